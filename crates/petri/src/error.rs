@@ -1,0 +1,206 @@
+//! The error type of the crate.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong when reading, building, exploring or solving a
+/// net. User input never panics: it ends up here, with enough context (file
+/// position, element name, limit) to fix it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be read or written.
+    #[error("cannot access {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not well-formed XML.
+    #[error("{location}: malformed XML: {message}")]
+    Xml {
+        /// `file:line:column`.
+        location: String,
+        /// The XML parser's message.
+        message: String,
+    },
+    /// The file is well-formed but does not describe a valid net.
+    #[error("{location}: {message}")]
+    Format {
+        /// Where: `file:line:column` and/or the element.
+        location: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The file name does not say which format it is in.
+    #[error("cannot tell the format of {path}: use the extension .pnpro, .pnml, .toml (or .dot for output)")]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// An expression (rate, weight, marking, measure) does not parse.
+    #[error("in expression `{text}`, at character {position}: {message}")]
+    Expr {
+        /// The expression as written.
+        text: String,
+        /// 1-based character position of the problem.
+        position: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// An expression could not be evaluated.
+    #[error("cannot evaluate `{text}` for {context}: {message}")]
+    Eval {
+        /// The expression.
+        text: String,
+        /// What it belongs to, e.g. "the rate of transition t3".
+        context: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// Two places, two transitions or a place and a transition share a name.
+    #[error("duplicate name `{name}`: {first} and {second} must be named differently")]
+    DuplicateName {
+        /// The name.
+        name: String,
+        /// What the first holder of the name is.
+        first: &'static str,
+        /// What the second holder of the name is.
+        second: &'static str,
+    },
+    /// An arc refers to a node that does not exist (or has the wrong kind).
+    #[error("{arc}: unknown {expected} `{name}`")]
+    UnknownNode {
+        /// Description of the arc (with its position when known).
+        arc: String,
+        /// The kind of node that was expected ("place", "transition").
+        expected: &'static str,
+        /// The name or id that was not found.
+        name: String,
+    },
+    /// A parameter is used but has no value.
+    #[error(
+        "parameter `{name}` has no value (used by {used_by}); give it one, e.g. --param {name}=VALUE{hint}"
+    )]
+    UnboundParameter {
+        /// The parameter.
+        name: String,
+        /// The first element using it.
+        used_by: String,
+        /// Extra help, e.g. a value suggested by the file.
+        hint: String,
+    },
+    /// A value given for a parameter the net does not have.
+    #[error("the net has no parameter `{name}` (its parameters: {known})")]
+    UnknownParameter {
+        /// The name given.
+        name: String,
+        /// The net's parameters, comma separated.
+        known: String,
+    },
+    /// A command-line style `NAME=VALUE` assignment does not parse.
+    #[error("bad parameter assignment `{text}`: {message}")]
+    BadAssignment {
+        /// The text given.
+        text: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A place or transition was named that the net does not have.
+    #[error("the net has no {kind} `{name}`")]
+    UnknownName {
+        /// "place" or "transition".
+        kind: &'static str,
+        /// The name.
+        name: String,
+    },
+    /// A number is out of its allowed range (a zero weight, a negative rate…).
+    #[error("{what} of {element} must be {requirement}, got {value}")]
+    InvalidValue {
+        /// The element, e.g. "transition `t3`".
+        element: String,
+        /// Which attribute, e.g. "rate".
+        what: &'static str,
+        /// The rule, e.g. "a finite number > 0".
+        requirement: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// A timed transition has no rate and no default was given.
+    #[error(
+        "timed transition `{transition}` has no rate: give one in the model, or a default for all (--default-rate R)"
+    )]
+    MissingRate {
+        /// The transition.
+        transition: String,
+    },
+    /// State-space generation reached the configured limit.
+    #[error(
+        "the reachability graph has more than {limit} markings (limit reached after {explored} were fully explored){hint}; raise the limit with --max-states if the net is bounded"
+    )]
+    StateLimit {
+        /// The configured limit.
+        limit: usize,
+        /// Markings whose successors had all been generated.
+        explored: usize,
+        /// Diagnosis, e.g. places whose token counts keep growing.
+        hint: String,
+    },
+    /// A place's token count does not fit the engine's counters.
+    #[error("place `{place}` would hold more than {limit} tokens")]
+    TokenOverflow {
+        /// The place.
+        place: String,
+        /// The largest count supported.
+        limit: u64,
+    },
+    /// A set of vanishing markings from which no tangible marking is reachable.
+    #[error(
+        "timeless trap: {count} vanishing marking(s) fire immediate transitions forever without reaching a tangible marking, e.g. {markings}"
+    )]
+    TimelessTrap {
+        /// How many markings form the trap.
+        count: usize,
+        /// A few of them, printed.
+        markings: String,
+    },
+    /// An iterative solver stopped before reaching its tolerance.
+    #[error(
+        "{solver} did not converge in {iterations} iterations: residual {residual:.3e} > tolerance {tolerance:.1e}"
+    )]
+    NoConvergence {
+        /// The solver.
+        solver: &'static str,
+        /// Iterations done.
+        iterations: usize,
+        /// Relative residual reached.
+        residual: f64,
+        /// Requested tolerance.
+        tolerance: f64,
+    },
+    /// A direct solver met a singular system.
+    #[error("{what}: the linear system is singular or too ill-conditioned ({detail})")]
+    Singular {
+        /// Which system.
+        what: &'static str,
+        /// Solver detail.
+        detail: String,
+    },
+    /// A parameter that fixes the structure was changed after compilation.
+    #[error(
+        "parameter `{name}` determines {what}, which is fixed when the model is compiled; compile again to change it"
+    )]
+    StructuralParameter {
+        /// The parameter.
+        name: String,
+        /// What depends on it.
+        what: String,
+    },
+    /// A request that makes no sense for this net or these options.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Shorthand for `Result<T, petri::Error>`.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,667 @@
+//! A net instantiated for analysis: every marking, multiplicity, priority and
+//! weight is a number; rates stay expressions so that they can be re-bound
+//! without rebuilding anything (see [`CompiledGspn`](crate::CompiledGspn)).
+//!
+//! This module also holds the firing rule, shared by the state-space
+//! generator, the simulator and the property checks.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use crate::error::{Error, Result};
+use crate::expr::Expr;
+use crate::net::{ArcKind, Net, Params, PlaceId, Servers, TransitionId, TransitionKind};
+
+/// Timing of an instantiated transition.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Timing {
+    /// Exponential delay; the rate is bound separately.
+    Timed {
+        /// Server semantics.
+        servers: Servers,
+    },
+    /// Zero delay.
+    Immediate {
+        /// Priority level ≥ 1.
+        priority: u32,
+        /// Weight > 0.
+        weight: f64,
+    },
+}
+
+/// Kind of a marking under GSPN semantics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MarkingKind {
+    /// Some immediate transition is enabled: left in zero time.
+    Vanishing,
+    /// Only timed transitions (or none) are enabled.
+    Tangible,
+}
+
+/// Compressed row storage of `(place, value)` pairs per transition.
+#[derive(Debug, Clone, Default)]
+struct PerTransition<V> {
+    start: Vec<u32>,
+    items: Vec<(u32, V)>,
+}
+
+impl<V: Copy> PerTransition<V> {
+    fn from_lists(lists: Vec<Vec<(u32, V)>>) -> Self {
+        let mut start = Vec::with_capacity(lists.len() + 1);
+        let mut items = Vec::new();
+        start.push(0);
+        for l in lists {
+            items.extend(l);
+            start.push(items.len() as u32);
+        }
+        PerTransition { start, items }
+    }
+
+    #[inline]
+    fn of(&self, t: usize) -> &[(u32, V)] {
+        &self.items[self.start[t] as usize..self.start[t + 1] as usize]
+    }
+}
+
+/// A GSPN ready for analysis. Build one with [`Gspn::new`] (or
+/// [`Net::instantiate`]).
+#[derive(Debug, Clone)]
+pub struct Gspn {
+    name: String,
+    place_names: Vec<String>,
+    transition_names: Vec<String>,
+    initial: Vec<u32>,
+    capacity: Vec<Option<u32>>,
+    timing: Vec<Timing>,
+    rate_exprs: Vec<Option<Expr>>,
+    params: BTreeMap<String, Option<f64>>,
+    structural_params: BTreeMap<String, String>,
+    inputs: PerTransition<u32>,
+    outputs: PerTransition<u32>,
+    inhibitors: PerTransition<u32>,
+    delta: PerTransition<i64>,
+}
+
+impl Net {
+    /// Instantiates the net with parameter `overrides` (see [`Gspn::new`]).
+    pub fn instantiate(&self, overrides: &Params) -> Result<Gspn> {
+        Gspn::new(self, overrides)
+    }
+}
+
+fn whole(v: f64, element: String, what: &'static str, min: f64) -> Result<u32> {
+    if !v.is_finite() || v < min || v != v.trunc() || v > f64::from(u32::MAX) {
+        return Err(Error::InvalidValue {
+            element,
+            what,
+            requirement: if min > 0.0 {
+                "a whole number ≥ 1"
+            } else {
+                "a whole number ≥ 0"
+            },
+            value: v,
+        });
+    }
+    Ok(v as u32)
+}
+
+impl Gspn {
+    /// Binds the parameters (the net's own values, replaced by `overrides`)
+    /// and checks everything that does not depend on rates: markings and
+    /// multiplicities are whole numbers, priorities ≥ 1, weights > 0.
+    pub fn new(net: &Net, overrides: &Params) -> Result<Gspn> {
+        net.validate()?;
+        let params = net.resolve_params(overrides)?;
+        let mut structural_params = BTreeMap::new();
+        let mut eval_structural = |e: &Expr, context: String| -> Result<f64> {
+            let mut missing = None;
+            e.for_each_param(&mut |n| {
+                structural_params
+                    .entry(n.to_string())
+                    .or_insert_with(|| context.clone());
+                if missing.is_none() && !matches!(params.get(n), Some(Some(_))) {
+                    missing = Some(n.to_string());
+                }
+            });
+            if let Some(name) = missing {
+                return Err(unbound(net, &name, &context));
+            }
+            e.eval_params(&|n| params.get(n).copied().flatten(), &context)
+        };
+
+        let mut initial = Vec::with_capacity(net.places.len());
+        for p in &net.places {
+            let ctx = format!("the initial marking of place `{}`", p.name);
+            let v = eval_structural(&p.initial, ctx.clone())?;
+            initial.push(whole(
+                v,
+                format!("place `{}`", p.name),
+                "the initial marking",
+                0.0,
+            )?);
+        }
+
+        let nt = net.transitions.len();
+        let mut timing = Vec::with_capacity(nt);
+        let mut rate_exprs = Vec::with_capacity(nt);
+        for t in &net.transitions {
+            match &t.kind {
+                TransitionKind::Timed { rate, servers } => {
+                    if let Servers::K(0) = servers {
+                        return Err(Error::InvalidValue {
+                            element: format!("transition `{}`", t.name),
+                            what: "the number of servers",
+                            requirement: "≥ 1",
+                            value: 0.0,
+                        });
+                    }
+                    if let Some(r) = rate {
+                        if r.uses_tokens() {
+                            return Err(Error::Eval {
+                                text: r.to_string(),
+                                context: format!("the rate of transition `{}`", t.name),
+                                message: "marking-dependent rates are not supported; use server semantics (nservers) instead".into(),
+                            });
+                        }
+                    }
+                    timing.push(Timing::Timed { servers: *servers });
+                    rate_exprs.push(rate.clone());
+                }
+                TransitionKind::Immediate { weight, priority } => {
+                    let pr = eval_structural(priority, format!("the priority of transition `{}`", t.name))?;
+                    let pr = whole(pr, format!("transition `{}`", t.name), "the priority", 1.0)?;
+                    let w = eval_structural(weight, format!("the weight of transition `{}`", t.name))?;
+                    if !(w.is_finite() && w > 0.0) {
+                        return Err(Error::InvalidValue {
+                            element: format!("immediate transition `{}`", t.name),
+                            what: "the weight",
+                            requirement: "a finite number > 0 (leave a branch of weight 0 out of the net)",
+                            value: w,
+                        });
+                    }
+                    timing.push(Timing::Immediate {
+                        priority: pr,
+                        weight: w,
+                    });
+                    rate_exprs.push(None);
+                }
+            }
+        }
+
+        // Arcs, merged per (transition, place, kind): input and output
+        // multiplicities add up, parallel inhibitor arcs keep the smallest.
+        let mut merged: BTreeMap<(u32, ArcKind, u32), u32> = BTreeMap::new();
+        for a in &net.arcs {
+            let ctx = format!(
+                "the multiplicity of the {} arc between `{}` and `{}`",
+                a.kind.name(),
+                net.places[a.place.index()].name,
+                net.transitions[a.transition.index()].name
+            );
+            let v = eval_structural(&a.multiplicity, ctx.clone())?;
+            let m = whole(v, ctx, "the value", 1.0)?;
+            let key = (a.transition.0, a.kind, a.place.0);
+            match merged.get_mut(&key) {
+                None => {
+                    merged.insert(key, m);
+                }
+                Some(old) if a.kind == ArcKind::Inhibitor => *old = (*old).min(m),
+                Some(old) => *old = old.saturating_add(m),
+            }
+        }
+        let mut ins = vec![Vec::new(); nt];
+        let mut outs = vec![Vec::new(); nt];
+        let mut inhs = vec![Vec::new(); nt];
+        for (&(t, kind, p), &m) in &merged {
+            let list = match kind {
+                ArcKind::Input => &mut ins,
+                ArcKind::Output => &mut outs,
+                ArcKind::Inhibitor => &mut inhs,
+            };
+            list[t as usize].push((p, m));
+        }
+        let mut deltas = vec![Vec::new(); nt];
+        for t in 0..nt {
+            let mut d: BTreeMap<u32, i64> = BTreeMap::new();
+            for &(p, m) in &ins[t] {
+                *d.entry(p).or_default() -= i64::from(m);
+            }
+            for &(p, m) in &outs[t] {
+                *d.entry(p).or_default() += i64::from(m);
+            }
+            deltas[t] = d.into_iter().filter(|&(_, v)| v != 0).collect();
+        }
+
+        Ok(Gspn {
+            name: net.name.clone(),
+            place_names: net.places.iter().map(|p| p.name.clone()).collect(),
+            transition_names: net.transitions.iter().map(|t| t.name.clone()).collect(),
+            initial,
+            capacity: net.places.iter().map(|p| p.capacity).collect(),
+            timing,
+            rate_exprs,
+            params,
+            structural_params,
+            inputs: PerTransition::from_lists(ins),
+            outputs: PerTransition::from_lists(outs),
+            inhibitors: PerTransition::from_lists(inhs),
+            delta: PerTransition::from_lists(deltas),
+        })
+    }
+
+    /// The model's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Number of places.
+    pub fn num_places(&self) -> usize {
+        self.place_names.len()
+    }
+
+    /// Number of transitions.
+    pub fn num_transitions(&self) -> usize {
+        self.transition_names.len()
+    }
+
+    /// Place names, by [`PlaceId`].
+    pub fn place_names(&self) -> &[String] {
+        &self.place_names
+    }
+
+    /// Transition names, by [`TransitionId`].
+    pub fn transition_names(&self) -> &[String] {
+        &self.transition_names
+    }
+
+    /// The place called `name`.
+    pub fn place(&self, name: &str) -> Result<PlaceId> {
+        self.place_names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| PlaceId(i as u32))
+            .ok_or_else(|| Error::UnknownName {
+                kind: "place",
+                name: name.into(),
+            })
+    }
+
+    /// The transition called `name`.
+    pub fn transition(&self, name: &str) -> Result<TransitionId> {
+        self.transition_names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| TransitionId(i as u32))
+            .ok_or_else(|| Error::UnknownName {
+                kind: "transition",
+                name: name.into(),
+            })
+    }
+
+    /// The initial marking.
+    pub fn initial_marking(&self) -> &[u32] {
+        &self.initial
+    }
+
+    /// The capacity of each place, if any.
+    pub fn capacities(&self) -> &[Option<u32>] {
+        &self.capacity
+    }
+
+    /// Timing of transition `t`.
+    pub fn timing(&self, t: TransitionId) -> Timing {
+        self.timing[t.index()]
+    }
+
+    /// Whether `t` is immediate.
+    pub fn is_immediate(&self, t: TransitionId) -> bool {
+        matches!(self.timing[t.index()], Timing::Immediate { .. })
+    }
+
+    /// Number of immediate transitions.
+    pub fn num_immediate(&self) -> usize {
+        self.timing
+            .iter()
+            .filter(|t| matches!(t, Timing::Immediate { .. }))
+            .count()
+    }
+
+    /// Input arcs of `t` as `(place index, multiplicity)`.
+    #[inline]
+    pub fn inputs(&self, t: TransitionId) -> &[(u32, u32)] {
+        self.inputs.of(t.index())
+    }
+
+    /// Output arcs of `t` as `(place index, multiplicity)`.
+    #[inline]
+    pub fn outputs(&self, t: TransitionId) -> &[(u32, u32)] {
+        self.outputs.of(t.index())
+    }
+
+    /// Inhibitor arcs of `t` as `(place index, multiplicity)`.
+    #[inline]
+    pub fn inhibitors(&self, t: TransitionId) -> &[(u32, u32)] {
+        self.inhibitors.of(t.index())
+    }
+
+    /// Token change caused by firing `t`, as `(place index, change)`, zero
+    /// changes left out.
+    #[inline]
+    pub fn delta(&self, t: TransitionId) -> &[(u32, i64)] {
+        self.delta.of(t.index())
+    }
+
+    /// Bound parameter values (`None`: declared without value, unused).
+    pub fn params(&self) -> &BTreeMap<String, Option<f64>> {
+        &self.params
+    }
+
+    /// Parameters that fix the structure (markings, multiplicities,
+    /// priorities, weights), with the first thing each one determines.
+    pub fn structural_params(&self) -> &BTreeMap<String, String> {
+        &self.structural_params
+    }
+
+    /// The rate expression of a timed transition, if it has one.
+    pub fn rate_expr(&self, t: TransitionId) -> Option<&Expr> {
+        self.rate_exprs[t.index()].as_ref()
+    }
+
+    /// The weight of an immediate transition (`None` for timed ones).
+    pub fn weight(&self, t: TransitionId) -> Option<f64> {
+        match self.timing[t.index()] {
+            Timing::Immediate { weight, .. } => Some(weight),
+            Timing::Timed { .. } => None,
+        }
+    }
+
+    /// Evaluates every timed transition's rate with the bound parameters,
+    /// replaced by `overrides`. `default_rate` is used for transitions that
+    /// have no rate. Immediate transitions get 0. Fails if `overrides` would
+    /// change a structural parameter.
+    pub fn rates(&self, overrides: &Params, default_rate: Option<f64>) -> Result<Vec<f64>> {
+        let mut values = self.params.clone();
+        for (name, v) in &overrides.0 {
+            match values.get_mut(name) {
+                None => {
+                    return Err(Error::UnknownParameter {
+                        name: name.clone(),
+                        known: values.keys().cloned().collect::<Vec<_>>().join(", "),
+                    });
+                }
+                Some(slot) => {
+                    if let Some(what) = self.structural_params.get(name) {
+                        if *slot != Some(*v) {
+                            return Err(Error::StructuralParameter {
+                                name: name.clone(),
+                                what: what.clone(),
+                            });
+                        }
+                    }
+                    *slot = Some(*v);
+                }
+            }
+        }
+        if let Some(d) = default_rate {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(Error::InvalidValue {
+                    element: "the default rate".into(),
+                    what: "the value",
+                    requirement: "a finite number > 0",
+                    value: d,
+                });
+            }
+        }
+        let mut rates = vec![0.0; self.num_transitions()];
+        for (t, rate) in rates.iter_mut().enumerate() {
+            if self.is_immediate(TransitionId(t as u32)) {
+                continue;
+            }
+            let name = &self.transition_names[t];
+            let v = match &self.rate_exprs[t] {
+                Some(e) => {
+                    let ctx = format!("the rate of transition `{name}`");
+                    let mut missing = None;
+                    e.for_each_param(&mut |n| {
+                        if missing.is_none() && !matches!(values.get(n), Some(Some(_))) {
+                            missing = Some(n.to_string());
+                        }
+                    });
+                    if let Some(n) = missing {
+                        return Err(Error::UnboundParameter {
+                            name: n,
+                            used_by: ctx,
+                            hint: String::new(),
+                        });
+                    }
+                    e.eval_params(&|n| values.get(n).copied().flatten(), &ctx)?
+                }
+                None => default_rate.ok_or_else(|| Error::MissingRate {
+                    transition: name.clone(),
+                })?,
+            };
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidValue {
+                    element: format!("timed transition `{name}`"),
+                    what: "the rate",
+                    requirement: "a finite number > 0",
+                    value: v,
+                });
+            }
+            *rate = v;
+        }
+        Ok(rates)
+    }
+
+    /// Whether `t` is enabled in `m` (inputs, inhibitors, capacities;
+    /// priorities are not considered here).
+    #[inline]
+    pub fn is_enabled(&self, t: TransitionId, m: &[u32]) -> bool {
+        self.inputs(t).iter().all(|&(p, k)| m[p as usize] >= k)
+            && self.inhibitors(t).iter().all(|&(p, k)| m[p as usize] < k)
+            && self.capacity_allows(t, m)
+    }
+
+    #[inline]
+    fn capacity_allows(&self, t: TransitionId, m: &[u32]) -> bool {
+        self.delta(t).iter().all(|&(p, d)| {
+            d <= 0
+                || match self.capacity[p as usize] {
+                    None => true,
+                    Some(c) => i64::from(m[p as usize]) + d <= i64::from(c),
+                }
+        })
+    }
+
+    /// Enabling degree: how many times `t` could fire concurrently (at least
+    /// 1 for an enabled transition without input arcs).
+    #[inline]
+    pub fn enabling_degree(&self, t: TransitionId, m: &[u32]) -> u32 {
+        self.inputs(t)
+            .iter()
+            .map(|&(p, k)| m[p as usize] / k)
+            .min()
+            .unwrap_or(1)
+    }
+
+    /// The factor that multiplies `t`'s rate in `m`: 1, `min(degree, k)` or
+    /// the degree.
+    #[inline]
+    pub fn server_factor(&self, t: TransitionId, m: &[u32]) -> f64 {
+        match self.timing[t.index()] {
+            Timing::Timed {
+                servers: Servers::Single,
+            }
+            | Timing::Immediate { .. } => 1.0,
+            Timing::Timed {
+                servers: Servers::K(k),
+            } => f64::from(self.enabling_degree(t, m).min(k)),
+            Timing::Timed {
+                servers: Servers::Infinite,
+            } => f64::from(self.enabling_degree(t, m)),
+        }
+    }
+
+    /// Fires `t` in `m` (which must enable it). Fails if a count would
+    /// overflow.
+    pub fn fire(&self, t: TransitionId, m: &mut [u32]) -> Result<()> {
+        for &(p, d) in self.delta(t) {
+            let v = i64::from(m[p as usize]) + d;
+            if v < 0 || v > i64::from(u32::MAX) {
+                return Err(Error::TokenOverflow {
+                    place: self.place_names[p as usize].clone(),
+                    limit: u64::from(u32::MAX),
+                });
+            }
+            m[p as usize] = v as u32;
+        }
+        Ok(())
+    }
+
+    /// Collects into `out` the transitions that may fire in `m` under GSPN
+    /// semantics, and says whether `m` is vanishing: if any immediate
+    /// transition is enabled, only the enabled immediate transitions of the
+    /// highest priority; otherwise all enabled timed transitions.
+    pub fn firable(&self, m: &[u32], out: &mut Vec<TransitionId>) -> MarkingKind {
+        out.clear();
+        let mut best_priority = 0u32;
+        for t in 0..self.num_transitions() {
+            let tid = TransitionId(t as u32);
+            if let Timing::Immediate { priority, .. } = self.timing[t] {
+                if priority >= best_priority && self.is_enabled(tid, m) {
+                    if priority > best_priority {
+                        out.clear();
+                        best_priority = priority;
+                    }
+                    out.push(tid);
+                }
+            }
+        }
+        if best_priority > 0 {
+            return MarkingKind::Vanishing;
+        }
+        for t in 0..self.num_transitions() {
+            let tid = TransitionId(t as u32);
+            if matches!(self.timing[t], Timing::Timed { .. }) && self.is_enabled(tid, m) {
+                out.push(tid);
+            }
+        }
+        MarkingKind::Tangible
+    }
+
+    /// Formats a marking compactly: the marked places, `P3 P7 Q(2)`.
+    pub fn format_marking(&self, m: &[u32]) -> String {
+        let parts: Vec<String> = m
+            .iter()
+            .enumerate()
+            .filter(|&(_, &k)| k > 0)
+            .map(|(p, &k)| {
+                if k == 1 {
+                    self.place_names[p].clone()
+                } else {
+                    format!("{}({k})", self.place_names[p])
+                }
+            })
+            .collect();
+        if parts.is_empty() {
+            "(empty)".into()
+        } else {
+            parts.join(" ")
+        }
+    }
+
+    /// Parameters that are declared but have no value.
+    pub fn unbound_params(&self) -> BTreeSet<&str> {
+        self.params
+            .iter()
+            .filter(|(_, v)| v.is_none())
+            .map(|(k, _)| k.as_str())
+            .collect()
+    }
+}
+
+fn unbound(net: &Net, name: &str, context: &str) -> Error {
+    let hint = match net.param(name) {
+        None => " (it is not declared in the model either)".to_string(),
+        Some(p) => match p.suggested {
+            Some(s) => format!(" (the file suggests {name}={})", crate::expr::fmt_number(s)),
+            None => String::new(),
+        },
+    };
+    Error::UnboundParameter {
+        name: name.into(),
+        used_by: context.into(),
+        hint,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> Net {
+        let mut n = Net::new("small");
+        let a = n.add_place("a", 2u32);
+        let b = n.add_place("b", 0u32);
+        let t = n.add_timed("t", Expr::param("r"));
+        n.set_servers(t, Servers::Infinite);
+        n.input(a, t);
+        n.output(t, b);
+        let u = n.add_immediate("u", 1.0, 2);
+        n.input(b, u);
+        n.output(u, a);
+        n.set_param("r", Some(2.0), crate::net::ParamKind::Real);
+        n
+    }
+
+    #[test]
+    fn firing_rule_and_server_semantics() {
+        let g = small().instantiate(&Params::new()).unwrap();
+        let t = g.transition("t").unwrap();
+        let mut m = g.initial_marking().to_vec();
+        assert!(g.is_enabled(t, &m));
+        assert_eq!(g.server_factor(t, &m), 2.0);
+        let mut out = Vec::new();
+        assert_eq!(g.firable(&m, &mut out), MarkingKind::Tangible);
+        g.fire(t, &mut m).unwrap();
+        assert_eq!(m, vec![1, 1]);
+        assert_eq!(g.firable(&m, &mut out), MarkingKind::Vanishing);
+        assert_eq!(out, vec![g.transition("u").unwrap()]);
+        assert_eq!(g.rates(&Params::new(), None).unwrap()[t.index()], 2.0);
+        assert_eq!(
+            g.rates(&Params::new().with("r", 5.0), None).unwrap()[t.index()],
+            5.0
+        );
+    }
+
+    #[test]
+    fn bad_values_are_errors() {
+        let mut n = small();
+        n.transitions[1].kind = TransitionKind::Immediate {
+            weight: Expr::Num(0.0),
+            priority: Expr::Num(1.0),
+        };
+        assert!(matches!(
+            n.instantiate(&Params::new()),
+            Err(Error::InvalidValue { .. })
+        ));
+        let mut n = small();
+        n.places[0].initial = Expr::param("N");
+        let err = n.instantiate(&Params::new()).unwrap_err();
+        assert!(matches!(err, Error::UnboundParameter { .. }), "{err}");
+        let g = small().instantiate(&Params::new()).unwrap();
+        assert!(matches!(
+            g.rates(&Params::new().with("r", -1.0), None),
+            Err(Error::InvalidValue { .. })
+        ));
+        assert!(matches!(
+            g.rates(&Params::new().with("zz", 1.0), None),
+            Err(Error::UnknownParameter { .. })
+        ));
+        let mut n = small();
+        n.add_place("t", 0u32);
+        assert!(matches!(
+            n.instantiate(&Params::new()),
+            Err(Error::DuplicateName { .. })
+        ));
+    }
+}
