@@ -1,11 +1,20 @@
 //! Generalized Stochastic Petri Nets.
 #![warn(missing_docs)]
 
+pub mod ctmc;
 pub mod error;
 pub mod expr;
+pub mod families;
 pub mod gspn;
+mod linear;
+mod marking;
 pub mod net;
+pub mod reachability;
+mod scc;
+pub mod steady_state;
+mod vanishing;
 
+pub use ctmc::{CompileStats, CompiledGspn, Solution};
 pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
 pub use gspn::{Gspn, MarkingKind, Timing};
@@ -13,3 +22,5 @@ pub use net::{
     Arc, ArcKind, Net, Param, ParamKind, Params, Place, PlaceId, Servers, Transition, TransitionId,
     TransitionKind,
 };
+pub use reachability::{Edge, ExploreParams, ExploreStats, MarkingId, ReachabilityGraph};
+pub use steady_state::{Method, SolveInfo, SolveParams};

@@ -1,0 +1,547 @@
+//! Balance equations of a CTMC: the stationary distribution `π Q = 0, Σπ = 1`
+//! of an irreducible chain, and the non-singular systems `x (−Q_TT) = b` met
+//! when absorbing the transient part of a non-ergodic chain.
+//!
+//! Both are written per state `j` as *outflow = inflow (+ source)*:
+//! `exit_j · x_j = Σ_{i≠j} x_i q_ij (+ b_j)`. The chain is given by its
+//! incoming entries per state ([`InRows`]), which is what Gauss–Seidel needs.
+//!
+//! Methods:
+//! * **direct**: below ~160 states, GTH elimination (no subtractions, so
+//!   every probability is accurate to rounding even when rates span many
+//!   orders of magnitude, as in the supervisor net); above, sparse LU of the
+//!   system with one equation replaced by fixing `x_k = 1` (then normalised)
+//!   — any principal submatrix of an irreducible generator is non-singular,
+//!   so this is exact and needs no dense normalisation row. `O(fill-in)`
+//!   memory: for small and medium chains.
+//! * **Gauss–Seidel / SOR**: `x_j ← (1−ω) x_j + ω (inflow_j + b_j) / exit_j`
+//!   in state order, normalised after each sweep; `O(nnz)` per sweep and no
+//!   extra memory. Stops when the relative residual is at most the tolerance.
+//!
+//! Residual: `‖x Q (+ b)‖₁ / Σ_j exit_j x_j` — the total flow imbalance over
+//! the total flow, independent of the time unit and of the number of states.
+
+use std::time::Instant;
+
+use crate::error::{Error, Result};
+use crate::linear;
+
+/// How to solve the balance equations.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Direct up to [`SolveParams::direct_limit`] states, Gauss–Seidel above.
+    #[default]
+    Auto,
+    /// Sparse (or dense, when tiny) LU.
+    Direct,
+    /// Gauss–Seidel, over-relaxed by [`SolveParams::omega`].
+    GaussSeidel,
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SolveParams {
+    /// Method; default [`Method::Auto`].
+    pub method: Method,
+    /// Relative residual at which an iterative solve stops. Default 1e-12.
+    pub tolerance: f64,
+    /// Sweeps before an iterative solve gives up. Default 100,000.
+    pub max_iterations: usize,
+    /// Relaxation factor ω of SOR in (0, 2); 1 is Gauss–Seidel. Default 1.
+    pub omega: f64,
+    /// Largest chain that [`Method::Auto`] solves directly. Default 50,000.
+    pub direct_limit: usize,
+}
+
+impl Default for SolveParams {
+    fn default() -> Self {
+        SolveParams {
+            method: Method::Auto,
+            tolerance: 1e-12,
+            max_iterations: 100_000,
+            omega: 1.0,
+            direct_limit: 50_000,
+        }
+    }
+}
+
+impl SolveParams {
+    pub(crate) fn validate(&self) -> Result<()> {
+        let bad = |what: &'static str, requirement: &'static str, value: f64| {
+            Err(Error::InvalidValue {
+                element: "the solver settings".into(),
+                what,
+                requirement,
+                value,
+            })
+        };
+        if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return bad("the tolerance", "in (0, 1)", self.tolerance);
+        }
+        if !(self.omega > 0.0 && self.omega < 2.0) {
+            return bad("ω", "in (0, 2)", self.omega);
+        }
+        if self.max_iterations == 0 {
+            return bad("the iteration limit", "≥ 1", 0.0);
+        }
+        Ok(())
+    }
+}
+
+/// What a solve did.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct SolveInfo {
+    /// `"direct-gth"`, `"direct-lu"`, `"gauss-seidel"`, `"sor"` or `"trivial"`.
+    pub method: &'static str,
+    /// Sweeps done (0 for direct solves).
+    pub iterations: usize,
+    /// Relative residual (see the module docs).
+    pub residual: f64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// Incoming entries of a chain, per state.
+pub(crate) trait InRows {
+    /// Number of states.
+    fn n(&self) -> usize;
+    /// Total exit rate of state `j` (self-loops excluded).
+    fn exit(&self, j: usize) -> f64;
+    /// `Σ_{i≠j} x_i q_ij`.
+    fn inflow(&self, j: usize, x: &[f64]) -> f64;
+    /// Calls `f(i, q_ij)` for the incoming entries of `j`.
+    fn for_each_in(&self, j: usize, f: &mut dyn FnMut(usize, f64));
+}
+
+/// Incoming entries given symbolically: `q_ij = rate[t] · coeff`.
+pub(crate) struct SymbolicRows<'a> {
+    pub offsets: &'a [u64],
+    pub src: &'a [u32],
+    pub trans: &'a [u32],
+    pub coeff: Option<&'a [f64]>,
+    pub rates: &'a [f64],
+    pub exit: &'a [f64],
+}
+
+impl InRows for SymbolicRows<'_> {
+    fn n(&self) -> usize {
+        self.exit.len()
+    }
+
+    #[inline]
+    fn exit(&self, j: usize) -> f64 {
+        self.exit[j]
+    }
+
+    #[inline]
+    fn inflow(&self, j: usize, x: &[f64]) -> f64 {
+        let (a, b) = (self.offsets[j] as usize, self.offsets[j + 1] as usize);
+        let src = &self.src[a..b];
+        let trans = &self.trans[a..b];
+        match self.coeff {
+            None => src
+                .iter()
+                .zip(trans)
+                .map(|(&i, &t)| x[i as usize] * self.rates[t as usize])
+                .sum(),
+            Some(c) => src
+                .iter()
+                .zip(trans)
+                .zip(&c[a..b])
+                .map(|((&i, &t), &c)| x[i as usize] * self.rates[t as usize] * c)
+                .sum(),
+        }
+    }
+
+    fn for_each_in(&self, j: usize, f: &mut dyn FnMut(usize, f64)) {
+        let (a, b) = (self.offsets[j] as usize, self.offsets[j + 1] as usize);
+        for k in a..b {
+            let c = self.coeff.map_or(1.0, |c| c[k]);
+            f(self.src[k] as usize, self.rates[self.trans[k] as usize] * c);
+        }
+    }
+}
+
+/// Incoming entries with numeric values.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct NumericRows {
+    pub offsets: Vec<u64>,
+    pub src: Vec<u32>,
+    pub val: Vec<f64>,
+    pub exit: Vec<f64>,
+}
+
+impl NumericRows {
+    /// Builds from `(dst, src, value)` entries (self-loops must be left out).
+    pub(crate) fn from_entries(n: usize, mut entries: Vec<(u32, u32, f64)>, exit: Vec<f64>) -> NumericRows {
+        entries.sort_unstable_by_key(|e| (e.0, e.1));
+        let mut offsets = vec![0u64; n + 1];
+        for e in &entries {
+            offsets[e.0 as usize + 1] += 1;
+        }
+        for j in 0..n {
+            offsets[j + 1] += offsets[j];
+        }
+        NumericRows {
+            offsets,
+            src: entries.iter().map(|e| e.1).collect(),
+            val: entries.iter().map(|e| e.2).collect(),
+            exit,
+        }
+    }
+}
+
+impl InRows for NumericRows {
+    fn n(&self) -> usize {
+        self.exit.len()
+    }
+
+    #[inline]
+    fn exit(&self, j: usize) -> f64 {
+        self.exit[j]
+    }
+
+    #[inline]
+    fn inflow(&self, j: usize, x: &[f64]) -> f64 {
+        let (a, b) = (self.offsets[j] as usize, self.offsets[j + 1] as usize);
+        self.src[a..b]
+            .iter()
+            .zip(&self.val[a..b])
+            .map(|(&i, &v)| x[i as usize] * v)
+            .sum()
+    }
+
+    fn for_each_in(&self, j: usize, f: &mut dyn FnMut(usize, f64)) {
+        let (a, b) = (self.offsets[j] as usize, self.offsets[j + 1] as usize);
+        for k in a..b {
+            f(self.src[k] as usize, self.val[k]);
+        }
+    }
+}
+
+/// Relative residual of `x` (see the module docs); `rhs` is `b` or none for
+/// the stationary equations.
+pub(crate) fn residual(rows: &dyn InRows, x: &[f64], rhs: Option<&[f64]>) -> f64 {
+    let (mut imbalance, mut flow) = (0.0, 0.0);
+    for j in 0..rows.n() {
+        let b = rhs.map_or(0.0, |b| b[j]);
+        let out = rows.exit(j) * x[j];
+        imbalance += (rows.inflow(j, x) + b - out).abs();
+        flow += out.abs();
+    }
+    if flow > 0.0 { imbalance / flow } else { imbalance }
+}
+
+/// Solves the stationary equations of an irreducible chain (`rhs = None`)
+/// or `exit·x − inflow(x) = b` (`rhs = Some(b)`).
+pub(crate) fn solve(
+    rows: &dyn InRows,
+    rhs: Option<&[f64]>,
+    params: &SolveParams,
+) -> Result<(Vec<f64>, SolveInfo)> {
+    params.validate()?;
+    let start = Instant::now();
+    let n = rows.n();
+    if n == 0 {
+        return Ok((Vec::new(), SolveInfo::default()));
+    }
+    if let Some(j) = (0..n).find(|&j| !(rows.exit(j) > 0.0 && rows.exit(j).is_finite())) {
+        if rhs.is_none() && n == 1 {
+            return Ok((
+                vec![1.0],
+                SolveInfo {
+                    method: "trivial",
+                    ..SolveInfo::default()
+                },
+            ));
+        }
+        return Err(Error::Singular {
+            what: "the balance equations",
+            detail: format!(
+                "state {j} has exit rate {} in a chain that should not absorb",
+                rows.exit(j)
+            ),
+        });
+    }
+    if rhs.is_none() && n == 1 {
+        return Ok((
+            vec![1.0],
+            SolveInfo {
+                method: "trivial",
+                ..SolveInfo::default()
+            },
+        ));
+    }
+    let direct = match params.method {
+        Method::Direct => true,
+        Method::GaussSeidel => false,
+        Method::Auto => n <= params.direct_limit,
+    };
+    let (x, method, iterations) = if direct && rhs.is_none() && n <= linear::DENSE_LIMIT {
+        (gth(rows)?, "direct-gth", 0)
+    } else if direct {
+        (solve_direct(rows, rhs)?, "direct-lu", 0)
+    } else {
+        let (x, it) = gauss_seidel(rows, rhs, params)?;
+        (
+            x,
+            if params.omega == 1.0 {
+                "gauss-seidel"
+            } else {
+                "sor"
+            },
+            it,
+        )
+    };
+    let residual = residual(rows, &x, rhs);
+    Ok((
+        x,
+        SolveInfo {
+            method,
+            iterations,
+            residual,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    ))
+}
+
+/// Grassmann–Taksar–Heyman elimination (dense, `O(n³)`): Gaussian
+/// elimination on the rates in which every pivot is a sum of positive rates,
+/// so no subtraction ever happens and each probability is accurate to a few
+/// ulps relative, whatever the spread of the rates (Grassmann, Taksar &
+/// Heyman 1985; Stewart 1994 §2.7).
+fn gth(rows: &dyn InRows) -> Result<Vec<f64>> {
+    let n = rows.n();
+    let mut q = vec![0.0f64; n * n];
+    for j in 0..n {
+        rows.for_each_in(j, &mut |i, v| {
+            if i != j {
+                q[i * n + j] += v;
+            }
+        });
+    }
+    let mut pivot = vec![0.0; n];
+    for k in (1..n).rev() {
+        let s: f64 = q[k * n..k * n + k].iter().sum();
+        if !(s > 0.0 && s.is_finite()) {
+            return Err(Error::Singular {
+                what: "the steady-state equations",
+                detail: format!("state {k} cannot reach the states before it (reducible chain?)"),
+            });
+        }
+        pivot[k] = s;
+        for i in 0..k {
+            let f = q[i * n + k] / s;
+            if f != 0.0 {
+                for j in 0..k {
+                    q[i * n + j] += f * q[k * n + j];
+                }
+            }
+        }
+    }
+    let mut x = vec![0.0; n];
+    x[0] = 1.0;
+    for k in 1..n {
+        x[k] = (0..k).map(|i| x[i] * q[i * n + k]).sum::<f64>() / pivot[k];
+    }
+    let sum: f64 = x.iter().sum();
+    x.iter_mut().for_each(|v| *v /= sum);
+    Ok(x)
+}
+
+fn solve_direct(rows: &dyn InRows, rhs: Option<&[f64]>) -> Result<Vec<f64>> {
+    let n = rows.n();
+    let mut triplets: Vec<(u32, u32, f64)> = Vec::new();
+    match rhs {
+        Some(b) => {
+            for j in 0..n {
+                triplets.push((j as u32, j as u32, rows.exit(j)));
+                rows.for_each_in(j, &mut |i, v| triplets.push((j as u32, i as u32, -v)));
+            }
+            let mut sol = vec![b.to_vec()];
+            linear::solve("the absorption equations", n, &triplets, &mut sol)?;
+            let mut x = sol.pop().unwrap_or_default();
+            x.iter_mut().for_each(|v| *v = v.max(0.0));
+            Ok(x)
+        }
+        None => {
+            // Fix x_k = 1 for the last state k and drop its equation.
+            let k = n - 1;
+            let mut b = vec![0.0; k];
+            for (j, bj) in b.iter_mut().enumerate() {
+                triplets.push((j as u32, j as u32, rows.exit(j)));
+                rows.for_each_in(j, &mut |i, v| {
+                    if i == k {
+                        *bj += v;
+                    } else {
+                        triplets.push((j as u32, i as u32, -v));
+                    }
+                });
+            }
+            let mut sol = vec![b];
+            linear::solve("the steady-state equations", k, &triplets, &mut sol)?;
+            let mut x = sol.pop().unwrap_or_default();
+            x.push(1.0);
+            x.iter_mut().for_each(|v| *v = v.max(0.0));
+            let sum: f64 = x.iter().sum();
+            if !(sum.is_finite() && sum > 0.0) {
+                return Err(Error::Singular {
+                    what: "the steady-state equations",
+                    detail: format!("the solution sums to {sum}"),
+                });
+            }
+            x.iter_mut().for_each(|v| *v /= sum);
+            Ok(x)
+        }
+    }
+}
+
+fn gauss_seidel(rows: &dyn InRows, rhs: Option<&[f64]>, params: &SolveParams) -> Result<(Vec<f64>, usize)> {
+    let n = rows.n();
+    let omega = params.omega;
+    let mut x = match rhs {
+        None => vec![1.0 / n as f64; n],
+        Some(b) => (0..n).map(|j| b[j] / rows.exit(j)).collect(),
+    };
+    let mut last = f64::INFINITY;
+    for it in 1..=params.max_iterations {
+        let (mut imbalance, mut flow) = (0.0f64, 0.0f64);
+        for j in 0..n {
+            let d = rows.exit(j);
+            let s = rows.inflow(j, &x) + rhs.map_or(0.0, |b| b[j]);
+            let old = x[j];
+            imbalance += (s - d * old).abs();
+            let new = s / d;
+            x[j] = if omega == 1.0 {
+                new
+            } else {
+                old + omega * (new - old)
+            };
+            flow += d * x[j];
+        }
+        if rhs.is_none() {
+            let sum: f64 = x.iter().sum();
+            if !(sum.is_finite() && sum > 0.0) {
+                break;
+            }
+            x.iter_mut().for_each(|v| *v /= sum);
+            flow /= sum;
+            imbalance /= sum;
+        }
+        let proxy = if flow > 0.0 { imbalance / flow } else { imbalance };
+        if proxy <= params.tolerance {
+            last = residual(rows, &x, rhs);
+            if last <= params.tolerance {
+                return Ok((x, it));
+            }
+        } else {
+            last = proxy;
+        }
+        if !last.is_finite() {
+            break;
+        }
+    }
+    Err(Error::NoConvergence {
+        solver: if omega == 1.0 { "Gauss-Seidel" } else { "SOR" },
+        iterations: params.max_iterations,
+        residual: last,
+        tolerance: params.tolerance,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Birth–death chain 0..n with birth λ and death μ.
+    fn birth_death(n: usize, lambda: f64, mu: f64) -> NumericRows {
+        let mut entries = Vec::new();
+        let mut exit = vec![0.0; n];
+        for (i, e) in exit.iter_mut().enumerate() {
+            if i + 1 < n {
+                entries.push(((i + 1) as u32, i as u32, lambda));
+                *e += lambda;
+            }
+            if i > 0 {
+                entries.push(((i - 1) as u32, i as u32, mu));
+                *e += mu;
+            }
+        }
+        NumericRows::from_entries(n, entries, exit)
+    }
+
+    fn closed_form(n: usize, rho: f64) -> Vec<f64> {
+        let w: Vec<f64> = (0..n).map(|i| rho.powi(i as i32)).collect();
+        let s: f64 = w.iter().sum();
+        w.iter().map(|v| v / s).collect()
+    }
+
+    #[test]
+    fn birth_death_matches_closed_form_with_every_method() {
+        for n in [2, 7, 300] {
+            let rows = birth_death(n, 1.0, 1.7);
+            let exact = closed_form(n, 1.0 / 1.7);
+            for method in [Method::Direct, Method::GaussSeidel] {
+                let p = SolveParams {
+                    method,
+                    ..SolveParams::default()
+                };
+                let (x, info) = solve(&rows, None, &p).unwrap();
+                assert!(info.residual <= 1e-12, "{method:?} {n}: {}", info.residual);
+                for i in 0..n {
+                    // LU is normwise accurate (absolute error ~ ε); iterative to its residual.
+                    let tol = match method {
+                        Method::Direct => 1e-10 * exact[i] + 1e-14,
+                        _ => 1e-10,
+                    };
+                    assert!(
+                        (x[i] - exact[i]).abs() <= tol,
+                        "{method:?} {n} {i}: {} vs {}",
+                        x[i],
+                        exact[i]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn stiff_rates_are_solved_exactly() {
+        // Rates 1e-3 next to 1e3, as in the supervisor net.
+        let rows = birth_death(4, 1e-3, 1e3);
+        let (x, info) = solve(&rows, None, &SolveParams::default()).unwrap();
+        let exact = closed_form(4, 1e-6);
+        for i in 0..4 {
+            assert!(
+                (x[i] - exact[i]).abs() <= 1e-12 * exact[i].max(1e-30) + 1e-300,
+                "{i}"
+            );
+        }
+        assert!(info.residual < 1e-13);
+    }
+
+    #[test]
+    fn absorption_system() {
+        // One transient state with exit 2 and source 1: x = 0.5.
+        let rows = NumericRows::from_entries(1, vec![], vec![2.0]);
+        let (x, _) = solve(&rows, Some(&[1.0]), &SolveParams::default()).unwrap();
+        assert!((x[0] - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn gauss_seidel_reports_non_convergence() {
+        let rows = birth_death(200, 1.0, 1.0001);
+        let p = SolveParams {
+            method: Method::GaussSeidel,
+            max_iterations: 3,
+            ..SolveParams::default()
+        };
+        assert!(matches!(solve(&rows, None, &p), Err(Error::NoConvergence { .. })));
+        let bad = SolveParams {
+            omega: 2.5,
+            ..SolveParams::default()
+        };
+        assert!(solve(&rows, None, &bad).is_err());
+    }
+}
