@@ -4,6 +4,7 @@
 pub mod error;
 pub mod expr;
 pub mod gspn;
+pub mod io;
 pub mod net;
 
 pub use error::{Error, Result};
