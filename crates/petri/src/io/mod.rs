@@ -69,6 +69,9 @@
 //! - Errors carry a `file:line:column` location wherever the format has one,
 //!   and name the element and attribute at fault. Bad input never panics.
 //! - A leading byte-order mark is skipped; an empty file is an error.
+//! - Expressions in files are limited to [`MAX_EXPRESSION_CHARS`] characters
+//!   and [`MAX_EXPRESSION_DEPTH`] nested parentheses, so that a file cannot
+//!   exhaust the stack of the (recursive) expression parser.
 
 use std::fmt;
 use std::path::Path;
@@ -329,9 +332,45 @@ fn parse_xml<'a>(text: &'a str, source: &str) -> Result<roxmltree::Document<'a>>
     })
 }
 
+/// The longest expression a file may hold, in characters.
+pub const MAX_EXPRESSION_CHARS: usize = 2000;
+/// The deepest nesting of parentheses an expression in a file may hold.
+pub const MAX_EXPRESSION_DEPTH: usize = 64;
+
+/// Why an expression is too big to parse safely, if it is: the expression
+/// parser is recursive, and a file must not be able to exhaust the stack.
+fn too_big(text: &str) -> Option<String> {
+    if text.chars().count() > MAX_EXPRESSION_CHARS {
+        return Some(format!(
+            "the expression is longer than {MAX_EXPRESSION_CHARS} characters"
+        ));
+    }
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    for c in text.chars() {
+        match c {
+            '(' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            ')' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    (deepest > MAX_EXPRESSION_DEPTH)
+        .then(|| format!("the expression nests parentheses deeper than {MAX_EXPRESSION_DEPTH} levels"))
+}
+
 /// Parses an expression found in a file; `what` names the element and
-/// attribute for the error message.
+/// attribute for the error message. Expressions longer than
+/// [`MAX_EXPRESSION_CHARS`] or nested deeper than [`MAX_EXPRESSION_DEPTH`]
+/// are refused.
 fn parse_expr(text: &str, location: impl FnOnce() -> String, what: impl FnOnce() -> String) -> Result<Expr> {
+    if let Some(message) = too_big(text) {
+        return Err(Error::Format {
+            location: location(),
+            message: format!("{}: {message}", what()),
+        });
+    }
     Expr::parse(text).map_err(|e| Error::Format {
         location: location(),
         message: format!("{}: {e}", what()),
@@ -436,6 +475,20 @@ mod tests {
         push_xml_escaped(&mut s, "a\"\nb", false, &what).unwrap();
         assert_eq!(s, "a\"\nb");
         assert!(push_xml_escaped(&mut s, "bell\u{7}", false, &what).is_err());
+    }
+
+    #[test]
+    fn huge_expressions_are_refused_before_parsing() {
+        let loc = || "f:1:1".to_string();
+        let what = || "x".to_string();
+        let deep = format!("{}1{}", "(".repeat(500), ")".repeat(500));
+        let err = parse_expr(&deep, loc, what).unwrap_err().to_string();
+        assert!(err.contains("deeper than 64"), "{err}");
+        let long = "-".repeat(100_000) + "1";
+        let err = parse_expr(&long, loc, what).unwrap_err().to_string();
+        assert!(err.contains("longer than 2000"), "{err}");
+        let ok = format!("{}1{}", "(".repeat(64), ")".repeat(64));
+        assert_eq!(parse_expr(&ok, loc, what).unwrap(), Expr::Num(1.0));
     }
 
     #[test]
