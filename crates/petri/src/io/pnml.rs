@@ -15,15 +15,16 @@
 //!   text is not empty and no other place or transition has the same text;
 //!   otherwise by its `id`. If that id is already the name of another node,
 //!   `_2`, `_3`, … is appended until it is unique.
-//! - **Places**: `<initialMarking><text>` (a whole number, default 0; PIPE's
-//!   `Default,1` form and TAPAAL's `initialMarking` attribute are accepted),
-//!   `<graphics><position x y>` into `position`, PIPE's `<capacity><value>`
-//!   (0 means unbounded).
+//! - **Places**: `<initialMarking><text>` (a whole number; 0 when absent
+//!   or empty; PIPE's `Default,1` form and TAPAAL's `initialMarking`
+//!   attribute are accepted), `<graphics><position x y>` into `position`,
+//!   PIPE's `<capacity><value>` (0 means unbounded).
 //! - **Arcs**: `source`/`target` ids; place → transition is an input arc,
 //!   transition → place an output arc; place → place and transition →
 //!   transition are errors. `<inscription><text>` is the multiplicity (a
-//!   whole number ≥ 1, default 1; PIPE's `<value>Default,1</value>` and
-//!   TAPAAL's `weight` attribute are accepted).
+//!   whole number ≥ 1; 1 when absent or empty; PIPE's
+//!   `<value>Default,1</value>` and TAPAAL's `weight` attribute are
+//!   accepted).
 //! - **Inhibitor arcs**, in every common encoding: an arc `type` attribute,
 //!   or a `<type>` child (its `value` attribute, or its `<text>`/`<value>`
 //!   child or own text), saying `inhibitor` or `inhibition` (any case), or
@@ -61,7 +62,7 @@
 //! Everything a plain P/T net cannot say goes into `<toolspecific
 //! tool="petrinav" version="1">` elements, each attribute written as
 //! `<attr><value>text</value></attr>` with expressions in
-//! [`Expr`](crate::Expr) syntax:
+//! [`Expr`] syntax:
 //!
 //! ```xml
 //! <net id="supervisor" type="http://www.pnml.org/version-2009/grammar/ptnet">
@@ -198,6 +199,17 @@ fn is_petrinav(node: Node<'_, '_>) -> bool {
 
 struct Reader<'s> {
     source: &'s str,
+}
+
+/// Where an attribute element was found.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Source {
+    /// A child of the object itself (PNML, PIPE).
+    Direct,
+    /// Inside another tool's `<toolspecific>`.
+    OtherTool,
+    /// Inside `<toolspecific tool="petrinav">`.
+    Petrinav,
 }
 
 /// Where an arc end is.
@@ -527,6 +539,10 @@ impl Reader<'_> {
     /// `Class,count` list with tokens of one class.
     fn count(&self, text: &str, node: Node<'_, '_>, what: &dyn Fn() -> String, min: u32) -> Result<Expr> {
         let text = text.trim();
+        if text.is_empty() {
+            // An empty marking or inscription element: the default.
+            return Ok(Expr::Num(f64::from(min)));
+        }
         let parts: Vec<&str> = text.split(',').map(str::trim).collect();
         let number = if parts.len() == 1 {
             text
@@ -560,19 +576,19 @@ impl Reader<'_> {
         }
     }
 
-    /// Children of an element that hold GSPN attributes: direct children
-    /// first, then other tools' `<toolspecific>` content, then petrinav's,
-    /// so that later ones win.
-    fn attributes<'a, 'i>(node: Node<'a, 'i>) -> Vec<(Node<'a, 'i>, bool)> {
-        let mut out: Vec<(Node<'a, 'i>, bool)> = elements(node)
+    /// Children of an element that hold its attributes, with where they
+    /// come from: direct children first, then other tools' `<toolspecific>`
+    /// content, then petrinav's, so that later ones win.
+    fn attributes<'a, 'i>(node: Node<'a, 'i>) -> Vec<(Node<'a, 'i>, Source)> {
+        let mut out: Vec<(Node<'a, 'i>, Source)> = elements(node)
             .filter(|n| n.tag_name().name() != "toolspecific")
-            .map(|n| (n, false))
+            .map(|n| (n, Source::Direct))
             .collect();
         for ts in elements(node).filter(|n| n.tag_name().name() == "toolspecific" && !is_petrinav(*n)) {
-            out.extend(elements(ts).map(|n| (n, false)));
+            out.extend(elements(ts).map(|n| (n, Source::OtherTool)));
         }
         for ts in elements(node).filter(|n| is_petrinav(*n)) {
-            out.extend(elements(ts).map(|n| (n, true)));
+            out.extend(elements(ts).map(|n| (n, Source::Petrinav)));
         }
         out
     }
@@ -586,26 +602,30 @@ impl Reader<'_> {
         }
         let mut capacity = None;
         let mut doc = None;
-        for (item, ours) in Self::attributes(node) {
-            match (item.tag_name().name(), ours) {
-                ("initialMarking", false) => initial = self.count(&value_text(item), item, &what, 0)?,
-                ("hlinitialMarking", false) => return Err(self.coloured(item, &owner)),
-                ("type", false) => return Err(self.coloured(item, &format!("{owner} has a sort (<type>)"))),
-                ("capacity", false) => {
+        for (item, source) in Self::attributes(node) {
+            match (item.tag_name().name(), source) {
+                ("initialMarking", Source::Direct) => {
+                    initial = self.count(&value_text(item), item, &what, 0)?
+                }
+                ("hlinitialMarking", Source::Direct) => return Err(self.coloured(item, &owner)),
+                ("type", Source::Direct) => {
+                    return Err(self.coloured(item, &format!("{owner} has a sort (<type>)")));
+                }
+                ("capacity", Source::Direct | Source::OtherTool) => {
                     // PIPE: 0 means unbounded.
                     capacity = match self.count(&value_text(item), item, &what, 0)?.as_number() {
                         Some(v) if v > 0.0 => Some(v as u32),
                         _ => None,
                     };
                 }
-                ("marking", true) => initial = self.expr_child(item, &owner, "marking")?,
-                ("capacity", true) => {
+                ("marking", Source::Petrinav) => initial = self.expr_child(item, &owner, "marking")?,
+                ("capacity", Source::Petrinav) => {
                     capacity = self
                         .count(&value_text(item), item, &what, 0)?
                         .as_number()
                         .map(|v| v as u32)
                 }
-                ("doc", true) => doc = Some(value_text(item)),
+                ("doc", Source::Petrinav) => doc = Some(value_text(item)),
                 _ => {}
             }
         }
@@ -650,10 +670,10 @@ impl Reader<'_> {
         let mut priority = None;
         let mut servers = Servers::Single;
         let mut doc = None;
-        for (item, ours) in Self::attributes(node) {
+        for (item, source) in Self::attributes(node) {
             let tag = item.tag_name().name();
             let blank = value_text(item).trim().is_empty();
-            match (tag, ours) {
+            match (tag, source) {
                 ("timed", _) => timed = self.boolean(item, &owner)?,
                 ("rate", _) if !blank => rate = Some(self.expr_child(item, &owner, tag)?),
                 ("weight", _) if !blank => weight = Some(self.expr_child(item, &owner, tag)?),
@@ -665,8 +685,8 @@ impl Reader<'_> {
                         Servers::Single
                     }
                 }
-                ("servers", true) => servers = self.servers(item, &owner)?,
-                ("doc", true) => doc = Some(value_text(item)),
+                ("servers", Source::Petrinav) => servers = self.servers(item, &owner)?,
+                ("doc", Source::Petrinav) => doc = Some(value_text(item)),
                 _ => {}
             }
         }
@@ -696,10 +716,10 @@ impl Reader<'_> {
             return Ok(Servers::Infinite);
         }
         match t.parse::<u32>() {
-            Ok(k) => Ok(Servers::K(k)),
-            Err(_) => Err(self.error(
+            Ok(k) if k >= 1 => Ok(Servers::K(k)),
+            _ => Err(self.error(
                 item,
-                format!("{owner}, <servers>: expected single, infinite or a whole number, got `{t}`"),
+                format!("{owner}, <servers>: expected single, infinite or a whole number ≥ 1, got `{t}`"),
             )),
         }
     }
@@ -791,11 +811,15 @@ impl Reader<'_> {
         if let Some(w) = arc.attribute("weight") {
             multiplicity = self.count(w, arc, &what, 1)?;
         }
-        for (item, ours) in Self::attributes(arc) {
-            match (item.tag_name().name(), ours) {
-                ("inscription", false) => multiplicity = self.count(&value_text(item), item, &what, 1)?,
-                ("hlinscription", false) => return Err(self.coloured(item, &owner)),
-                ("multiplicity", true) => multiplicity = self.expr_child(item, &owner, "multiplicity")?,
+        for (item, source) in Self::attributes(arc) {
+            match (item.tag_name().name(), source) {
+                ("inscription", Source::Direct) => {
+                    multiplicity = self.count(&value_text(item), item, &what, 1)?
+                }
+                ("hlinscription", Source::Direct) => return Err(self.coloured(item, &owner)),
+                ("multiplicity", Source::Petrinav) => {
+                    multiplicity = self.expr_child(item, &owner, "multiplicity")?;
+                }
                 _ => {}
             }
         }

@@ -9,11 +9,11 @@
 //!
 //! | element | read as | defaults (GreatSPN's) |
 //! |---|---|---|
-//! | `<place name marking>` | [`Place`](crate::Place), `marking` an expression | `marking` 0 |
+//! | `<place name marking>` | [`Place`], `marking` an expression | `marking` 0 |
 //! | `<transition type="EXP" delay nservers>` | timed; `delay` is the **rate** expression | `delay` 1.0; `nservers` absent: **infinite** servers |
 //! | `<transition type="IMM" weight priority>` | immediate | `weight` 1.0, `priority` 1 |
-//! | `<constant name consttype value>` | [`Param`](crate::Param) with its value | `INTEGER` → int, `REAL` → real |
-//! | `<template name type last-binding>` | [`Param`](crate::Param) without value, `last-binding` as the suggested value | |
+//! | `<constant name consttype value>` | [`Param`] with its value | `INTEGER` → int, `REAL` → real |
+//! | `<template name type last-binding>` | [`Param`] without value, `last-binding` as the suggested value | |
 //! | `<arc kind head tail mult>` | `INPUT` (tail = place, head = transition), `OUTPUT` (tail = transition, head = place), `INHIBITOR` (tail = place) | `mult` 1 |
 //!
 //! - `nservers` is `Infinite`, `Single`, `1` (single server), or a whole
@@ -36,7 +36,7 @@
 //!   (general distributions), `CONT` and continuous places (fluid nets),
 //!   coloured nets (`<colorclass>`, `<color-var>`, places with a `domain`),
 //!   transitions with a `guard`, `<clock-var>`.
-//! - Expressions are parsed with [`Expr::parse`](crate::Expr::parse); an
+//! - Expressions are parsed with [`Expr::parse`]; an
 //!   error names the element and attribute and gives `file:line:column` of
 //!   the attribute's value.
 //!
@@ -60,7 +60,9 @@
 //! than change the net's behaviour silently), documentation, a value
 //! suggested for a parameter that has a value, k = 1 servers as distinct from
 //! a single server, and a timed transition **without rate** (the `delay` is
-//! omitted, which GreatSPN reads as rate 1).
+//! omitted, which GreatSPN reads as rate 1). Names are written as they are:
+//! the GreatSPN editor expects identifiers (letters, digits, `_`) and may
+//! refuse others.
 
 use std::collections::HashMap;
 
@@ -372,7 +374,7 @@ impl Reader<'_> {
                 format!("the values of `{owner}` and `{missing}` depend on each other")
             } else if net.param(&missing).is_some() {
                 format!(
-                    "`{missing}` has no value (a template); a constant's value may only use numbers and constants with values"
+                    "`{missing}` has no value (a template, or a constant without value); a constant's value may only use numbers and constants with values"
                 )
             } else {
                 format!("`{missing}` is not defined")
@@ -852,7 +854,7 @@ mod tests {
     fn constants_depending_on_templates_are_refused() {
         let text = SMALL.replace("value=\"M + 1\"", "value=\"N + 1\"");
         let err = read_pnpro(&text, "s").unwrap_err().to_string();
-        assert!(err.contains("`N` has no value (a template)"), "{err}");
+        assert!(err.contains("`N` has no value (a template"), "{err}");
         let text = SMALL.replace("value=\"2\"", "value=\"K\"");
         let err = read_pnpro(&text, "s").unwrap_err().to_string();
         assert!(err.contains("depend on each other"), "{err}");
