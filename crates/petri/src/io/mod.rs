@@ -52,8 +52,9 @@
 //!   servers, expressions, capacities, documentation and parameters;
 //!   `read(write(net)) == net`.
 //! - **PNPRO** holds everything except capacities (refused when writing),
-//!   documentation, values suggested for parameters that have a value, and a
-//!   missing rate (GreatSPN's default rate 1 is read back).
+//!   documentation, values suggested for parameters that have a value, k = 1
+//!   servers (read back as a single server) and a missing rate (GreatSPN's
+//!   default rate 1 is read back).
 //!
 //! # Decisions common to all readers
 //!
