@@ -6,6 +6,7 @@ pub mod error;
 pub mod expr;
 pub mod families;
 pub mod gspn;
+pub mod io;
 mod linear;
 mod marking;
 pub mod net;
