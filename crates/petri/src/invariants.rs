@@ -116,7 +116,8 @@ pub struct FarkasInfo {
     pub initial_rows: usize,
     /// The most rows any intermediate matrix held.
     pub rows_peak: usize,
-    /// Columns eliminated (columns that are zero from the start need no step).
+    /// Columns eliminated: at most the number of columns, fewer when some
+    /// are zero from the start or become zero in every row (dependent columns).
     pub columns_eliminated: usize,
     /// Pairs of rows of opposite sign examined.
     pub pairs_examined: u64,
