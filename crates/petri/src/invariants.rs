@@ -437,6 +437,9 @@ impl fmt::Display for DisplayInvariants<'_> {
     }
 }
 
+/// `(index, coefficient)` pairs sorted by index.
+type SparseVector = Vec<(u32, u64)>;
+
 /// A row of the Farkas matrix.
 #[derive(Debug, Clone)]
 struct Row {
@@ -459,7 +462,7 @@ fn farkas(
     num_columns: usize,
     params: &FarkasParams,
     kind: InvariantKind,
-) -> Result<(Vec<Vec<(u32, u64)>>, FarkasInfo)> {
+) -> Result<(Vec<SparseVector>, FarkasInfo)> {
     let n = matrix.len();
     let num_columns = matrix
         .iter()
