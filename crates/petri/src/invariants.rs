@@ -98,7 +98,7 @@ use crate::net::TransitionId;
 pub struct FarkasParams {
     /// The most rows the intermediate matrix may hold, the initial rows (one
     /// per place, or per transition) included. A row costs a few dozen bytes
-    /// plus 16 bytes per non-zero entry plus one bit per initial row. Default
+    /// plus 32 bytes per non-zero entry plus one bit per initial row. Default
     /// 100 000.
     pub max_rows: usize,
 }
