@@ -200,6 +200,37 @@ pub enum Error {
     /// A request that makes no sense for this net or these options.
     #[error("{0}")]
     Invalid(String),
+    /// The Farkas algorithm computing minimal invariants needed more
+    /// intermediate rows than allowed (the number of minimal invariants, and of
+    /// intermediate rows, can grow exponentially with the net).
+    #[error(
+        "computing the minimal {what} needs more than {limit} intermediate rows (limit reached after eliminating {eliminated} of {columns} columns); raise the limit (max_rows) if memory allows"
+    )]
+    InvariantRowLimit {
+        /// "P-invariants" or "T-invariants".
+        what: &'static str,
+        /// The configured limit (`FarkasParams::max_rows`).
+        limit: usize,
+        /// Columns eliminated before the limit was reached.
+        eliminated: usize,
+        /// Columns that had to be eliminated (non-zero columns of the matrix).
+        columns: usize,
+    },
+    /// A coefficient of an invariant (or of an intermediate row of the Farkas
+    /// algorithm) does not fit the integers used: arc multiplicities that
+    /// multiply along chains of places can make coefficients astronomically
+    /// large.
+    #[error(
+        "computing the minimal {what}: a coefficient exceeds {limit} (after eliminating {eliminated} columns); the arc multiplicities make the invariants too large to represent"
+    )]
+    InvariantOverflow {
+        /// "P-invariants" or "T-invariants".
+        what: &'static str,
+        /// The largest coefficient supported.
+        limit: u128,
+        /// Columns eliminated when it happened.
+        eliminated: usize,
+    },
 }
 
 /// Shorthand for `Result<T, petri::Error>`.

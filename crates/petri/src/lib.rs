@@ -6,6 +6,8 @@ pub mod error;
 pub mod expr;
 pub mod families;
 pub mod gspn;
+pub mod incidence;
+pub mod invariants;
 pub mod io;
 mod linear;
 mod marking;
@@ -19,6 +21,11 @@ pub use ctmc::{CompileStats, CompiledGspn, Solution};
 pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
 pub use gspn::{Gspn, MarkingKind, Timing};
+pub use incidence::{DisplayIncidence, Incidence};
+pub use invariants::{
+    DisplayInvariant, DisplayInvariants, FarkasInfo, FarkasParams, InvariantKind, Invariants, NamedInvariant,
+    NamedTerm, p_invariants, structural_bounds, t_invariants,
+};
 pub use net::{
     Arc, ArcKind, Net, Param, ParamKind, Params, Place, PlaceId, Servers, Transition, TransitionId,
     TransitionKind,
