@@ -5,6 +5,7 @@ pub mod error;
 pub mod expr;
 pub mod gspn;
 pub mod net;
+pub mod simulation;
 
 pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
@@ -13,3 +14,4 @@ pub use net::{
     Arc, ArcKind, Net, Param, ParamKind, Params, Place, PlaceId, Servers, Transition, TransitionId,
     TransitionKind,
 };
+pub use simulation::{Estimate, SimParams, SimResult, simulate};
