@@ -412,7 +412,11 @@ mod tests {
         assert!(close(normal_quantile(0.975), z, 1e-14));
         assert!(close(normal_quantile(0.025), -z, 1e-14));
         assert!(close(normal_quantile(1e-10), -6.361_340_902_404_056, 1e-12));
-        assert!(close(student_t_quantile(0.975, 1e9), z * (1.0 + (z * z + 1.0) / 4e9), 1e-13));
+        assert!(close(
+            student_t_quantile(0.975, 1e9),
+            z * (1.0 + (z * z + 1.0) / 4e9),
+            1e-13
+        ));
         assert!(close(
             student_t_quantile(0.975, 2e6),
             z * (1.0 + (z * z + 1.0) / 8e6),
