@@ -655,3 +655,93 @@ proptest::proptest! {
         }
     }
 }
+
+/// The tour-guide supervisor net of the spec, with `p` = 1 (AutoMove
+/// hypothesis) or 0 (Contour): a weight-0 branch is left out.
+fn supervisor(automove: bool) -> Net {
+    let (l1, l2) = if automove {
+        (0.001, 1000.0)
+    } else {
+        (1000.0, 0.001)
+    };
+    let lambda = [
+        l1,
+        l2,
+        0.001,
+        1000.0,
+        0.001,
+        1000.0,
+        1.0 / 122.33,
+        1.0 / 186.98,
+        0.001,
+        0.001,
+        1000.0,
+    ];
+    let mut n = Net::new("supervisor");
+    let p: Vec<_> = (0..9)
+        .map(|i| n.add_place(format!("P{i}"), u32::from(matches!(i, 0 | 5 | 7))))
+        .collect();
+    let arcs = |t, ins: &[usize], outs: &[usize], inh: &[usize], n: &mut Net| {
+        for &i in ins {
+            n.input(p[i], t);
+        }
+        for &o in outs {
+            n.output(t, p[o]);
+        }
+        for &h in inh {
+            n.inhibitor(p[h], t);
+        }
+    };
+    if automove {
+        let t0 = n.add_immediate("t0", 1.0, 1);
+        arcs(t0, &[0], &[1], &[], &mut n);
+    } else {
+        let t1 = n.add_immediate("t1", 1.0, 1);
+        arcs(t1, &[0], &[2], &[], &mut n);
+    }
+    // (name, index into lambda, inputs, outputs, inhibitors)
+    type Places = &'static [usize];
+    let timed: [(&str, usize, Places, Places, Places); 12] = [
+        ("t2", 0, &[1, 5], &[2, 5], &[]),
+        ("t4", 1, &[2, 5], &[1, 5], &[]),
+        ("t5", 2, &[5], &[6], &[3, 4]),
+        ("t6", 3, &[6], &[5], &[3, 4]),
+        ("t7", 4, &[7], &[8], &[3, 4]),
+        ("t8", 5, &[8], &[7], &[3, 4]),
+        ("t9", 6, &[1, 7], &[3, 7], &[]),
+        ("t10", 7, &[2], &[3], &[]),
+        ("t11", 8, &[1, 8], &[4, 8], &[]),
+        ("t12", 9, &[2, 6], &[4, 6], &[]),
+        ("t13", 10, &[3], &[0], &[]),
+        ("t14", 10, &[4], &[0], &[]),
+    ];
+    for (name, rate, ins, outs, inh) in timed {
+        let t = n.add_timed(name, lambda[rate]);
+        arcs(t, ins, outs, inh, &mut n);
+    }
+    let t3 = n.add_immediate("t3", 1.0, 1);
+    arcs(t3, &[1, 6], &[2, 6], &[], &mut n);
+    n
+}
+
+#[test]
+fn supervisor_net_gives_the_specified_decision_measures() {
+    // Rates from 1e-3 to 1e3. Each task cycle is a completion (mean 1/λ)
+    // then a re-initialisation (mean 1/1000); localizer and planner
+    // excursions change the throughput by about 1e-6 relative.
+    for (automove, t, lambda) in [(false, "t10", 1.0 / 186.98), (true, "t9", 1.0 / 122.33)] {
+        let (g, r) = instantiate(&supervisor(automove));
+        let params = SimParams {
+            seed: 3,
+            ..SimParams::new(4e6)
+        };
+        let res = simulate(&g, &r, &[], &params).unwrap();
+        let f = res.throughput(t).unwrap();
+        let expected = lambda / (1.0 + lambda / 1000.0);
+        near(f, expected, 4.0, t);
+        precise(f, expected, 0.02, t);
+        if !automove {
+            assert!((f.mean - 0.00535).abs() < 0.0001, "f_cont = {}", f.mean);
+        }
+    }
+}
