@@ -231,6 +231,19 @@ pub enum Error {
         /// Columns eliminated when it happened.
         eliminated: usize,
     },
+    /// A simulation reached its safety cap on transition firings
+    /// (`SimParams::max_events`) before the end of its runs.
+    #[error(
+        "the simulation fired {limit} transitions, its limit, at simulated time {time} (runs end at {end_time}); raise max_events or shorten the runs"
+    )]
+    EventLimit {
+        /// The cap on firings, over all runs.
+        limit: u64,
+        /// Simulated time (within the current run) when it was reached.
+        time: f64,
+        /// The end time of each run.
+        end_time: f64,
+    },
 }
 
 /// Shorthand for `Result<T, petri::Error>`.

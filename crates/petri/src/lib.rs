@@ -14,6 +14,7 @@ mod marking;
 pub mod net;
 pub mod reachability;
 mod scc;
+pub mod simulation;
 pub mod steady_state;
 mod vanishing;
 
@@ -31,4 +32,5 @@ pub use net::{
     TransitionKind,
 };
 pub use reachability::{Edge, ExploreParams, ExploreStats, MarkingId, ReachabilityGraph};
+pub use simulation::{Estimate, SimParams, SimResult, simulate};
 pub use steady_state::{Method, SolveInfo, SolveParams};
