@@ -12,6 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let method = match args.get(2).map(String::as_str) {
         Some("direct") => Method::Direct,
         Some("gs") => Method::GaussSeidel,
+        Some("bicgstab") => Method::Bicgstab,
         _ => Method::Auto,
     };
     let net = match family {

@@ -17,14 +17,17 @@
 
 use std::time::Instant;
 
+use hashbrown::HashMap;
+
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::gspn::Gspn;
 use crate::marking::MarkingStore;
 use crate::net::{Params, PlaceId, TransitionId};
 use crate::reachability::{ExploreParams, ExploreStats, ReachabilityGraph};
+use crate::rows::{Chain, Ids, Rows};
 use crate::scc::{Components, Successors};
-use crate::steady_state::{self, NumericRows, SolveInfo, SolveParams, SymbolicRows};
+use crate::steady_state::{self, SolveInfo, SolveParams};
 use crate::vanishing;
 
 const NONE: u32 = u32::MAX;
@@ -36,6 +39,8 @@ pub struct CompileStats {
     pub explore: ExploreStats,
     /// Entries `(s, t, s')` of the symbolic generator (self-loops included).
     pub entries: usize,
+    /// Distinct `(transition, coefficient)` values among them.
+    pub distinct_values: usize,
     /// Seconds spent eliminating vanishing markings and building the chain.
     pub compile_seconds: f64,
     /// Number of strongly connected components of the tangible chain.
@@ -53,19 +58,16 @@ pub struct CompiledGspn {
     stats: CompileStats,
     store: MarkingStore,
     tangible_rg: Vec<u32>,
-    // Outgoing entries per tangible state (self-loops kept for throughputs).
-    out_offsets: Vec<u64>,
-    out_dst: Vec<u32>,
-    out_trans: Vec<u32>,
-    out_coeff: Option<Vec<f64>>,
-    // Incoming entries per tangible state, self-loops left out.
-    in_offsets: Vec<u64>,
-    in_src: Vec<u32>,
-    in_trans: Vec<u32>,
-    in_coeff: Option<Vec<f64>>,
+    /// `(transition, coefficient)` of each value id.
+    dictionary: Vec<(u32, f64)>,
+    /// Outgoing entries per state (index = target), self-loops kept.
+    outgoing: Rows,
+    /// Incoming entries per state (index = source), self-loops left out.
+    incoming: Rows,
     imm: ImmediateFlows,
     initial: Vec<(u32, f64)>,
-    components: Components,
+    /// `None` when the chain is irreducible.
+    components: Option<Components>,
     bottoms: Vec<Vec<u32>>,
     transient: Vec<u32>,
 }
@@ -89,7 +91,7 @@ pub struct Solution {
     /// Residual of the absorption equations (0 for ergodic chains).
     pub absorption_residual: f64,
     /// Long-run probability of ending in each bottom component, in the order
-    /// of [`CompiledGspn::bottom_components`].
+    /// of [`CompiledGspn::bottom_components`] (`[1.0]` for an ergodic chain).
     pub bottom_probabilities: Vec<f64>,
 }
 
@@ -108,15 +110,6 @@ impl Solution {
     pub fn prob_nonempty(&self, p: PlaceId) -> f64 {
         self.prob_nonempty[p.index()]
     }
-}
-
-/// Entries of the generator per source state: `q(s, dst[k]) += rate[trans[k]] · coeff[k]`.
-#[derive(Debug, Clone, Default)]
-struct Entries {
-    offsets: Vec<u64>,
-    dst: Vec<u32>,
-    trans: Vec<u32>,
-    coeff: Option<Vec<f64>>,
 }
 
 /// Timed firings `(src, trans, coeff)` that enter vanishing markings, with
@@ -142,19 +135,66 @@ impl Default for ImmediateFlows {
     }
 }
 
-struct OutGraph<'a> {
-    offsets: &'a [u64],
-    dst: &'a [u32],
-}
-
-impl Successors for OutGraph<'_> {
+impl Successors for Rows {
     fn num_nodes(&self) -> usize {
-        self.offsets.len() - 1
+        self.len()
     }
 
     fn successors(&self, v: u32) -> &[u32] {
-        &self.dst[self.offsets[v as usize] as usize..self.offsets[v as usize + 1] as usize]
+        let (a, b) = self.range(v as usize);
+        &self.index[a..b]
     }
+}
+
+/// Assigns value ids to `(transition, coefficient)` pairs.
+struct Dictionary {
+    pairs: Vec<(u32, f64)>,
+    index: HashMap<(u32, u64), u32>,
+}
+
+impl Dictionary {
+    fn new(num_transitions: usize) -> Dictionary {
+        // Ids 0..T are the pairs (t, 1): the common case needs no lookup.
+        Dictionary {
+            pairs: (0..num_transitions as u32).map(|t| (t, 1.0)).collect(),
+            index: HashMap::new(),
+        }
+    }
+
+    #[inline]
+    fn id(&mut self, t: u32, c: f64) -> u32 {
+        if c == 1.0 {
+            return t;
+        }
+        let pairs = &mut self.pairs;
+        *self.index.entry((t, c.to_bits())).or_insert_with(|| {
+            pairs.push((t, c));
+            (pairs.len() - 1) as u32
+        })
+    }
+}
+
+/// Whether every state reaches and is reached from state 0 (one forward
+/// and one backward search; cheaper than Tarjan for the common ergodic case).
+fn irreducible(outgoing: &Rows, incoming: &Rows) -> bool {
+    let n = outgoing.len();
+    let all_reached = |g: &Rows| {
+        let mut seen = vec![false; n];
+        let mut stack = vec![0u32];
+        seen[0] = true;
+        let mut count = 1;
+        while let Some(v) = stack.pop() {
+            for &w in g.successors(v) {
+                if !seen[w as usize] {
+                    seen[w as usize] = true;
+                    count += 1;
+                    stack.push(w);
+                }
+            }
+        }
+        count == n
+    };
+    n > 0 && all_reached(outgoing) && all_reached(incoming)
 }
 
 impl CompiledGspn {
@@ -175,25 +215,26 @@ impl CompiledGspn {
                 tangible_rg.push(i as u32);
             }
         }
-        let explore = rg.stats.clone();
+        let n = tangible_rg.len();
+        let mut dict = Dictionary::new(gspn.num_transitions());
         let mut imm = ImmediateFlows::default();
-        let (chain, initial) = if explore.vanishing == 0 {
-            // No vanishing markings: tangible ids are RG indices, the RG is the chain.
-            let chain = Entries {
-                offsets: rg.offsets,
-                dst: rg.targets,
-                trans: rg.transitions,
-                coeff: rg.coeffs,
+        let (offsets, dst, ids, initial) = if rg.stats.vanishing == 0 {
+            // Tangible ids are RG indices: the RG's edges are the chain.
+            let ids: Vec<u32> = match &rg.coeffs {
+                None => rg.transitions.clone(),
+                Some(cs) => rg
+                    .transitions
+                    .iter()
+                    .zip(cs)
+                    .map(|(&t, &c)| dict.id(t, c))
+                    .collect(),
             };
-            (chain, vec![(0u32, 1.0)])
+            (rg.offsets.clone(), rg.targets.clone(), ids, vec![(0u32, 1.0)])
         } else {
             let el = vanishing::eliminate(&gspn, &rg, &tangible_id)?;
-            let mut chain = Entries {
-                offsets: Vec::with_capacity(tangible_rg.len() + 1),
-                ..Entries::default()
-            };
-            chain.offsets.push(0);
-            let mut coeff = Vec::new();
+            let mut offsets = Vec::with_capacity(n + 1);
+            offsets.push(0u64);
+            let (mut dst, mut ids) = (Vec::new(), Vec::new());
             let mut row: Vec<(u32, u32, f64)> = Vec::new();
             for &s in &tangible_rg {
                 row.clear();
@@ -218,69 +259,36 @@ impl CompiledGspn {
                 }
                 // Merge entries with the same target and transition.
                 row.sort_unstable_by_key(|e| (e.0, e.1));
-                let mut last = None;
-                for &(u, t, c) in &row {
-                    if last == Some((u, t)) {
-                        if let Some(x) = coeff.last_mut() {
-                            *x += c;
-                        }
-                    } else {
-                        chain.dst.push(u);
-                        chain.trans.push(t);
-                        coeff.push(c);
-                        last = Some((u, t));
+                let mut i = 0;
+                while i < row.len() {
+                    let (u, t, mut c) = row[i];
+                    i += 1;
+                    while i < row.len() && row[i].0 == u && row[i].1 == t {
+                        c += row[i].2;
+                        i += 1;
                     }
+                    dst.push(u);
+                    ids.push(dict.id(t, c));
                 }
-                chain.offsets.push(chain.dst.len() as u64);
+                offsets.push(dst.len() as u64);
             }
-            chain.coeff = if coeff.iter().all(|&c| c == 1.0) {
-                None
-            } else {
-                Some(coeff)
-            };
             let initial = if rg.vanishing[0] {
                 el.dist(0).to_vec()
             } else {
                 vec![(tangible_id[0], 1.0)]
             };
-            (chain, initial)
+            (offsets, dst, ids, initial)
         };
+        let explore = rg.stats.clone();
         let mut store = rg.store;
         store.drop_index();
-        Ok(CompiledGspn::finish(
-            gspn,
-            explore,
-            store,
-            tangible_rg,
-            chain,
-            imm,
-            initial,
-            start,
-        ))
-    }
+        drop(tangible_id);
 
-    #[allow(clippy::too_many_arguments)]
-    fn finish(
-        gspn: Gspn,
-        explore: ExploreStats,
-        store: MarkingStore,
-        tangible_rg: Vec<u32>,
-        chain: Entries,
-        imm: ImmediateFlows,
-        initial: Vec<(u32, f64)>,
-        start: Instant,
-    ) -> CompiledGspn {
-        let Entries {
-            offsets: out_offsets,
-            dst: out_dst,
-            trans: out_trans,
-            coeff: out_coeff,
-        } = chain;
-        let n = tangible_rg.len();
-        // Transpose, leaving self-loops out.
+        // Incoming rows: the transpose without self-loops. Sources are visited
+        // in order, so each row comes out sorted.
         let mut in_offsets = vec![0u64; n + 1];
         for s in 0..n {
-            for &d in &out_dst[out_offsets[s] as usize..out_offsets[s + 1] as usize] {
+            for &d in &dst[offsets[s] as usize..offsets[s + 1] as usize] {
                 if d as usize != s {
                     in_offsets[d as usize + 1] += 1;
                 }
@@ -292,71 +300,76 @@ impl CompiledGspn {
         let m = in_offsets[n] as usize;
         let mut fill: Vec<u64> = in_offsets[..n].to_vec();
         let mut in_src = vec![0u32; m];
-        let mut in_trans = vec![0u32; m];
-        let mut in_coeff = out_coeff.as_ref().map(|_| vec![0.0; m]);
+        let mut in_ids = vec![0u32; m];
         for s in 0..n {
-            for k in out_offsets[s] as usize..out_offsets[s + 1] as usize {
-                let d = out_dst[k] as usize;
+            for k in offsets[s] as usize..offsets[s + 1] as usize {
+                let d = dst[k] as usize;
                 if d != s {
                     let pos = fill[d] as usize;
                     fill[d] += 1;
                     in_src[pos] = s as u32;
-                    in_trans[pos] = out_trans[k];
-                    if let (Some(ic), Some(oc)) = (in_coeff.as_mut(), out_coeff.as_ref()) {
-                        ic[pos] = oc[k];
-                    }
+                    in_ids[pos] = ids[k];
                 }
             }
         }
         drop(fill);
-        let components = Components::of(&OutGraph {
-            offsets: &out_offsets,
-            dst: &out_dst,
-        });
-        let bottom_ids = components.bottoms();
-        let mut bottom_index = vec![NONE; components.len()];
-        for (b, &c) in bottom_ids.iter().enumerate() {
-            bottom_index[c as usize] = b as u32;
-        }
-        let mut bottoms = vec![Vec::new(); bottom_ids.len()];
-        let mut transient = Vec::new();
-        if bottom_ids.len() > 1 || components.len() > 1 {
+        let dl = dict.pairs.len();
+        let outgoing = Rows {
+            offsets,
+            index: dst,
+            ids: Ids::new(ids, dl),
+            below: Vec::new(),
+        };
+        let mut incoming = Rows {
+            offsets: in_offsets,
+            index: in_src,
+            ids: Ids::new(in_ids, dl),
+            below: Vec::new(),
+        };
+        incoming.split_diagonal();
+
+        let (components, bottoms, transient) = if irreducible(&outgoing, &incoming) {
+            (None, Vec::new(), Vec::new())
+        } else {
+            let c = Components::of(&outgoing);
+            let bottom_ids = c.bottoms();
+            let mut bottom_index = vec![NONE; c.len()];
+            for (b, &id) in bottom_ids.iter().enumerate() {
+                bottom_index[id as usize] = b as u32;
+            }
+            let mut bottoms = vec![Vec::new(); bottom_ids.len()];
+            let mut transient = Vec::new();
             for s in 0..n as u32 {
-                let b = bottom_index[components.comp[s as usize] as usize];
-                if b == NONE {
-                    transient.push(s);
-                } else {
-                    bottoms[b as usize].push(s);
+                match bottom_index[c.comp[s as usize] as usize] {
+                    NONE => transient.push(s),
+                    b => bottoms[b as usize].push(s),
                 }
             }
-        }
+            (Some(c), bottoms, transient)
+        };
         let stats = CompileStats {
             explore,
-            entries: out_dst.len(),
+            entries: outgoing.index.len(),
+            distinct_values: dl,
             compile_seconds: start.elapsed().as_secs_f64(),
-            components: components.len(),
-            bottom_components: bottom_ids.len(),
+            components: components.as_ref().map_or(1, |c| c.len()),
+            bottom_components: if components.is_some() { bottoms.len() } else { 1 },
             transient_states: transient.len(),
         };
-        CompiledGspn {
+        Ok(CompiledGspn {
             gspn,
             stats,
             store,
             tangible_rg,
-            out_offsets,
-            out_dst,
-            out_trans,
-            out_coeff,
-            in_offsets,
-            in_src,
-            in_trans,
-            in_coeff,
+            dictionary: dict.pairs,
+            outgoing,
+            incoming,
             imm,
             initial,
             components,
             bottoms,
             transient,
-        }
+        })
     }
 
     /// The instantiated net.
@@ -387,26 +400,24 @@ impl CompiledGspn {
     }
 
     /// Tangible states of each bottom strongly connected component (empty
-    /// list of lists when the chain is irreducible: one component, all states).
+    /// when the chain is irreducible).
     pub fn bottom_components(&self) -> &[Vec<u32>] {
         &self.bottoms
     }
 
     /// Whether the chain is irreducible (ergodic).
     pub fn is_ergodic(&self) -> bool {
-        self.components.len() == 1
+        self.components.is_none()
     }
 
     /// Approximate heap bytes of the compiled chain.
     pub fn heap_bytes(&self) -> usize {
         self.store.heap_bytes()
             + self.tangible_rg.capacity() * 4
-            + (self.out_offsets.capacity() + self.in_offsets.capacity()) * 8
-            + (self.out_dst.capacity() + self.out_trans.capacity()) * 4
-            + (self.in_src.capacity() + self.in_trans.capacity()) * 4
-            + self.out_coeff.as_ref().map_or(0, |c| c.capacity() * 8)
-            + self.in_coeff.as_ref().map_or(0, |c| c.capacity() * 8)
-            + self.components.comp.capacity() * 4
+            + self.outgoing.heap_bytes()
+            + self.incoming.heap_bytes()
+            + self.dictionary.capacity() * 16
+            + self.components.as_ref().map_or(0, |c| c.comp.capacity() * 4)
     }
 
     /// Evaluates the rates from the net's parameters with `overrides`, and
@@ -444,74 +455,89 @@ impl CompiledGspn {
             }
         }
         let n = self.num_tangible();
-        let exit = self.exit_rates(rates);
-        let rows = SymbolicRows {
-            offsets: &self.in_offsets,
-            src: &self.in_src,
-            trans: &self.in_trans,
-            coeff: self.in_coeff.as_deref(),
-            rates,
+        let values: Vec<f64> = self
+            .dictionary
+            .iter()
+            .map(|&(t, c)| rates[t as usize] * c)
+            .collect();
+        let exit = self.exit_rates(&values);
+        let chain = Chain {
+            incoming: &self.incoming,
+            values: &values,
             exit: &exit,
         };
         let mut pi = vec![0.0; n];
         let mut info;
         let mut absorption_residual = 0.0;
         let mut bottom_probabilities = Vec::new();
-        if self.is_ergodic() {
-            let (x, i) = steady_state::solve(&rows, None, params)?;
-            pi = x;
-            info = i;
-            bottom_probabilities.push(1.0);
-        } else {
-            // Probability of ending in each bottom component.
-            let mut init = vec![0.0; n];
-            for &(s, p) in &self.initial {
-                init[s as usize] += p;
+        match &self.components {
+            None => {
+                let (x, i) = steady_state::solve(&chain, None, params)?;
+                pi = x;
+                info = i;
+                bottom_probabilities.push(1.0);
             }
-            let mut comp_prob = vec![0.0; self.components.len()];
-            for (s, &p) in init.iter().enumerate() {
-                comp_prob[self.components.comp[s] as usize] += p;
-            }
-            if !self.transient.is_empty() {
-                let (sub, _) = self.sub_chain(&self.transient, rates, &exit);
-                let b: Vec<f64> = self.transient.iter().map(|&s| init[s as usize]).collect();
-                let (x, ai) = steady_state::solve(&sub, Some(&b), params)?;
-                absorption_residual = ai.residual;
-                for (&s, &xs) in self.transient.iter().zip(&x) {
-                    let s = s as usize;
-                    for k in self.out_offsets[s] as usize..self.out_offsets[s + 1] as usize {
-                        let d = self.out_dst[k] as usize;
-                        let c = self.components.comp[d] as usize;
-                        if self.components.bottom[c] {
-                            comp_prob[c] += xs * rates[self.out_trans[k] as usize] * self.out_c(k);
+            Some(components) => {
+                // Probability of ending in each bottom component.
+                let mut init = vec![0.0; n];
+                for &(s, p) in &self.initial {
+                    init[s as usize] += p;
+                }
+                let mut comp_prob = vec![0.0; components.len()];
+                for (s, &p) in init.iter().enumerate() {
+                    comp_prob[components.comp[s] as usize] += p;
+                }
+                if !self.transient.is_empty() {
+                    let sub = self.sub_chain(&self.transient);
+                    let sub_exit: Vec<f64> = self.transient.iter().map(|&s| exit[s as usize]).collect();
+                    let sub_chain = Chain {
+                        incoming: &sub,
+                        values: &values,
+                        exit: &sub_exit,
+                    };
+                    let b: Vec<f64> = self.transient.iter().map(|&s| init[s as usize]).collect();
+                    let (x, ai) = steady_state::solve(&sub_chain, Some(&b), params)?;
+                    absorption_residual = ai.residual;
+                    for (&s, &xs) in self.transient.iter().zip(&x) {
+                        let (a, b) = self.outgoing.range(s as usize);
+                        for k in a..b {
+                            let c = components.comp[self.outgoing.index[k] as usize] as usize;
+                            if components.bottom[c] {
+                                comp_prob[c] += xs * values[self.outgoing.ids.get(k)];
+                            }
                         }
                     }
                 }
-            }
-            info = SolveInfo {
-                method: "trivial",
-                ..SolveInfo::default()
-            };
-            let mut largest = 0;
-            for states in &self.bottoms {
-                let c = self.components.comp[states[0] as usize] as usize;
-                let prob = comp_prob[c];
-                bottom_probabilities.push(prob);
-                let (sub, _) = self.sub_chain(states, rates, &exit);
-                let (x, i) = steady_state::solve(&sub, None, params)?;
-                if states.len() >= largest {
-                    largest = states.len();
-                    info.method = i.method;
-                }
-                info.iterations += i.iterations;
-                for (&s, &v) in states.iter().zip(&x) {
-                    pi[s as usize] = prob * v;
+                info = SolveInfo {
+                    method: "trivial",
+                    ..SolveInfo::default()
+                };
+                let mut largest = 0;
+                for states in &self.bottoms {
+                    let prob = comp_prob[components.comp[states[0] as usize] as usize];
+                    bottom_probabilities.push(prob);
+                    let sub = self.sub_chain(states);
+                    let sub_exit: Vec<f64> = states.iter().map(|&s| exit[s as usize]).collect();
+                    let sub_chain = Chain {
+                        incoming: &sub,
+                        values: &values,
+                        exit: &sub_exit,
+                    };
+                    let (x, i) = steady_state::solve(&sub_chain, None, params)?;
+                    if states.len() >= largest {
+                        largest = states.len();
+                        info.method = i.method;
+                    }
+                    info.iterations += i.iterations;
+                    for (&s, &v) in states.iter().zip(&x) {
+                        pi[s as usize] = prob * v;
+                    }
                 }
             }
         }
-        info.residual = steady_state::residual(&rows, &pi, None);
+        info.residual = steady_state::residual(&chain, &pi, None);
         info.seconds = start.elapsed().as_secs_f64();
-        let throughput = self.throughputs(&pi, rates);
+        let throughput = self.throughputs(&pi, rates, &values);
         let (mean_tokens, prob_nonempty) = self.place_measures(&pi);
         Ok(Solution {
             pi,
@@ -525,62 +551,50 @@ impl CompiledGspn {
         })
     }
 
-    #[inline]
-    fn out_c(&self, k: usize) -> f64 {
-        self.out_coeff.as_ref().map_or(1.0, |c| c[k])
+    fn exit_rates(&self, values: &[f64]) -> Vec<f64> {
+        let out = &self.outgoing;
+        (0..self.num_tangible())
+            .map(|s| {
+                let (a, b) = out.range(s);
+                (a..b)
+                    .filter(|&k| out.index[k] as usize != s)
+                    .map(|k| values[out.ids.get(k)])
+                    .sum()
+            })
+            .collect()
     }
 
-    fn exit_rates(&self, rates: &[f64]) -> Vec<f64> {
-        let n = self.num_tangible();
-        let mut exit = vec![0.0; n];
-        for (s, e) in exit.iter_mut().enumerate() {
-            let (a, b) = (self.out_offsets[s] as usize, self.out_offsets[s + 1] as usize);
-            let mut sum = 0.0;
-            for k in a..b {
-                if self.out_dst[k] as usize != s {
-                    sum += rates[self.out_trans[k] as usize] * self.out_c(k);
-                }
-            }
-            *e = sum;
-        }
-        exit
-    }
-
-    /// The chain restricted to `states` (sorted), with numeric entries; exit
-    /// rates stay the full ones (flow leaving the subset counts as exit).
-    fn sub_chain(&self, states: &[u32], rates: &[f64], exit: &[f64]) -> (NumericRows, Vec<u32>) {
-        let n = self.num_tangible();
-        let mut local = vec![NONE; n];
+    /// Incoming rows of the chain restricted to `states` (sorted), in local
+    /// indices; value ids are shared with the whole chain.
+    fn sub_chain(&self, states: &[u32]) -> Rows {
+        let mut local = vec![NONE; self.num_tangible()];
         for (i, &s) in states.iter().enumerate() {
             local[s as usize] = i as u32;
         }
         let mut entries = Vec::new();
         for (i, &s) in states.iter().enumerate() {
-            let s = s as usize;
-            for k in self.out_offsets[s] as usize..self.out_offsets[s + 1] as usize {
-                let d = self.out_dst[k] as usize;
-                if d != s && local[d] != NONE {
-                    entries.push((
-                        local[d],
-                        i as u32,
-                        rates[self.out_trans[k] as usize] * self.out_c(k),
-                    ));
+            let (a, b) = self.outgoing.range(s as usize);
+            for k in a..b {
+                let d = self.outgoing.index[k] as usize;
+                if d != s as usize && local[d] != NONE {
+                    entries.push((local[d], i as u32, self.outgoing.ids.get(k) as u32));
                 }
             }
         }
-        let ex = states.iter().map(|&s| exit[s as usize]).collect();
-        (NumericRows::from_entries(states.len(), entries, ex), local)
+        Rows::from_entries(states.len(), entries, self.dictionary.len())
     }
 
-    fn throughputs(&self, pi: &[f64], rates: &[f64]) -> Vec<f64> {
+    fn throughputs(&self, pi: &[f64], rates: &[f64], values: &[f64]) -> Vec<f64> {
         let mut x = vec![0.0; self.gspn.num_transitions()];
+        let out = &self.outgoing;
         for (s, &p) in pi.iter().enumerate() {
             if p == 0.0 {
                 continue;
             }
-            for k in self.out_offsets[s] as usize..self.out_offsets[s + 1] as usize {
-                let t = self.out_trans[k] as usize;
-                x[t] += p * rates[t] * self.out_c(k);
+            let (a, b) = out.range(s);
+            for k in a..b {
+                let id = out.ids.get(k);
+                x[self.dictionary[id].0 as usize] += p * values[id];
             }
         }
         let imm = &self.imm;

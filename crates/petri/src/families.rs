@@ -202,9 +202,9 @@ pub fn philosophers(n: u32) -> Net {
 /// `work`) before returning to idle.
 pub fn robots_corridors(n: u32, k: u32) -> Net {
     let mut net = Net::new(format!("robots{n}_corridors{k}"));
-    let request = rate(&mut net, "request", 0.5);
-    let traverse = rate(&mut net, "traverse", 2.0);
-    let work = rate(&mut net, "work", 0.25);
+    let request = rate(&mut net, "r_request", 0.5);
+    let traverse = rate(&mut net, "r_traverse", 2.0);
+    let work = rate(&mut net, "r_work", 0.25);
     let idle = net.add_place("Idle", n);
     let waiting = net.add_place("Waiting", 0u32);
     let working = net.add_place("Working", 0u32);

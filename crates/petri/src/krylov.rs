@@ -1,0 +1,268 @@
+//! Preconditioned BiCGSTAB for the stationary equations of large chains,
+//! running on all cores with results independent of the thread count.
+//!
+//! The singular system `π Q = 0` is made regular by fixing `π_k = 1` for one
+//! state `k`: row `j ≠ k` is the balance equation
+//! `exit_j x_j − Σ_i q_ij x_i = 0`, row `k` is `x_k = 1`. This matrix `A` is a
+//! non-singular M-matrix; its solution, normalised, is `π`. `k` is the most
+//! probable state after a few Gauss–Seidel sweeps, so that no entry of `x`
+//! is astronomically large.
+//!
+//! Iteration: BiCGSTAB (van der Vorst 1992; Saad, *Iterative Methods for
+//! Sparse Linear Systems*, Alg. 7.7), right-preconditioned by a *block*
+//! Gauss–Seidel sweep `M = D − L_B`, where `L_B` keeps the entries below the
+//! diagonal that lie inside the same block of consecutive states ([`BLOCKS`]
+//! blocks of at least [`MIN_BLOCK`] states).
+//! Gauss–Seidel is the preconditioner Stewart (1994, §4.4) recommends next to
+//! ILU(0); on our benchmark families it needs about as many iterations as
+//! ILU(0) at a fraction of the cost and no extra storage, and the blocks lose
+//! little (BFS numbering keeps most neighbours close). With `A = M − R`,
+//! Eisenstat's trick gives `A M⁻¹ p = p − R y` for `y = M⁻¹ p`, so one
+//! preconditioned product is one pass over the entries: the forward
+//! substitution reads the in-block entries below the diagonal, the product
+//! the rest. A breakdown (`ρ` or `r̂·v` vanishing) restarts with a fresh
+//! shadow residual.
+//!
+//! **Determinism.** Blocks and reduction chunks have fixed sizes, each block
+//! and chunk is computed sequentially, and partial sums are added in chunk
+//! order: the same input gives bit-identical output on 1 thread or 64.
+//!
+//! Cost per iteration: two preconditioned products (`O(nnz)` each, blocks in
+//! parallel) and a few vector operations. Memory: 9 vectors of `n` doubles
+//! plus 12 bytes per state.
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::rows::Chain;
+use crate::steady_state::{SolveParams, residual};
+
+/// Number of blocks of the preconditioner for chains of at least
+/// [`MIN_BLOCK`] states per block; fixed, so that results do not depend on
+/// the number of threads.
+pub const BLOCKS: usize = 2;
+/// Smallest block worth running in parallel.
+pub const MIN_BLOCK: usize = 1 << 16;
+
+fn block_size(n: usize) -> usize {
+    n.div_ceil(BLOCKS).max(MIN_BLOCK)
+}
+/// Elements per chunk of the parallel vector operations.
+const CHUNK: usize = 1 << 14;
+
+/// The regularised matrix with what the blocked sweeps need per row.
+struct Blocked<'a, 'c> {
+    chain: &'a Chain<'c>,
+    k: usize,
+    inv_exit: Vec<f64>,
+    /// Entries of each row with an index before the row's block.
+    cross: Vec<u32>,
+    block: usize,
+}
+
+impl<'a, 'c> Blocked<'a, 'c> {
+    fn new(chain: &'a Chain<'c>, k: usize) -> Self {
+        let n = chain.n();
+        let rows = chain.incoming;
+        let block = block_size(n);
+        let cross = (0..n)
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .map(|j| {
+                let lo = (j / block * block) as u32;
+                let (a, _) = rows.range(j);
+                rows.index[a..a + rows.below[j] as usize].partition_point(|&i| i < lo) as u32
+            })
+            .collect();
+        let inv_exit = (0..n).map(|j| 1.0 / chain.exit(j)).collect();
+        Blocked {
+            chain,
+            k,
+            inv_exit,
+            cross,
+            block,
+        }
+    }
+
+    /// `y = A x`.
+    fn matvec(&self, x: &[f64], y: &mut [f64]) {
+        y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, yc)| {
+            for (jj, yj) in yc.iter_mut().enumerate() {
+                let j = c * CHUNK + jj;
+                *yj = if j == self.k {
+                    x[j]
+                } else {
+                    self.chain.exit(j) * x[j] - self.chain.inflow(j, x)
+                };
+            }
+        });
+    }
+
+    /// `y = M⁻¹ p` and `v = A y = p − R y`, blocks in parallel.
+    fn precondition_apply(&self, p: &[f64], y: &mut [f64], v: &mut [f64]) {
+        let rows = self.chain.incoming;
+        let values = self.chain.values;
+        y.par_chunks_mut(self.block).enumerate().for_each(|(blk, yb)| {
+            let lo = blk * self.block;
+            for jj in 0..yb.len() {
+                let j = lo + jj;
+                yb[jj] = if j == self.k {
+                    p[j]
+                } else {
+                    let a = rows.offsets[j] as usize;
+                    let inner = rows.dot_span_offset(
+                        a + self.cross[j] as usize,
+                        a + rows.below[j] as usize,
+                        values,
+                        yb,
+                        lo,
+                    );
+                    (p[j] + inner) * self.inv_exit[j]
+                };
+            }
+        });
+        let y = &*y;
+        v.par_chunks_mut(CHUNK).enumerate().for_each(|(c, vc)| {
+            for (jj, vj) in vc.iter_mut().enumerate() {
+                let j = c * CHUNK + jj;
+                *vj = if j == self.k {
+                    p[j]
+                } else {
+                    let (a, b) = rows.range(j);
+                    let before = rows.dot_span_offset(a, a + self.cross[j] as usize, values, y, 0);
+                    let after = rows.dot_span_offset(a + rows.below[j] as usize, b, values, y, 0);
+                    p[j] - (before + after)
+                };
+            }
+        });
+    }
+}
+
+/// `a · b`, summed per fixed chunk and then in chunk order.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let partial: Vec<f64> = a
+        .par_chunks(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .map(|(x, y)| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>())
+        .collect();
+    partial.iter().sum()
+}
+
+/// `out[j] = f(j, out[j])` in parallel.
+fn update(out: &mut [f64], f: impl Fn(usize, f64) -> f64 + Sync) {
+    out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, oc)| {
+        for (jj, o) in oc.iter_mut().enumerate() {
+            *o = f(c * CHUNK + jj, *o);
+        }
+    });
+}
+
+fn normalised(x: &[f64]) -> Vec<f64> {
+    let partial: Vec<f64> = x.par_chunks(CHUNK).map(|c| c.iter().sum::<f64>()).collect();
+    let s: f64 = partial.iter().sum();
+    x.par_iter().map(|v| (v / s).max(0.0)).collect()
+}
+
+/// Solves the stationary equations of an irreducible chain (`n ≥ 2`, every
+/// exit rate > 0). Returns the distribution and the iterations done.
+pub(crate) fn bicgstab(chain: &Chain<'_>, params: &SolveParams) -> Result<(Vec<f64>, usize)> {
+    let n = chain.n();
+    // A few Gauss–Seidel sweeps give the starting point and the pinned state.
+    let mut x = vec![1.0 / n as f64; n];
+    for _ in 0..3 {
+        for j in 0..n {
+            x[j] = chain.inflow(j, &x) / chain.exit(j);
+        }
+    }
+    let k = (0..n)
+        .max_by(|&a, &b| x[a].total_cmp(&x[b]))
+        .filter(|&k| x[k] > 0.0 && x[k].is_finite())
+        .unwrap_or(0);
+    let xk = x[k];
+    if xk > 0.0 && xk.is_finite() {
+        x.iter_mut().for_each(|v| *v /= xk);
+    } else {
+        x.iter_mut().for_each(|v| *v = 1.0);
+    }
+    let a = Blocked::new(chain, k);
+    let b = |j: usize| if j == k { 1.0 } else { 0.0 };
+
+    let mut r = vec![0.0; n];
+    let (mut v, mut p, mut y, mut s, mut z, mut t) = (
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+    );
+    let mut it = 0;
+    let mut last = f64::INFINITY;
+    // Check the true residual only when the cheap one says it may be met;
+    // the ratio of the two is learnt on the way.
+    let mut check_below = params.tolerance * 1e3;
+    let converged = |x: &[f64], cheap: f64, last: &mut f64, check_below: &mut f64| {
+        if cheap > *check_below {
+            return None;
+        }
+        let pi = normalised(x);
+        *last = residual(chain, &pi, None);
+        if *last <= params.tolerance {
+            return Some(pi);
+        }
+        *check_below = (cheap * params.tolerance / *last).min(params.tolerance * 1e3);
+        None
+    };
+    while it < params.max_iterations {
+        a.matvec(&x, &mut r);
+        update(&mut r, |j, ax| b(j) - ax);
+        if let Some(pi) = converged(&x, dot(&r, &r).sqrt(), &mut last, &mut check_below) {
+            return Ok((pi, it));
+        }
+        let rhat = r.clone();
+        let (mut rho, mut alpha, mut omega) = (1.0, 1.0, 1.0);
+        v.iter_mut().for_each(|e| *e = 0.0);
+        p.iter_mut().for_each(|e| *e = 0.0);
+        while it < params.max_iterations {
+            it += 1;
+            let rho_new = dot(&rhat, &r);
+            if rho_new == 0.0 || !rho_new.is_finite() {
+                break; // restart
+            }
+            let beta = (rho_new / rho) * (alpha / omega);
+            rho = rho_new;
+            update(&mut p, |j, pj| r[j] + beta * (pj - omega * v[j]));
+            a.precondition_apply(&p, &mut y, &mut v);
+            let rv = dot(&rhat, &v);
+            if rv == 0.0 || !rv.is_finite() {
+                break;
+            }
+            alpha = rho / rv;
+            update(&mut s, |j, _| r[j] - alpha * v[j]);
+            a.precondition_apply(&s, &mut z, &mut t);
+            let tt = dot(&t, &t);
+            omega = if tt > 0.0 { dot(&t, &s) / tt } else { 0.0 };
+            update(&mut x, |j, xj| xj + alpha * y[j] + omega * z[j]);
+            update(&mut r, |j, _| s[j] - omega * t[j]);
+            let cheap = dot(&r, &r).sqrt();
+            if !cheap.is_finite() {
+                break;
+            }
+            if let Some(pi) = converged(&x, cheap, &mut last, &mut check_below) {
+                return Ok((pi, it));
+            }
+            if omega == 0.0 {
+                break;
+            }
+        }
+        if !x.iter().all(|v| v.is_finite()) {
+            break;
+        }
+    }
+    Err(Error::NoConvergence {
+        solver: "BiCGSTAB",
+        iterations: it,
+        residual: last,
+        tolerance: params.tolerance,
+    })
+}

@@ -1,0 +1,208 @@
+//! Compressed sparse rows whose values come from a small dictionary.
+//!
+//! Every entry of a GSPN's generator is `rate[t] · c` where the pair
+//! `(t, c)` — transition and coefficient (server factor × vanishing path
+//! probability) — takes few distinct values. Entries therefore store an index
+//! into a dictionary of pairs (2 bytes when there are at most 65,536 of them,
+//! 4 otherwise) instead of a transition and a coefficient (12 bytes); binding
+//! new rates only recomputes the dictionary's values. The solvers are bound by
+//! memory traffic, so this makes every pass over the chain faster.
+
+/// Dictionary indices, as narrow as the dictionary allows.
+#[derive(Debug, Clone)]
+pub(crate) enum Ids {
+    /// At most 65,536 distinct values.
+    U16(Vec<u16>),
+    /// More.
+    U32(Vec<u32>),
+}
+
+impl Ids {
+    pub(crate) fn new(ids: Vec<u32>, dictionary_len: usize) -> Ids {
+        if dictionary_len <= usize::from(u16::MAX) + 1 {
+            Ids::U16(ids.into_iter().map(|i| i as u16).collect())
+        } else {
+            Ids::U32(ids)
+        }
+    }
+
+    #[inline]
+    pub(crate) fn get(&self, k: usize) -> usize {
+        match self {
+            Ids::U16(v) => usize::from(v[k]),
+            Ids::U32(v) => v[k] as usize,
+        }
+    }
+
+    fn bytes(&self) -> usize {
+        match self {
+            Ids::U16(v) => v.capacity() * 2,
+            Ids::U32(v) => v.capacity() * 4,
+        }
+    }
+}
+
+/// Rows of `(index, value id)` entries, indices sorted within each row.
+#[derive(Debug, Clone)]
+pub(crate) struct Rows {
+    pub offsets: Vec<u64>,
+    pub index: Vec<u32>,
+    pub ids: Ids,
+    /// Per row, how many entries have an index below the row's own
+    /// (computed by [`Rows::split_diagonal`], for triangular sweeps).
+    pub below: Vec<u32>,
+}
+
+/// An index type of the dictionary.
+trait Id: Copy {
+    fn at(self) -> usize;
+}
+
+impl Id for u16 {
+    #[inline]
+    fn at(self) -> usize {
+        usize::from(self)
+    }
+}
+
+impl Id for u32 {
+    #[inline]
+    fn at(self) -> usize {
+        self as usize
+    }
+}
+
+/// Dot product with two independent accumulators, so that consecutive
+/// additions do not wait on each other (rows are short; the sweeps are bound
+/// by this latency, not by memory bandwidth).
+/// `x` holds the states from `offset` on.
+#[inline]
+fn dot<I: Id>(index: &[u32], ids: &[I], values: &[f64], x: &[f64], offset: usize) -> f64 {
+    let (mut s0, mut s1) = (0.0, 0.0);
+    let mut pairs = index.chunks_exact(2).zip(ids.chunks_exact(2));
+    for (i, id) in &mut pairs {
+        s0 += x[i[0] as usize - offset] * values[id[0].at()];
+        s1 += x[i[1] as usize - offset] * values[id[1].at()];
+    }
+    if index.len() % 2 == 1 {
+        let k = index.len() - 1;
+        s0 += x[index[k] as usize - offset] * values[ids[k].at()];
+    }
+    s0 + s1
+}
+
+impl Rows {
+    /// Builds rows from `(row, index, id)` entries.
+    pub(crate) fn from_entries(n: usize, mut entries: Vec<(u32, u32, u32)>, dictionary_len: usize) -> Rows {
+        entries.sort_unstable_by_key(|e| (e.0, e.1));
+        let mut offsets = vec![0u64; n + 1];
+        for e in &entries {
+            offsets[e.0 as usize + 1] += 1;
+        }
+        for j in 0..n {
+            offsets[j + 1] += offsets[j];
+        }
+        let mut rows = Rows {
+            offsets,
+            index: entries.iter().map(|e| e.1).collect(),
+            ids: Ids::new(entries.iter().map(|e| e.2).collect(), dictionary_len),
+            below: Vec::new(),
+        };
+        rows.split_diagonal();
+        rows
+    }
+
+    /// Records where each row crosses the diagonal.
+    pub(crate) fn split_diagonal(&mut self) {
+        self.below = (0..self.len())
+            .map(|j| {
+                let (a, b) = self.range(j);
+                self.index[a..b].partition_point(|&i| (i as usize) < j) as u32
+            })
+            .collect();
+    }
+
+    /// Number of rows.
+    pub(crate) fn len(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    #[inline]
+    pub(crate) fn range(&self, j: usize) -> (usize, usize) {
+        (self.offsets[j] as usize, self.offsets[j + 1] as usize)
+    }
+
+    #[inline]
+    fn dot_span(&self, a: usize, b: usize, values: &[f64], x: &[f64]) -> f64 {
+        self.dot_span_offset(a, b, values, x, 0)
+    }
+
+    /// Dot product over entries `a..b`, with `x[i - offset]` for state `i`.
+    #[inline]
+    pub(crate) fn dot_span_offset(
+        &self,
+        a: usize,
+        b: usize,
+        values: &[f64],
+        x: &[f64],
+        offset: usize,
+    ) -> f64 {
+        if a >= b {
+            return 0.0;
+        }
+        match &self.ids {
+            Ids::U16(v) => dot(&self.index[a..b], &v[a..b], values, x, offset),
+            Ids::U32(v) => dot(&self.index[a..b], &v[a..b], values, x, offset),
+        }
+    }
+
+    /// `Σ_k x[index_k] · values[id_k]` over row `j`.
+    #[inline]
+    pub(crate) fn dot_row(&self, j: usize, values: &[f64], x: &[f64]) -> f64 {
+        let (a, b) = self.range(j);
+        self.dot_span(a, b, values, x)
+    }
+
+    /// Heap bytes.
+    pub(crate) fn heap_bytes(&self) -> usize {
+        self.offsets.capacity() * 8 + self.index.capacity() * 4 + self.ids.bytes() + self.below.capacity() * 4
+    }
+}
+
+/// A chain for one binding of the rates: incoming rows, the dictionary's
+/// values and the exit rates.
+pub(crate) struct Chain<'a> {
+    pub incoming: &'a Rows,
+    pub values: &'a [f64],
+    pub exit: &'a [f64],
+}
+
+impl Chain<'_> {
+    /// Number of states.
+    pub(crate) fn n(&self) -> usize {
+        self.exit.len()
+    }
+
+    /// Total exit rate of state `j` (self-loops excluded).
+    #[inline]
+    pub(crate) fn exit(&self, j: usize) -> f64 {
+        self.exit[j]
+    }
+
+    /// `Σ_{i≠j} x_i q_ij`.
+    #[inline]
+    pub(crate) fn inflow(&self, j: usize, x: &[f64]) -> f64 {
+        self.incoming.dot_row(j, self.values, x)
+    }
+
+    /// Calls `f(i, q_ij)` for the incoming entries of `j`.
+    pub(crate) fn for_each_in(&self, j: usize, f: &mut dyn FnMut(usize, f64)) {
+        let (a, b) = self.incoming.range(j);
+        for k in a..b {
+            f(
+                self.incoming.index[k] as usize,
+                self.values[self.incoming.ids.get(k)],
+            );
+        }
+    }
+}
