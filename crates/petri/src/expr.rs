@@ -202,6 +202,7 @@ impl Expr {
             text,
             chars: text.char_indices().collect(),
             pos: 0,
+            depth: 0,
         };
         let e = p.or()?;
         p.skip_ws();
@@ -370,8 +371,17 @@ impl Expr {
                 a.fmt_prec(f, 7)
             }
             Expr::Not(a) => {
+                // `not` binds looser than comparisons and arithmetic.
+                let paren = parent > 3;
+                if paren {
+                    f.write_str("(")?;
+                }
                 f.write_str("not ")?;
-                a.fmt_prec(f, 3)
+                a.fmt_prec(f, 3)?;
+                if paren {
+                    f.write_str(")")?;
+                }
+                Ok(())
             }
             Expr::Binary(op, a, b) => {
                 let p = op.precedence();
@@ -379,7 +389,8 @@ impl Expr {
                 if paren {
                     f.write_str("(")?;
                 }
-                a.fmt_prec(f, p)?;
+                // Comparisons do not chain: a comparison operand needs parentheses.
+                a.fmt_prec(f, if p == 4 { p + 1 } else { p })?;
                 write!(f, " {} ", op.symbol())?;
                 // Left-associative: the right operand needs parentheses at equal precedence.
                 b.fmt_prec(f, p + 1)?;
@@ -411,11 +422,19 @@ pub fn fmt_number(v: f64) -> String {
     }
 }
 
+fn is_infinity(n: &str) -> bool {
+    matches!(n, "inf" | "infinity" | "Infinity")
+}
+
+/// Whether a name can be written without quotes. Names containing `"` cannot
+/// be written in an expression at all (no escape exists).
 fn is_plain_name(n: &str) -> bool {
     let mut chars = n.chars();
     matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
         && chars.all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '.')
         && !matches!(n, "and" | "or" | "not")
+        && !is_infinity(n)
+        && Func::from_name(n).is_none()
 }
 
 fn write_name(f: &mut fmt::Formatter<'_>, n: &str) -> fmt::Result {
@@ -455,7 +474,7 @@ impl CompiledExpr {
         for op in &self.code {
             match *op {
                 Op::Const(v) => stack.push(v),
-                Op::Tokens(p) => stack.push(f64::from(marking[p])),
+                Op::Tokens(p) => stack.push(marking.get(p).map_or(0.0, |&k| f64::from(k))),
                 Op::Neg => {
                     let a = stack.pop().unwrap_or(0.0);
                     stack.push(-a);
@@ -485,9 +504,26 @@ struct Parser<'a> {
     text: &'a str,
     chars: Vec<(usize, char)>,
     pos: usize,
+    depth: usize,
 }
 
+/// Deepest nesting (parentheses, unary operators, function calls) an
+/// expression may have: the parser is recursive, and no input may exhaust
+/// the stack.
+pub const MAX_DEPTH: usize = 64;
+
 impl Parser<'_> {
+    /// Enters one level of nesting, failing beyond [`MAX_DEPTH`].
+    fn nest(&mut self) -> Result<()> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.error(&format!(
+                "the expression is nested more than {MAX_DEPTH} levels deep"
+            )));
+        }
+        Ok(())
+    }
+
     fn error(&self, message: &str) -> Error {
         Error::Expr {
             text: self.text.to_string(),
@@ -556,7 +592,10 @@ impl Parser<'_> {
                 && self.chars.get(self.pos + 1).map(|c| c.1) != Some('=')
                 && self.eat("!"))
         {
-            return Ok(Expr::Not(Box::new(self.not()?)));
+            self.nest()?;
+            let inner = self.not()?;
+            self.depth -= 1;
+            return Ok(Expr::Not(Box::new(inner)));
         }
         self.cmp()
     }
@@ -614,14 +653,19 @@ impl Parser<'_> {
 
     fn unary(&mut self) -> Result<Expr> {
         if self.eat("-") {
+            self.nest()?;
             let a = self.unary()?;
+            self.depth -= 1;
             return Ok(match a {
                 Expr::Num(v) => Expr::Num(-v),
                 a => Expr::Neg(Box::new(a)),
             });
         }
         if self.eat("+") {
-            return self.unary();
+            self.nest()?;
+            let a = self.unary();
+            self.depth -= 1;
+            return a;
         }
         self.atom()
     }
@@ -658,10 +702,12 @@ impl Parser<'_> {
             None => Err(self.error("unexpected end of the expression")),
             Some('(') => {
                 self.pos += 1;
+                self.nest()?;
                 let e = self.or()?;
                 if !self.eat(")") {
                     return Err(self.error("expected `)`"));
                 }
+                self.depth -= 1;
                 Ok(e)
             }
             Some('#') => {
@@ -671,8 +717,9 @@ impl Parser<'_> {
             Some(c) if c.is_ascii_digit() || c == '.' => self.number(),
             Some(c) if c.is_ascii_alphabetic() || c == '_' || c == '"' => {
                 let start = self.pos;
+                let quoted = c == '"';
                 let n = self.name()?;
-                if matches!(n.as_str(), "and" | "or" | "not") {
+                if !quoted && matches!(n.as_str(), "and" | "or" | "not") {
                     self.pos = start;
                     return Err(self.error("expected a value before this operator"));
                 }
@@ -683,6 +730,7 @@ impl Parser<'_> {
                             "unknown function `{n}` (known: min, max, abs, floor, ceil)"
                         )));
                     };
+                    self.nest()?;
                     let mut args = vec![self.or()?];
                     while self.eat(",") {
                         args.push(self.or()?);
@@ -694,9 +742,10 @@ impl Parser<'_> {
                         self.pos = start;
                         return Err(self.error(&format!("wrong number of arguments for `{n}`")));
                     }
+                    self.depth -= 1;
                     return Ok(Expr::Call(func, args));
                 }
-                if n == "inf" || n == "infinity" || n == "Infinity" {
+                if !quoted && is_infinity(&n) {
                     return Ok(Expr::Num(f64::INFINITY));
                 }
                 Ok(Expr::Param(n))
@@ -780,11 +829,30 @@ mod tests {
             "-x / 2",
             "1.5e-7 * lambda1",
             "min(#P, 3) * mu",
+            "(a < b) < c",
+            "(not a) = b",
+            "(not a) * b",
+            "\"inf\" + inf",
+            "\"min\" * 2",
         ] {
             let e = Expr::parse(s).unwrap();
             let again = Expr::parse(&e.to_string()).unwrap();
             assert_eq!(e, again, "{s} -> {e}");
         }
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        for deep in [
+            "(".repeat(5000) + "1" + &")".repeat(5000),
+            "-".repeat(5000) + "1",
+            "not ".repeat(5000) + "1",
+        ] {
+            let err = Expr::parse(&deep).unwrap_err().to_string();
+            assert!(err.contains("nested"), "{err}");
+        }
+        let ok = "(".repeat(MAX_DEPTH - 1) + "1" + &")".repeat(MAX_DEPTH - 1);
+        assert_eq!(Expr::parse(&ok).unwrap(), Expr::Num(1.0));
     }
 
     #[test]

@@ -205,7 +205,19 @@ impl Gspn {
                     merged.insert(key, m);
                 }
                 Some(old) if a.kind == ArcKind::Inhibitor => *old = (*old).min(m),
-                Some(old) => *old = old.saturating_add(m),
+                Some(old) => {
+                    *old = old.checked_add(m).ok_or_else(|| Error::InvalidValue {
+                        element: format!(
+                            "the parallel {} arcs between `{}` and `{}`",
+                            a.kind.name(),
+                            net.places[a.place.index()].name,
+                            net.transitions[a.transition.index()].name
+                        ),
+                        what: "the total multiplicity",
+                        requirement: "at most 4294967295",
+                        value: f64::from(*old) + f64::from(m),
+                    })?
+                }
             }
         }
         let mut ins = vec![Vec::new(); nt];
@@ -472,8 +484,10 @@ impl Gspn {
         })
     }
 
-    /// Enabling degree: how many times `t` could fire concurrently (at least
-    /// 1 for an enabled transition without input arcs).
+    /// Enabling degree: how many times `t` could fire concurrently. A
+    /// transition without input arcs has degree 1 (so an infinite-server
+    /// source behaves as a single server). Markings passed to the firing-rule
+    /// methods must have one entry per place of this net.
     #[inline]
     pub fn enabling_degree(&self, t: TransitionId, m: &[u32]) -> u32 {
         self.inputs(t)
@@ -501,20 +515,38 @@ impl Gspn {
         }
     }
 
-    /// Fires `t` in `m` (which must enable it). Fails if a count would
-    /// overflow.
+    /// Fires `t` in `m` (a marking of this net, which must enable `t`).
+    /// Fails, leaving `m` unchanged, if a count would go negative (`t` was
+    /// not enabled) or overflow.
     pub fn fire(&self, t: TransitionId, m: &mut [u32]) -> Result<()> {
         for &(p, d) in self.delta(t) {
             let v = i64::from(m[p as usize]) + d;
-            if v < 0 || v > i64::from(u32::MAX) {
+            if v < 0 {
+                return Err(Error::Invalid(format!(
+                    "transition `{}` fired while not enabled (place `{}` would go negative)",
+                    self.transition_names[t.index()],
+                    self.place_names[p as usize]
+                )));
+            }
+            if v > i64::from(u32::MAX) {
                 return Err(Error::TokenOverflow {
                     place: self.place_names[p as usize].clone(),
                     limit: u64::from(u32::MAX),
                 });
             }
-            m[p as usize] = v as u32;
+        }
+        for &(p, d) in self.delta(t) {
+            m[p as usize] = (i64::from(m[p as usize]) + d) as u32;
         }
         Ok(())
+    }
+
+    /// Compiles a measure expression (over token counts `#place` and the
+    /// net's parameters) for evaluation on this net's markings.
+    pub fn compile_expr(&self, expr: &Expr) -> Result<crate::expr::CompiledExpr> {
+        expr.compile(&|n| self.place_names.iter().position(|p| p == n), &|n| {
+            self.params.get(n).copied().flatten()
+        })
     }
 
     /// Collects into `out` the transitions that may fire in `m` under GSPN

@@ -416,7 +416,15 @@ impl Net {
                 });
             }
         }
+        let mut params = std::collections::BTreeSet::new();
         for p in &self.params {
+            if !params.insert(p.name.as_str()) {
+                return Err(Error::DuplicateName {
+                    name: p.name.clone(),
+                    first: "a parameter",
+                    second: "a parameter",
+                });
+            }
             if seen.contains_key(p.name.as_str()) {
                 return Err(Error::DuplicateName {
                     name: p.name.clone(),
@@ -465,6 +473,18 @@ impl Net {
                     return Err(Error::UnknownParameter {
                         name: name.clone(),
                         known,
+                    });
+                }
+            }
+        }
+        for p in &self.params {
+            if let (ParamKind::Int, Some(v)) = (p.kind, values.get(&p.name).copied().flatten()) {
+                if v != v.trunc() || !v.is_finite() {
+                    return Err(Error::InvalidValue {
+                        element: format!("integer parameter `{}`", p.name),
+                        what: "the value",
+                        requirement: "a whole number",
+                        value: v,
                     });
                 }
             }

@@ -477,7 +477,7 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     assert!(
         read(&text, Format::Toml, "n")
             .to_string()
-            .contains("deeper than 64")
+            .contains("nested more than 64 levels")
     );
     let text = format!("name = \"x\"\n[params]\na = {}", "[".repeat(100_000));
     assert!(matches!(read(&text, Format::Toml, "n"), Error::Format { .. }));

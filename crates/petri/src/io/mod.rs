@@ -71,7 +71,7 @@
 //!   and name the element and attribute at fault. Bad input never panics.
 //! - A leading byte-order mark is skipped; an empty file is an error.
 //! - Expressions in files are limited to [`MAX_EXPRESSION_CHARS`] characters
-//!   and [`MAX_EXPRESSION_DEPTH`] nested parentheses, so that a file cannot
+//!   and [`crate::expr::MAX_DEPTH`] nested parentheses, so that a file cannot
 //!   exhaust the stack of the (recursive) expression parser.
 
 use std::fmt;
@@ -335,35 +335,16 @@ fn parse_xml<'a>(text: &'a str, source: &str) -> Result<roxmltree::Document<'a>>
 
 /// The longest expression a file may hold, in characters.
 pub const MAX_EXPRESSION_CHARS: usize = 2000;
-/// The deepest nesting of parentheses an expression in a file may hold.
-pub const MAX_EXPRESSION_DEPTH: usize = 64;
-
-/// Why an expression is too big to parse safely, if it is: the expression
-/// parser is recursive, and a file must not be able to exhaust the stack.
+/// Why an expression is too long to accept from a file, if it is (nesting
+/// depth is limited by the parser itself).
 fn too_big(text: &str) -> Option<String> {
-    if text.chars().count() > MAX_EXPRESSION_CHARS {
-        return Some(format!(
-            "the expression is longer than {MAX_EXPRESSION_CHARS} characters"
-        ));
-    }
-    let (mut depth, mut deepest) = (0usize, 0usize);
-    for c in text.chars() {
-        match c {
-            '(' => {
-                depth += 1;
-                deepest = deepest.max(depth);
-            }
-            ')' => depth = depth.saturating_sub(1),
-            _ => {}
-        }
-    }
-    (deepest > MAX_EXPRESSION_DEPTH)
-        .then(|| format!("the expression nests parentheses deeper than {MAX_EXPRESSION_DEPTH} levels"))
+    (text.chars().count() > MAX_EXPRESSION_CHARS)
+        .then(|| format!("the expression is longer than {MAX_EXPRESSION_CHARS} characters"))
 }
 
 /// Parses an expression found in a file; `what` names the element and
 /// attribute for the error message. Expressions longer than
-/// [`MAX_EXPRESSION_CHARS`] or nested deeper than [`MAX_EXPRESSION_DEPTH`]
+/// [`MAX_EXPRESSION_CHARS`] or nested deeper than [`crate::expr::MAX_DEPTH`]
 /// are refused.
 fn parse_expr(text: &str, location: impl FnOnce() -> String, what: impl FnOnce() -> String) -> Result<Expr> {
     if let Some(message) = too_big(text) {
@@ -484,7 +465,7 @@ mod tests {
         let what = || "x".to_string();
         let deep = format!("{}1{}", "(".repeat(500), ")".repeat(500));
         let err = parse_expr(&deep, loc, what).unwrap_err().to_string();
-        assert!(err.contains("deeper than 64"), "{err}");
+        assert!(err.contains("nested more than 64 levels"), "{err}");
         let long = "-".repeat(100_000) + "1";
         let err = parse_expr(&long, loc, what).unwrap_err().to_string();
         assert!(err.contains("longer than 2000"), "{err}");
