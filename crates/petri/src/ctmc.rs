@@ -394,6 +394,17 @@ impl CompiledGspn {
         m
     }
 
+    /// The symbolic entries leaving tangible state `s`: `(target, transition,
+    /// coefficient)`, meaning rate `rate(transition) · coefficient` from `s`
+    /// to `target` (targets may equal `s`: firings that come back).
+    pub fn entries_from(&self, s: usize) -> impl Iterator<Item = (u32, TransitionId, f64)> + '_ {
+        let (a, b) = self.outgoing.range(s);
+        (a..b).map(move |k| {
+            let (t, c) = self.dictionary[self.outgoing.ids.get(k)];
+            (self.outgoing.index[k], TransitionId(t), c)
+        })
+    }
+
     /// Distribution over tangible markings reached from `M0` in zero time.
     pub fn initial_distribution(&self) -> &[(u32, f64)] {
         &self.initial

@@ -13,6 +13,7 @@ pub mod krylov;
 mod linear;
 mod marking;
 pub mod net;
+pub mod properties;
 pub mod reachability;
 mod rows;
 mod scc;
@@ -33,6 +34,7 @@ pub use net::{
     Arc, ArcKind, Net, Param, ParamKind, Params, Place, PlaceId, Servers, Transition, TransitionId,
     TransitionKind,
 };
+pub use properties::Properties;
 pub use reachability::{Edge, ExploreParams, ExploreStats, MarkingId, ReachabilityGraph};
 pub use simulation::{Estimate, SimParams, SimResult, simulate};
 pub use steady_state::{Method, SolveInfo, SolveParams};

@@ -12,13 +12,26 @@
 //! - Node ids are the names, quoted (names are unique across places and
 //!   transitions); the output is valid DOT whatever the names contain.
 //!
+//! [`write_reachability_dot`] and [`write_tangible_dot`] draw the
+//! reachability graph (tangible markings as ellipses, vanishing ones as
+//! dashed boxes, the initial marking bold, dead markings red; edges labelled
+//! with the transition and its probability or server factor) and the
+//! tangible reachability graph (the CTMC: edges labelled with the transition
+//! and the rate, or the symbolic coefficient when no rates are given).
+//! Markings are labelled with their marked places (`P1 P5 Q(2)`). Graphs
+//! larger than the given limit are refused: nobody reads a drawing of a
+//! million states.
+//!
 //! DOT is an export format: it cannot be read back.
 
 use std::fmt::Write as _;
 
-use crate::error::Result;
-use crate::expr::Expr;
+use crate::ctmc::CompiledGspn;
+use crate::error::{Error, Result};
+use crate::expr::{Expr, fmt_number};
+use crate::gspn::Gspn;
 use crate::net::{ArcKind, Net, Servers, TransitionKind};
+use crate::reachability::{MarkingId, ReachabilityGraph};
 
 /// A DOT double-quoted string.
 fn quote(s: &str) -> String {
@@ -35,6 +48,99 @@ fn quote(s: &str) -> String {
     }
     out.push('"');
     out
+}
+
+fn too_large(what: &str, n: usize, limit: usize) -> Result<()> {
+    if n > limit {
+        return Err(Error::Invalid(format!(
+            "the {what} has {n} markings, more than the {limit} a drawing may have (raise the limit if you really want it)"
+        )));
+    }
+    Ok(())
+}
+
+fn graph_header(out: &mut String, name: &str) {
+    let _ = writeln!(out, "digraph {} {{", quote(name));
+    out.push_str("  node [fontname=\"Helvetica\", fontsize=10];\n");
+    out.push_str("  edge [fontname=\"Helvetica\", fontsize=9];\n");
+}
+
+/// Writes the reachability graph (tangible and vanishing markings) as DOT;
+/// fails if it has more than `max_markings` markings.
+pub fn write_reachability_dot(gspn: &Gspn, rg: &ReachabilityGraph, max_markings: usize) -> Result<String> {
+    too_large("reachability graph", rg.num_markings(), max_markings)?;
+    let mut out = String::new();
+    graph_header(&mut out, &format!("{} RG", gspn.name()));
+    let names = gspn.transition_names();
+    for i in 0..rg.num_markings() {
+        let id = MarkingId(i as u32);
+        let label = format!("M{i}\n{}", gspn.format_marking(&rg.marking(id)));
+        let mut style = if rg.is_vanishing(id) {
+            "shape=box, style=dashed".to_string()
+        } else {
+            "shape=ellipse".to_string()
+        };
+        if i == 0 {
+            style.push_str(", penwidth=2");
+        }
+        if rg.edges(id).next().is_none() {
+            style.push_str(", color=red");
+        }
+        let _ = writeln!(out, "  m{i} [{style}, label={}];", quote(&label));
+    }
+    for i in 0..rg.num_markings() {
+        for e in rg.edges(MarkingId(i as u32)) {
+            let t = &names[e.transition.index()];
+            let label = if e.coeff == 1.0 {
+                t.clone()
+            } else {
+                format!("{t} ×{}", fmt_number(e.coeff))
+            };
+            let _ = writeln!(out, "  m{i} -> m{} [label={}];", e.target.0, quote(&label));
+        }
+    }
+    out.push_str("}\n");
+    Ok(out)
+}
+
+/// Writes the tangible reachability graph (the CTMC after vanishing
+/// markings are eliminated) as DOT, edges labelled with their rate when
+/// `rates` (by transition) are given; fails beyond `max_markings` states.
+pub fn write_tangible_dot(
+    compiled: &CompiledGspn,
+    rates: Option<&[f64]>,
+    max_markings: usize,
+) -> Result<String> {
+    let n = compiled.num_tangible();
+    too_large("tangible reachability graph", n, max_markings)?;
+    let gspn = compiled.gspn();
+    let mut out = String::new();
+    graph_header(&mut out, &format!("{} TRG", gspn.name()));
+    for s in 0..n {
+        let label = format!("T{s}\n{}", gspn.format_marking(&compiled.tangible_marking(s)));
+        let _ = writeln!(out, "  s{s} [shape=ellipse, label={}];", quote(&label));
+    }
+    for (s, p) in compiled.initial_distribution() {
+        let _ = writeln!(
+            out,
+            "  s{s} [penwidth=2, xlabel={}];",
+            quote(&format!("M0 p={}", fmt_number(*p)))
+        );
+    }
+    let names = gspn.transition_names();
+    for s in 0..n {
+        for (d, t, c) in compiled.entries_from(s) {
+            let name = &names[t.index()];
+            let label = match rates {
+                Some(r) => format!("{name} {:.4e}", r[t.index()] * c),
+                None if c == 1.0 => name.clone(),
+                None => format!("{name} ×{}", fmt_number(c)),
+            };
+            let _ = writeln!(out, "  s{s} -> s{d} [label={}];", quote(&label));
+        }
+    }
+    out.push_str("}\n");
+    Ok(out)
 }
 
 /// Writes the net as a DOT digraph.
@@ -152,5 +258,28 @@ mod tests {
         assert!(dot.contains("\"t\" -> \"q\";"), "{dot}");
         assert!(dot.contains("\"q\" -> \"u\" [arrowhead=odot];"), "{dot}");
         assert!(dot.ends_with("}\n"));
+    }
+}
+
+#[cfg(test)]
+mod graph_tests {
+    use super::*;
+    use crate::net::Params;
+    use crate::reachability::ExploreParams;
+
+    #[test]
+    fn reachability_and_tangible_graphs_draw() {
+        let g = crate::families::robots_corridors(2, 2)
+            .instantiate(&Params::new())
+            .unwrap();
+        let rg = ReachabilityGraph::explore(&g, &ExploreParams::default()).unwrap();
+        let dot = write_reachability_dot(&g, &rg, 1000).unwrap();
+        assert!(dot.starts_with("digraph") && dot.contains("style=dashed") && dot.contains("-> m"));
+        assert_eq!(dot.matches(" -> ").count(), rg.num_edges());
+        let c = CompiledGspn::from_graph(g.clone(), rg.clone()).unwrap();
+        let rates = g.rates(&Params::new(), None).unwrap();
+        let trg = write_tangible_dot(&c, Some(&rates), 1000).unwrap();
+        assert!(trg.contains("-> s") && !trg.contains("dashed"));
+        assert!(write_reachability_dot(&g, &rg, 3).is_err());
     }
 }

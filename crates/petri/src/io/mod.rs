@@ -86,7 +86,7 @@ pub mod pnml;
 pub mod pnpro;
 pub mod toml_format;
 
-pub use dot::write_dot;
+pub use dot::{write_dot, write_reachability_dot, write_tangible_dot};
 pub use pnml::{read_pnml, write_pnml};
 pub use pnpro::{read_pnpro, read_pnpro_named, write_pnpro};
 pub use toml_format::{read_toml, write_toml};
