@@ -1,4 +1,40 @@
-//! Generalized Stochastic Petri Nets.
+//! Generalized Stochastic Petri Nets: models, state spaces, CTMC solvers,
+//! measures, structural properties, simulation and file formats.
+//!
+//! Load a net, solve its CTMC, read a throughput:
+//!
+//! ```
+//! use petri::{CompiledGspn, ExploreParams, Params, SolveParams};
+//!
+//! // The supervisor net of the tour-guide robot, in petrinav's TOML format
+//! // (`io::read_file` reads .toml, .pnpro and .pnml files the same way).
+//! let text = include_str!("../../../models/supervisor.toml");
+//! let net = petri::io::read_str(text, petri::io::Format::Toml, "supervisor.toml")?;
+//! let gspn = net.instantiate(&Params::new())?;
+//! let compiled = CompiledGspn::build(&gspn, &ExploreParams::default())?;
+//! assert_eq!(compiled.num_tangible(), 13);
+//!
+//! // Compile once, solve for any rates: only the rates are re-bound.
+//! let rates = Params::new().with("lambda7", 1.0 / 122.33);
+//! let solution = compiled.solve(&rates, None, &SolveParams::default())?;
+//! let t9 = gspn.transition("t9")?;
+//! println!("AutoMove completions per second: {:.5}", solution.throughput(t9));
+//! assert!(solution.info.residual < 1e-10);
+//! # Ok::<(), petri::Error>(())
+//! ```
+//!
+//! | step | module |
+//! |---|---|
+//! | read and write nets (PNPRO, PNML, TOML, DOT) | [`io`] |
+//! | the net as written, with parameters | [`net`], [`expr`] |
+//! | the net instantiated, firing rule | [`gspn`] |
+//! | reachability graph | [`reachability`] |
+//! | vanishing elimination, CTMC, long-run solution, measures | [`ctmc`] |
+//! | steady-state methods (GTH, LU, BiCGSTAB, Gauss–Seidel) | [`steady_state`], [`krylov`] |
+//! | structural analysis | [`incidence`], [`invariants`] |
+//! | behavioural properties | [`properties`] |
+//! | discrete-event simulation | [`simulation`] |
+//! | scalable benchmark nets | [`families`] |
 #![warn(missing_docs)]
 
 pub mod ctmc;

@@ -10,7 +10,7 @@
 //!
 //! Successors are computed on the packed marking: the transition's token
 //! changes are added to the bit fields directly, widening a field first if a
-//! count would not fit (see [`crate::marking`]). Cost: `O(|T|)` enabling tests
+//! count would not fit (see the `marking` module). Cost: `O(|T|)` enabling tests
 //! per marking plus one hash probe per edge. Memory: the packed marking (often
 //! 8 bytes) + ~5 bytes of hash table per marking, 8 bytes per edge (+8 when
 //! some coefficient differs from 1).

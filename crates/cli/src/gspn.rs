@@ -1,0 +1,706 @@
+//! `petrinav gspn …`: the GSPN engine on the command line.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand, ValueEnum};
+use nav::supervisor::{Behaviour, Rates, Supervisor};
+use petri::io::Format;
+use petri::{
+    CompiledGspn, ExploreParams, Expr, FarkasParams, Gspn, Method, Net, Params, Properties,
+    ReachabilityGraph, SimParams, SolveParams,
+};
+use serde_json::{Value, json};
+
+use crate::output::{Table, fields, num};
+use crate::{out, outln};
+
+#[derive(Subcommand, Debug)]
+pub enum GspnCommand {
+    /// Size, structure and behavioural properties of a net: reachability
+    /// graph, dead markings, bounds, liveness, invariants.
+    ///
+    /// Example: petrinav gspn info FlexibleManufacturingSystem.PNPRO --param N=3
+    Info(InfoArgs),
+    /// Steady-state solution: probabilities, mean tokens, throughputs, measures.
+    ///
+    /// Example: petrinav gspn solve model.toml --measure '#P1 = 1 and #P7 = 1'
+    Solve(SolveArgs),
+    /// The tour-guide supervisor's decision between AutoMove and Contour
+    /// tracking, on the shipped supervisor net.
+    ///
+    /// Unspecified rates take the source's initial values. Example:
+    /// petrinav gspn select --set lambda7=1/122.33 --set lambda8=1/186.98
+    Select(SelectArgs),
+    /// Discrete-event simulation with confidence intervals (batch means).
+    ///
+    /// Example: petrinav gspn simulate model.toml --time 100000 --seed 1
+    Simulate(SimulateArgs),
+    /// Converts between formats, chosen by extension: .pnpro (GreatSPN),
+    /// .pnml (ISO 15909-2), .toml (petrinav), .dot (Graphviz, output only).
+    Convert {
+        /// Input file.
+        input: PathBuf,
+        /// Output file.
+        output: PathBuf,
+    },
+    /// Graphviz drawing of the net, its reachability graph or its tangible
+    /// reachability graph (CTMC). Render with `dot -Tsvg`.
+    Dot(DotArgs),
+    /// Writes a member of a scalable benchmark family as a model file.
+    ///
+    /// Example: petrinav gspn family kanban 4 -o kanban4.toml
+    Family {
+        /// Family.
+        #[arg(value_enum)]
+        family: Family,
+        /// Size parameter (kanbans per cell, pallets, philosophers, robots).
+        n: u32,
+        /// Output file (format by extension); standard output (TOML) if absent.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+}
+
+/// Scalable net families.
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum Family {
+    /// Ciardo & Tilgner's Kanban system (16 places; N = 4: 454,475 states).
+    Kanban,
+    /// Flexible manufacturing system, GSPN variant (immediate choices).
+    Fms,
+    /// Dining philosophers of the MCC (deadlock; 3^N markings).
+    Philosophers,
+    /// N robots sharing 3 corridors (immediate choice of a free corridor).
+    Robots,
+}
+
+/// Options shared by commands that load and instantiate a net.
+#[derive(Args, Debug)]
+pub struct NetArgs {
+    /// Model file: .pnpro, .pnml or .toml.
+    pub file: PathBuf,
+    /// Sets a parameter (constant, template, rate, weight): NAME=VALUE; the
+    /// value may be an expression over numbers, e.g. lambda=1/3.
+    #[arg(long = "param", short = 'p', value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
+    /// Stop with an error beyond this many markings (tangible + vanishing).
+    #[arg(long, default_value_t = 10_000_000, value_name = "N")]
+    pub max_states: usize,
+}
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    #[command(flatten)]
+    net: NetArgs,
+    /// Print JSON instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct SolveArgs {
+    #[command(flatten)]
+    net: NetArgs,
+    /// Rate for every timed transition that has none (plain P/T nets).
+    #[arg(long, value_name = "R")]
+    default_rate: Option<f64>,
+    /// A measure: a condition (its probability), e.g. '#P1 = 1 and #P7 = 1',
+    /// or an arithmetic expression (its mean), e.g. '#P1 + 2 * #P2'.
+    #[arg(long = "measure", short = 'm', value_name = "EXPR")]
+    measures: Vec<String>,
+    /// Steady-state method: auto = GTH/LU up to 50,000 states, BiCGSTAB above.
+    #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
+    method: MethodArg,
+    /// Relative residual at which iterative methods stop.
+    #[arg(long, default_value_t = 1e-12)]
+    tolerance: f64,
+    /// Print JSON instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum MethodArg {
+    Auto,
+    Direct,
+    GaussSeidel,
+    Bicgstab,
+}
+
+#[derive(Args, Debug)]
+pub struct SelectArgs {
+    /// Sets a supervisor rate: lambdaN=VALUE (N from 1 to 11; λ1 and λ2 are
+    /// set by the hypotheses and ignored).
+    #[arg(long = "set", short = 's', value_name = "lambdaN=VALUE")]
+    set: Vec<String>,
+    /// Use another supervisor net of the same structure.
+    #[arg(long, value_name = "FILE")]
+    model: Option<PathBuf>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    #[command(flatten)]
+    net: NetArgs,
+    /// Simulated time per run.
+    #[arg(long, value_name = "T")]
+    time: f64,
+    /// Seed of the random number generator.
+    #[arg(long, value_name = "S")]
+    seed: u64,
+    /// Simulated time discarded at the start.
+    #[arg(long, default_value_t = 0.0)]
+    warmup: f64,
+    /// Number of batches for the batch-means confidence intervals.
+    #[arg(long, default_value_t = 20)]
+    batches: usize,
+    /// Confidence level of the intervals.
+    #[arg(long, default_value_t = 0.95)]
+    confidence: f64,
+    /// Rate for every timed transition that has none.
+    #[arg(long, value_name = "R")]
+    default_rate: Option<f64>,
+    /// A measure expression, as for `solve`.
+    #[arg(long = "measure", short = 'm', value_name = "EXPR")]
+    measures: Vec<String>,
+    /// Print JSON instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct DotArgs {
+    #[command(flatten)]
+    net: NetArgs,
+    /// What to draw.
+    #[arg(long, value_enum, default_value_t = Graph::Net)]
+    graph: Graph,
+    /// Label CTMC edges with rates (tangible graph only) using this default
+    /// for transitions without one.
+    #[arg(long, value_name = "R")]
+    default_rate: Option<f64>,
+    /// Refuse graphs with more markings than this.
+    #[arg(long, default_value_t = 2000)]
+    max_markings: usize,
+    /// Output file; standard output if absent.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum Graph {
+    /// The net itself.
+    Net,
+    /// Reachability graph (tangible and vanishing markings).
+    Rg,
+    /// Tangible reachability graph (the CTMC).
+    Trg,
+}
+
+pub fn run(cmd: GspnCommand) -> Result<()> {
+    match cmd {
+        GspnCommand::Info(a) => info(&a),
+        GspnCommand::Solve(a) => solve(&a),
+        GspnCommand::Select(a) => select(&a),
+        GspnCommand::Simulate(a) => simulate(&a),
+        GspnCommand::Convert { input, output } => convert(&input, &output),
+        GspnCommand::Dot(a) => dot(&a),
+        GspnCommand::Family { family, n, output } => family_cmd(family, n, output.as_deref()),
+    }
+}
+
+fn load(args: &NetArgs) -> Result<(Net, Gspn)> {
+    let net = petri::io::read_file(&args.file).with_context(|| format!("loading {}", args.file.display()))?;
+    let params = Params::parse_assignments(&args.params)?;
+    let gspn = net.instantiate(&params)?;
+    Ok((net, gspn))
+}
+
+fn explore(args: &NetArgs, gspn: &Gspn) -> Result<ReachabilityGraph> {
+    Ok(ReachabilityGraph::explore(
+        gspn,
+        &ExploreParams {
+            max_states: args.max_states,
+        },
+    )?)
+}
+
+fn print_json(v: &Value) -> Result<()> {
+    outln!("{}", serde_json::to_string_pretty(v)?)?;
+    Ok(())
+}
+
+fn info(a: &InfoArgs) -> Result<()> {
+    let (net, gspn) = load(&a.net)?;
+    let rg = explore(&a.net, &gspn)?;
+    let props = Properties::of(&gspn, &rg);
+    let pinv = petri::p_invariants(&gspn, &FarkasParams::default());
+    let tinv = petri::t_invariants(&gspn, &FarkasParams::default());
+    let places = gspn.place_names();
+    let trans = gspn.transition_names();
+    let tnames = |ts: &[petri::TransitionId]| ts.iter().map(|t| trans[t.index()].clone()).collect::<Vec<_>>();
+    let st = rg.stats();
+    let inv_json = |inv: &petri::Result<petri::Invariants>| match inv {
+        Ok(i) => json!(
+            (0..i.len())
+                .filter_map(|k| i.display_vector(k, &gspn).map(|d| d.to_string()))
+                .collect::<Vec<_>>()
+        ),
+        Err(e) => json!({ "error": e.to_string() }),
+    };
+    let structural = pinv.as_ref().ok().map(|i| petri::structural_bounds(&gspn, i));
+    if a.json {
+        let bounds: BTreeMap<&str, u32> = places
+            .iter()
+            .map(String::as_str)
+            .zip(props.bounds.iter().copied())
+            .collect();
+        let mutex = props.mutually_exclusive.as_ref().map(|pairs| {
+            pairs
+                .iter()
+                .map(|(p, q)| json!([places[p.index()], places[q.index()]]))
+                .collect::<Vec<_>>()
+        });
+        return print_json(&json!({
+            "name": gspn.name(),
+            "places": gspn.num_places(),
+            "transitions": gspn.num_transitions(),
+            "immediate_transitions": gspn.num_immediate(),
+            "arcs": net.arcs.len(),
+            "reachable_markings": rg.num_markings(),
+            "tangible_markings": rg.num_tangible(),
+            "vanishing_markings": rg.num_vanishing(),
+            "edges": rg.num_edges(),
+            "dead_markings": props.dead_markings.len(),
+            "bounded": true,
+            "safe": props.safe,
+            "live": props.live,
+            "reversible": props.reversible,
+            "terminal_components": props.terminal_components,
+            "bounds": bounds,
+            "dead_transitions": tnames(&props.dead_transitions),
+            "live_transitions": tnames(&props.live_transitions),
+            "mutually_exclusive": mutex,
+            "p_invariants": inv_json(&pinv),
+            "t_invariants": inv_json(&tinv),
+            "covered_by_p_invariants": pinv.as_ref().ok().map(|i| i.covers_all()),
+            "covered_by_t_invariants": tinv.as_ref().ok().map(|i| i.covers_all()),
+            "structurally_bounded": pinv.as_ref().ok().map(|i| i.covers_all()),
+            "structural_bounds": structural.as_ref().map(|b| places.iter().zip(b).map(|(p, v)| (p.clone(), json!(v))).collect::<BTreeMap<_, _>>()),
+            "generation": { "seconds": st.seconds, "bytes_per_marking": st.bytes_per_marking, "words_per_marking": st.words_per_marking },
+        }));
+    }
+    out!(
+        "{}",
+        fields(&[
+            ("net", format!("{} ({})", gspn.name(), a.net.file.display())),
+            (
+                "size",
+                format!(
+                    "{} places, {} transitions ({} immediate), {} arcs",
+                    gspn.num_places(),
+                    gspn.num_transitions(),
+                    gspn.num_immediate(),
+                    net.arcs.len()
+                )
+            ),
+            (
+                "reachability graph",
+                format!(
+                    "{} markings ({} tangible, {} vanishing), {} edges, {:.3} s",
+                    rg.num_markings(),
+                    rg.num_tangible(),
+                    rg.num_vanishing(),
+                    rg.num_edges(),
+                    st.seconds
+                )
+            ),
+            ("dead markings", props.dead_markings.len().to_string()),
+            ("bounded", format!("yes (safe: {})", yes(props.safe))),
+            (
+                "live",
+                format!(
+                    "{} ({} of {} transitions live, {} dead)",
+                    yes(props.live),
+                    props.live_transitions.len(),
+                    gspn.num_transitions(),
+                    props.dead_transitions.len()
+                )
+            ),
+            ("reversible (M0 home state)", yes(props.reversible).to_string()),
+            (
+                "covered by P-invariants",
+                pinv.as_ref()
+                    .map_or("not computed".into(), |i| yes(i.covers_all()).to_string())
+            ),
+        ])
+    )?;
+    let mut t = Table::new(["place", "initial", "bound", "structural bound"]);
+    for (p, name) in places.iter().enumerate() {
+        let sb = structural
+            .as_ref()
+            .and_then(|b| b[p])
+            .map_or("-".to_string(), |v| v.to_string());
+        t.row([
+            name.clone(),
+            gspn.initial_marking()[p].to_string(),
+            props.bounds[p].to_string(),
+            sb,
+        ]);
+    }
+    outln!("\n{}", t.render())?;
+    if !props.dead_transitions.is_empty() {
+        outln!(
+            "dead transitions: {}\n",
+            tnames(&props.dead_transitions).join(", ")
+        )?;
+    }
+    for (label, inv) in [("P-invariants", &pinv), ("T-invariants", &tinv)] {
+        match inv {
+            Ok(i) if i.is_empty() => outln!("{label}: none\n")?,
+            Ok(i) => outln!("{label} ({}):\n{}", i.len(), i.display(&gspn))?,
+            Err(e) => outln!("{label}: not computed ({e})\n")?,
+        }
+    }
+    if let Some(pairs) = &props.mutually_exclusive {
+        let shown: Vec<String> = pairs
+            .iter()
+            .take(20)
+            .map(|(p, q)| format!("{}|{}", places[p.index()], places[q.index()]))
+            .collect();
+        let more = if pairs.len() > 20 {
+            format!(" … ({} pairs in all; --json lists them)", pairs.len())
+        } else {
+            String::new()
+        };
+        outln!(
+            "mutually exclusive places: {}{more}",
+            if shown.is_empty() {
+                "none".into()
+            } else {
+                shown.join(", ")
+            }
+        )?;
+    }
+    Ok(())
+}
+
+fn yes(b: bool) -> &'static str {
+    if b { "yes" } else { "no" }
+}
+
+fn solve_params(method: MethodArg, tolerance: f64) -> SolveParams {
+    SolveParams {
+        method: match method {
+            MethodArg::Auto => Method::Auto,
+            MethodArg::Direct => Method::Direct,
+            MethodArg::GaussSeidel => Method::GaussSeidel,
+            MethodArg::Bicgstab => Method::Bicgstab,
+        },
+        tolerance,
+        ..SolveParams::default()
+    }
+}
+
+fn parse_measures(texts: &[String]) -> Result<Vec<Expr>> {
+    texts
+        .iter()
+        .map(|t| Expr::parse(t).with_context(|| format!("measure `{t}`")))
+        .collect()
+}
+
+fn solve(a: &SolveArgs) -> Result<()> {
+    let (_, gspn) = load(&a.net)?;
+    let measures = parse_measures(&a.measures)?;
+    // Check the rates before the (possibly long) state-space generation.
+    let rates = gspn.rates(&Params::new(), a.default_rate)?;
+    let rg = explore(&a.net, &gspn)?;
+    let (markings, vanishing) = (rg.num_markings(), rg.num_vanishing());
+    let compiled = CompiledGspn::from_graph(gspn.clone(), rg)?;
+    let sol = compiled.solve_rates(&rates, &solve_params(a.method, a.tolerance))?;
+    let values: Vec<f64> = measures
+        .iter()
+        .map(|m| {
+            compiled
+                .measure(&sol, m)
+                .with_context(|| format!("measure `{m}`"))
+        })
+        .collect::<Result<_>>()?;
+    let places = gspn.place_names();
+    let trans = gspn.transition_names();
+    if a.json {
+        let pl: BTreeMap<&str, Value> = places
+            .iter()
+            .enumerate()
+            .map(|(p, n)| {
+                (
+                    n.as_str(),
+                    json!({"prob_nonempty": sol.prob_nonempty[p], "mean_tokens": sol.mean_tokens[p]}),
+                )
+            })
+            .collect();
+        let tr: BTreeMap<&str, Value> = trans
+            .iter()
+            .enumerate()
+            .map(|(t, n)| (n.as_str(), json!({"throughput": sol.throughput[t], "immediate": gspn.is_immediate(petri::TransitionId(t as u32))})))
+            .collect();
+        let ms: BTreeMap<&str, f64> = a
+            .measures
+            .iter()
+            .map(String::as_str)
+            .zip(values.iter().copied())
+            .collect();
+        return print_json(&json!({
+            "name": gspn.name(),
+            "reachable_markings": markings,
+            "tangible_markings": compiled.num_tangible(),
+            "vanishing_markings": vanishing,
+            "ergodic": compiled.is_ergodic(),
+            "bottom_components": sol.bottom_probabilities.len(),
+            "solver": sol.info.method,
+            "iterations": sol.info.iterations,
+            "residual": sol.info.residual,
+            "seconds": sol.info.seconds,
+            "places": pl,
+            "transitions": tr,
+            "measures": ms,
+        }));
+    }
+    out!(
+        "{}",
+        fields(&[
+            ("net", format!("{} ({})", gspn.name(), a.net.file.display())),
+            (
+                "state space",
+                format!(
+                    "{} tangible, {} vanishing markings",
+                    compiled.num_tangible(),
+                    vanishing
+                )
+            ),
+            (
+                "long run",
+                if compiled.is_ergodic() {
+                    "ergodic (one recurrent class)".to_string()
+                } else {
+                    format!(
+                        "not ergodic: {} bottom components, reached with probabilities {}",
+                        sol.bottom_probabilities.len(),
+                        sol.bottom_probabilities
+                            .iter()
+                            .map(|p| num(*p))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                }
+            ),
+            (
+                "solver",
+                format!(
+                    "{}, {} iterations, residual {:.2e}, {:.3} s",
+                    sol.info.method, sol.info.iterations, sol.info.residual, sol.info.seconds
+                )
+            ),
+        ])
+    )?;
+    let mut t = Table::new(["place", "P{#p > 0}", "E[#p]"]);
+    for (p, n) in places.iter().enumerate() {
+        t.row([n.clone(), num(sol.prob_nonempty[p]), num(sol.mean_tokens[p])]);
+    }
+    outln!("\n{}", t.render())?;
+    let mut t = Table::new(["transition", "kind", "throughput"]);
+    for (i, n) in trans.iter().enumerate() {
+        let kind = if gspn.is_immediate(petri::TransitionId(i as u32)) {
+            "immediate"
+        } else {
+            "timed"
+        };
+        t.row([n.clone(), kind.to_string(), num(sol.throughput[i])]);
+    }
+    outln!("{}", t.render())?;
+    if !measures.is_empty() {
+        let mut t = Table::new(["measure", "value"]);
+        for (m, v) in a.measures.iter().zip(&values) {
+            t.row([m.clone(), num(*v)]);
+        }
+        outln!("{}", t.render())?;
+    }
+    Ok(())
+}
+
+fn select(a: &SelectArgs) -> Result<()> {
+    let supervisor = match &a.model {
+        None => Supervisor::new()?,
+        Some(path) => {
+            let net = petri::io::read_file(path).with_context(|| format!("loading {}", path.display()))?;
+            Supervisor::from_net(&net)?
+        }
+    };
+    let mut rates = Rates::initial();
+    for (name, value) in Params::parse_assignments(&a.set)?.0 {
+        let index = name
+            .strip_prefix("lambda")
+            .and_then(|k| k.parse::<usize>().ok())
+            .with_context(|| format!("unknown rate `{name}`: use lambda1 … lambda11"))?;
+        rates.try_set(index, value)?;
+    }
+    let d = supervisor.decide(&rates)?;
+    if a.json {
+        return print_json(&serde_json::to_value(&d)?);
+    }
+    let choice = match d.choice {
+        Behaviour::AutoMove => "AutoMove (map-based planner)",
+        Behaviour::Contour => "Contour tracking (wall following)",
+    };
+    out!(
+        "{}",
+        fields(&[
+            ("choice", choice.to_string()),
+            (
+                "f_auto",
+                format!("{}  (throughput of t9, AutoMove hypothesis)", num(d.f_auto))
+            ),
+            (
+                "f_cont",
+                format!("{}  (throughput of t10, Contour hypothesis)", num(d.f_cont))
+            ),
+            ("U_auto", format!("{}  P{{#P1 = 1}}", num(d.u_auto))),
+            ("U_cont", format!("{}  P{{#P2 = 1}}", num(d.u_cont))),
+            ("P_loc,succ", num(d.p_loc_succ)),
+            ("P_loc,warn", num(d.p_loc_warn)),
+            ("P_pp,norm", num(d.p_pp_norm)),
+            ("P_pp,abno", num(d.p_pp_abno)),
+            ("tangible markings", d.tangible_markings.to_string()),
+        ])
+    )?;
+    let r = rates.as_array();
+    outln!(
+        "rates λ3…λ11: {}",
+        r[2..].iter().map(|v| num(*v)).collect::<Vec<_>>().join(", ")
+    )?;
+    Ok(())
+}
+
+fn simulate(a: &SimulateArgs) -> Result<()> {
+    let (_, gspn) = load(&a.net)?;
+    let rates = gspn.rates(&Params::new(), a.default_rate)?;
+    let measures = parse_measures(&a.measures)?
+        .iter()
+        .zip(&a.measures)
+        .map(|(e, t)| Ok((t.clone(), gspn.compile_expr(e)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let mut p = SimParams::new(a.time);
+    p.seed = a.seed;
+    p.warmup = a.warmup;
+    p.batches = a.batches;
+    p.confidence = a.confidence;
+    let r = petri::simulate(&gspn, &rates, &measures, &p)?;
+    if a.json {
+        return print_json(&serde_json::to_value(&r)?);
+    }
+    out!(
+        "{}",
+        fields(&[
+            ("net", format!("{} ({})", gspn.name(), a.net.file.display())),
+            (
+                "run",
+                format!(
+                    "{} events over {} time units (warm-up {}), seed {}",
+                    r.events,
+                    num(r.simulated_time),
+                    num(a.warmup),
+                    a.seed
+                )
+            ),
+            (
+                "intervals",
+                format!("{}% confidence, {} batches", num(100.0 * r.confidence), a.batches)
+            ),
+        ])
+    )?;
+    let ci = |e: &petri::Estimate| format!("{} ± {}", num(e.mean), num(e.half_width));
+    let mut t = Table::new(["place", "P{#p > 0}", "E[#p]"]);
+    for (i, n) in r.place_names.iter().enumerate() {
+        t.row([n.clone(), ci(&r.prob_nonempty[i]), ci(&r.places[i])]);
+    }
+    outln!("\n{}", t.render())?;
+    let mut t = Table::new(["transition", "throughput"]);
+    for (i, n) in r.transition_names.iter().enumerate() {
+        t.row([n.clone(), ci(&r.throughputs[i])]);
+    }
+    outln!("{}", t.render())?;
+    if !r.measures.is_empty() {
+        let mut t = Table::new(["measure", "value"]);
+        for (n, e) in &r.measures {
+            t.row([n.clone(), ci(e)]);
+        }
+        outln!("{}", t.render())?;
+    }
+    Ok(())
+}
+
+fn convert(input: &Path, output: &Path) -> Result<()> {
+    let net = petri::io::read_file(input).with_context(|| format!("loading {}", input.display()))?;
+    petri::io::write_file(&net, output).with_context(|| format!("writing {}", output.display()))?;
+    eprintln!(
+        "{} -> {}: {} places, {} transitions, {} arcs, {} parameters",
+        input.display(),
+        output.display(),
+        net.places.len(),
+        net.transitions.len(),
+        net.arcs.len(),
+        net.params.len()
+    );
+    Ok(())
+}
+
+fn write_out(text: &str, output: Option<&Path>) -> Result<()> {
+    match output {
+        Some(path) => std::fs::write(path, text).with_context(|| format!("writing {}", path.display())),
+        None => {
+            out!("{text}")?;
+            Ok(())
+        }
+    }
+}
+
+fn dot(a: &DotArgs) -> Result<()> {
+    let (net, gspn) = load(&a.net)?;
+    let text = match a.graph {
+        Graph::Net => petri::io::write_dot(&net)?,
+        Graph::Rg => {
+            let rg = explore(&a.net, &gspn)?;
+            petri::io::write_reachability_dot(&gspn, &rg, a.max_markings)?
+        }
+        Graph::Trg => {
+            let rates = gspn.rates(&Params::new(), a.default_rate).ok();
+            let rg = explore(&a.net, &gspn)?;
+            let compiled = CompiledGspn::from_graph(gspn, rg)?;
+            petri::io::write_tangible_dot(&compiled, rates.as_deref(), a.max_markings)?
+        }
+    };
+    write_out(&text, a.output.as_deref())
+}
+
+fn family_cmd(family: Family, n: u32, output: Option<&Path>) -> Result<()> {
+    if n == 0 {
+        bail!("the size parameter must be at least 1");
+    }
+    let net = match family {
+        Family::Kanban => petri::families::kanban(n),
+        Family::Fms => petri::families::fms(n, false),
+        Family::Philosophers => petri::families::philosophers(n),
+        Family::Robots => petri::families::robots_corridors(n, 3),
+    };
+    match output {
+        Some(path) => {
+            Ok(petri::io::write_file(&net, path).with_context(|| format!("writing {}", path.display()))?)
+        }
+        None => write_out(&petri::io::write_string(&net, Format::Toml)?, None),
+    }
+}

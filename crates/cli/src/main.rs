@@ -1,0 +1,47 @@
+//! `petrinav`: the command-line entry point. Parsing and dispatch only; each
+//! command lives in its own module.
+
+mod gspn;
+mod output;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// A workbench for behaviour-based robot navigation whose coordination logic
+/// can be analysed formally.
+#[derive(Parser, Debug)]
+#[command(name = "petrinav", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Generalized Stochastic Petri Nets: analyse, solve, simulate, convert, draw.
+    #[command(subcommand)]
+    Gspn(gspn::GspnCommand),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Gspn(cmd) => gspn::run(cmd),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // A closed pipe (`petrinav … | head`) is not an error.
+            let broken_pipe = e
+                .chain()
+                .filter_map(|c| c.downcast_ref::<std::io::Error>())
+                .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe);
+            if broken_pipe {
+                return ExitCode::SUCCESS;
+            }
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

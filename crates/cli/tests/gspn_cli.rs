@@ -1,0 +1,318 @@
+//! The `petrinav gspn` commands, run as a user would.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn petrinav(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_petrinav"))
+        .args(args)
+        .output()
+        .expect("the petrinav binary runs")
+}
+
+fn data(path: &str) -> String {
+    format!("{}/../petri/tests/data/{path}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = petrinav(args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("valid JSON")
+}
+
+/// Runs a command that must fail; returns its error message.
+fn fails(args: &[&str]) -> String {
+    let out = petrinav(args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    assert_ne!(out.status.code(), Some(101), "{args:?} panicked");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+fn temp_file(name: &str, text: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn select_gives_the_published_decision() {
+    let v = json(&[
+        "gspn",
+        "select",
+        "--set",
+        "lambda7=1/122.33",
+        "--set",
+        "lambda8=1/186.98",
+        "--json",
+    ]);
+    assert_eq!(v["tangible_markings"], 13);
+    assert_eq!(format!("{:.3e}", v["f_cont"].as_f64().unwrap()), "5.348e-3");
+    assert_eq!(v["choice"], "automove");
+    for key in [
+        "f_auto",
+        "u_auto",
+        "u_cont",
+        "p_loc_succ",
+        "p_loc_warn",
+        "p_pp_norm",
+        "p_pp_abno",
+    ] {
+        assert!(v[key].is_number(), "{key}");
+    }
+    let err = fails(&["gspn", "select", "--set", "lambda12=1"]);
+    assert!(err.contains("λ12"), "{err}");
+    let err = fails(&["gspn", "select", "--set", "mu=1"]);
+    assert!(err.contains("lambda1"), "{err}");
+}
+
+#[test]
+fn info_counts_the_mcc_reachability_sets() {
+    for (file, count) in [
+        ("mcc/TokenRing-PT-005.pnml", 166),
+        ("mcc/Philosophers-PT-000005.pnml", 243),
+        ("mcc/FMS-PT-00002.pnml", 3444),
+    ] {
+        let v = json(&["gspn", "info", &data(file), "--json"]);
+        assert_eq!(v["reachable_markings"], count, "{file}");
+        for key in [
+            "places",
+            "transitions",
+            "tangible_markings",
+            "vanishing_markings",
+            "dead_markings",
+            "bounded",
+        ] {
+            assert!(!v[key].is_null(), "{file}: {key}");
+        }
+    }
+    let v = json(&[
+        "gspn",
+        "info",
+        &data("greatspn/FlexibleManufacturingSystem.PNPRO"),
+        "--param",
+        "N=2",
+        "--json",
+    ]);
+    assert_eq!(
+        v["vanishing_markings"].as_u64().unwrap() + v["tangible_markings"].as_u64().unwrap(),
+        v["reachable_markings"].as_u64().unwrap()
+    );
+    assert_eq!(v["live"], true);
+}
+
+#[test]
+fn state_limit_is_an_error_naming_the_limit() {
+    let err = fails(&[
+        "gspn",
+        "info",
+        &data("mcc/Philosophers-PT-000010.pnml"),
+        "--max-states",
+        "1000",
+    ]);
+    assert!(err.contains("1000"), "{err}");
+    let unbounded = temp_file(
+        "unbounded.toml",
+        "[[place]]\nname = \"q\"\n[[transition]]\nname = \"arrive\"\nrate = 1\noutputs = [\"q\"]\n",
+    );
+    let err = fails(&["gspn", "info", unbounded.to_str().unwrap(), "--max-states", "500"]);
+    assert!(err.contains("500") && err.contains("`q`"), "{err}");
+}
+
+#[test]
+fn solve_reports_places_transitions_and_measures() {
+    let v = json(&[
+        "gspn",
+        "solve",
+        &data("mcc/Philosophers-PT-000005.pnml"),
+        "--default-rate",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(v["tangible_markings"], 243);
+    assert!(v["residual"].as_f64().unwrap() <= 1e-10);
+    // The MCC philosophers deadlock: every long-run throughput is 0.
+    for (_, t) in v["transitions"].as_object().unwrap() {
+        assert_eq!(t["throughput"], 0.0);
+    }
+    let supervisor = format!("{}/../../models/supervisor.toml", env!("CARGO_MANIFEST_DIR"));
+    let v = json(&[
+        "gspn",
+        "solve",
+        &supervisor,
+        "--measure",
+        "#P1 = 1 and #P7 = 1",
+        "--json",
+    ]);
+    assert_eq!(v["tangible_markings"], 13);
+    let m = v["measures"]["#P1 = 1 and #P7 = 1"].as_f64().unwrap();
+    let x9 = v["transitions"]["t9"]["throughput"].as_f64().unwrap();
+    // t9 fires at λ7 = 0.0082 whenever P1 and P7 are marked.
+    assert!((x9 - 0.0082 * m).abs() < 1e-15, "{x9} vs {m}");
+    assert!(v["places"]["P0"]["prob_nonempty"].is_number());
+    assert!(v["places"]["P0"]["mean_tokens"].is_number());
+    assert!(v["solver"].is_string());
+}
+
+#[test]
+fn plain_nets_need_a_default_rate() {
+    let err = fails(&["gspn", "solve", &data("mcc/TokenRing-PT-005.pnml")]);
+    assert!(err.contains("--default-rate"), "{err}");
+}
+
+#[test]
+fn bad_input_gets_clear_errors() {
+    let malformed = temp_file(
+        "malformed.pnml",
+        "<pnml><net id=\"n\"><page id=\"p\">\n<place id=\"a\">\n</net></pnml>",
+    );
+    let err = fails(&["gspn", "info", malformed.to_str().unwrap()]);
+    assert!(err.contains("malformed XML") && err.contains(":3:"), "{err}");
+
+    let unknown = temp_file(
+        "unknown_arc.toml",
+        "[[place]]\nname = \"a\"\n[[transition]]\nname = \"t\"\ninputs = [\"b\"]\n",
+    );
+    let err = fails(&["gspn", "info", unknown.to_str().unwrap()]);
+    assert!(err.contains("`b`"), "{err}");
+
+    let duplicate = temp_file(
+        "duplicate.toml",
+        "[[place]]\nname = \"a\"\n[[place]]\nname = \"a\"\n",
+    );
+    let err = fails(&["gspn", "info", duplicate.to_str().unwrap()]);
+    assert!(err.contains("duplicate") && err.contains("`a`"), "{err}");
+
+    let err = fails(&[
+        "gspn",
+        "info",
+        &data("greatspn/FlexibleManufacturingSystem.PNPRO"),
+    ]);
+    assert!(err.contains("`N`") && err.contains("--param N="), "{err}");
+
+    for rate in ["0", "-2"] {
+        let err = fails(&[
+            "gspn",
+            "solve",
+            &data("greatspn/Philosophers4.PNPRO"),
+            "--param",
+            &format!("lambda={rate}"),
+        ]);
+        assert!(err.contains("rate") && err.contains("> 0"), "{err}");
+    }
+    let weight = temp_file(
+        "zero_weight.toml",
+        "[[place]]\nname = \"a\"\ninitial = 1\n[[transition]]\nname = \"t\"\nkind = \"immediate\"\nweight = 0\ninputs = [\"a\"]\noutputs = [\"a\"]\n",
+    );
+    let err = fails(&["gspn", "info", weight.to_str().unwrap()]);
+    assert!(err.contains("weight"), "{err}");
+
+    let trap = temp_file(
+        "trap.toml",
+        "[[place]]\nname = \"a\"\ninitial = 1\n[[place]]\nname = \"b\"\n[[place]]\nname = \"c\"\n\
+         [[transition]]\nname = \"go\"\nrate = 1\ninputs = [\"a\"]\noutputs = [\"b\"]\n\
+         [[transition]]\nname = \"ping\"\nkind = \"immediate\"\ninputs = [\"b\"]\noutputs = [\"c\"]\n\
+         [[transition]]\nname = \"pong\"\nkind = \"immediate\"\ninputs = [\"c\"]\noutputs = [\"b\"]\n",
+    );
+    let err = fails(&["gspn", "solve", trap.to_str().unwrap()]);
+    assert!(err.contains("timeless trap"), "{err}");
+
+    let err = fails(&["gspn", "info", "no/such/file.pnpro"]);
+    assert!(err.contains("no/such/file.pnpro"), "{err}");
+    let err = fails(&["gspn", "info", "model.xyz"]);
+    assert!(err.contains("extension"), "{err}");
+    let err = fails(&[
+        "gspn",
+        "solve",
+        &data("greatspn/Philosophers4.PNPRO"),
+        "--measure",
+        "#nowhere > 0",
+    ]);
+    assert!(err.contains("nowhere"), "{err}");
+}
+
+#[test]
+fn convert_round_trips_and_dot_draws() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let toml = dir.join("rw.toml");
+    let pnpro = dir.join("rw.pnpro");
+    let src = data("greatspn/ReaderWriter.PNPRO");
+    assert!(
+        petrinav(&["gspn", "convert", &src, toml.to_str().unwrap()])
+            .status
+            .success()
+    );
+    assert!(
+        petrinav(&["gspn", "convert", toml.to_str().unwrap(), pnpro.to_str().unwrap()])
+            .status
+            .success()
+    );
+    let a = json(&["gspn", "solve", &src, "--param", "K=2", "--json"]);
+    let b = json(&[
+        "gspn",
+        "solve",
+        pnpro.to_str().unwrap(),
+        "--param",
+        "K=2",
+        "--json",
+    ]);
+    assert_eq!(a["places"], b["places"]);
+    assert_eq!(a["transitions"], b["transitions"]);
+    for graph in ["net", "rg", "trg"] {
+        let out = petrinav(&["gspn", "dot", &src, "--param", "K=2", "--graph", graph]);
+        assert!(out.status.success(), "{graph}");
+        assert!(
+            String::from_utf8_lossy(&out.stdout).starts_with("digraph"),
+            "{graph}"
+        );
+    }
+}
+
+#[test]
+fn simulate_is_reproducible_and_agrees_with_solve() {
+    let supervisor = format!("{}/../../models/supervisor.toml", env!("CARGO_MANIFEST_DIR"));
+    let file = data("greatspn/Cycle_of_Four_Seasons.PNPRO");
+    let run = || {
+        json(&[
+            "gspn", "simulate", &file, "--time", "20000", "--seed", "7", "--json",
+        ])
+    };
+    assert_eq!(run(), run());
+    let sim = run();
+    let exact = json(&["gspn", "solve", &file, "--json"]);
+    let names = sim["place_names"].as_array().unwrap();
+    for (i, name) in names.iter().enumerate() {
+        let est = &sim["places"][i];
+        let mean = est["mean"].as_f64().unwrap();
+        let hw = est["half_width"].as_f64().unwrap();
+        let want = exact["places"][name.as_str().unwrap()]["mean_tokens"]
+            .as_f64()
+            .unwrap();
+        assert!(
+            (mean - want).abs() <= 4.0 * hw.max(1e-3),
+            "{name}: {mean} ± {hw} vs {want}"
+        );
+    }
+    let err = fails(&["gspn", "simulate", &supervisor, "--time=-1", "--seed", "1"]);
+    assert!(err.contains("end"), "{err}");
+}
+
+#[test]
+fn family_writes_a_model_that_solves() {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("kanban1.toml");
+    assert!(
+        petrinav(&["gspn", "family", "kanban", "1", "-o", path.to_str().unwrap()])
+            .status
+            .success()
+    );
+    let v = json(&["gspn", "solve", path.to_str().unwrap(), "--json"]);
+    assert_eq!(v["tangible_markings"], 160);
+}
