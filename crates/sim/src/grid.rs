@@ -1,0 +1,213 @@
+//! Occupancy grids.
+//!
+//! A grid of `width × height` square cells of side `resolution_m`. Cell
+//! `(0, 0)` is the lower-left corner of the map; its lower-left corner is at
+//! `origin` in the world (position and rotation, as in ROS `map_server`:
+//! the map frame is the world frame moved by `origin`). Row `j` is `y`, column
+//! `i` is `x` in the map frame. Unknown cells count as occupied for
+//! collisions and sensing.
+
+use robot::{Pose, Vec2};
+
+/// State of a cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[repr(u8)]
+pub enum Cell {
+    /// Nothing there.
+    #[default]
+    Free = 0,
+    /// An obstacle.
+    Occupied = 1,
+    /// Not mapped (counts as an obstacle).
+    Unknown = 2,
+}
+
+/// Index of a cell: column `i` (x), row `j` (y), from the lower-left corner.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub struct CellIndex {
+    /// Column.
+    pub i: i64,
+    /// Row.
+    pub j: i64,
+}
+
+/// An occupancy grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OccupancyGrid {
+    width: usize,
+    height: usize,
+    resolution_m: f64,
+    origin: Pose,
+    cells: Vec<Cell>,
+}
+
+impl OccupancyGrid {
+    /// An all-free grid. `resolution_m` must be finite and > 0 (checked by
+    /// the loaders; here a bad value is a programming error and panics).
+    pub fn new(width: usize, height: usize, resolution_m: f64, origin: Pose) -> OccupancyGrid {
+        assert!(
+            resolution_m.is_finite() && resolution_m > 0.0,
+            "resolution must be > 0"
+        );
+        OccupancyGrid {
+            width,
+            height,
+            resolution_m,
+            origin,
+            cells: vec![Cell::Free; width * height],
+        }
+    }
+
+    /// Columns.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Rows.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Side of a cell, metres.
+    pub fn resolution_m(&self) -> f64 {
+        self.resolution_m
+    }
+
+    /// Pose of the map's lower-left corner in the world.
+    pub fn origin(&self) -> Pose {
+        self.origin
+    }
+
+    /// Whether the cell is inside the grid.
+    #[inline]
+    pub fn contains(&self, c: CellIndex) -> bool {
+        c.i >= 0 && c.j >= 0 && (c.i as usize) < self.width && (c.j as usize) < self.height
+    }
+
+    /// The cell's state; outside the grid everything is unknown.
+    #[inline]
+    pub fn get(&self, c: CellIndex) -> Cell {
+        if self.contains(c) {
+            self.cells[c.j as usize * self.width + c.i as usize]
+        } else {
+            Cell::Unknown
+        }
+    }
+
+    /// Whether the cell blocks motion and sensing (occupied, unknown, or
+    /// outside the map).
+    #[inline]
+    pub fn blocked(&self, c: CellIndex) -> bool {
+        self.get(c) != Cell::Free
+    }
+
+    /// Sets a cell (ignored outside the grid).
+    pub fn set(&mut self, c: CellIndex, v: Cell) {
+        if self.contains(c) {
+            self.cells[c.j as usize * self.width + c.i as usize] = v;
+        }
+    }
+
+    /// All cells, row by row from the bottom.
+    pub fn cells(&self) -> &[Cell] {
+        &self.cells
+    }
+
+    /// A world point in the map frame (metres from the map's corner).
+    #[inline]
+    pub fn to_map(&self, p: Vec2) -> Vec2 {
+        self.origin.inverse_transform(p)
+    }
+
+    /// A map-frame point in the world.
+    #[inline]
+    pub fn to_world(&self, p: Vec2) -> Vec2 {
+        self.origin.transform(p)
+    }
+
+    /// The cell containing a world point.
+    #[inline]
+    pub fn cell_of(&self, p: Vec2) -> CellIndex {
+        let m = self.to_map(p);
+        CellIndex {
+            i: (m.x / self.resolution_m).floor() as i64,
+            j: (m.y / self.resolution_m).floor() as i64,
+        }
+    }
+
+    /// The centre of a cell, in the world.
+    pub fn cell_center(&self, c: CellIndex) -> Vec2 {
+        self.to_world(Vec2::new(
+            (c.i as f64 + 0.5) * self.resolution_m,
+            (c.j as f64 + 0.5) * self.resolution_m,
+        ))
+    }
+
+    /// Whether a world point lies in a blocked cell.
+    #[inline]
+    pub fn blocked_at(&self, p: Vec2) -> bool {
+        self.blocked(self.cell_of(p))
+    }
+
+    /// Free area, m².
+    pub fn free_area_m2(&self) -> f64 {
+        let free = self.cells.iter().filter(|&&c| c == Cell::Free).count();
+        free as f64 * self.resolution_m * self.resolution_m
+    }
+
+    /// Whether a disc (e.g. the robot's footprint) overlaps a blocked cell.
+    /// Exact for axis-aligned cells in the map frame: a cell overlaps the
+    /// disc when its closest point to the centre is within the radius.
+    pub fn disc_blocked(&self, center: Vec2, radius_m: f64) -> bool {
+        let m = self.to_map(center);
+        let r = self.resolution_m;
+        let (i0, i1) = (
+            ((m.x - radius_m) / r).floor() as i64,
+            ((m.x + radius_m) / r).floor() as i64,
+        );
+        let (j0, j1) = (
+            ((m.y - radius_m) / r).floor() as i64,
+            ((m.y + radius_m) / r).floor() as i64,
+        );
+        for j in j0..=j1 {
+            let cy = (m.y).clamp(j as f64 * r, (j + 1) as f64 * r);
+            for i in i0..=i1 {
+                let c = CellIndex { i, j };
+                if !self.blocked(c) {
+                    continue;
+                }
+                let cx = (m.x).clamp(i as f64 * r, (i + 1) as f64 * r);
+                if (cx - m.x).powi(2) + (cy - m.y).powi(2) < radius_m * radius_m {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn world_cell_world_round_trip_with_rotated_origin() {
+        let g = OccupancyGrid::new(100, 50, 0.05, Pose::new(-2.0, 3.0, 0.3));
+        for &(x, y) in &[(-1.5, 3.7), (0.0, 4.0), (1.0, 5.0)] {
+            let c = g.cell_of(Vec2::new(x, y));
+            let back = g.cell_center(c);
+            assert_eq!(g.cell_of(back), c);
+            assert!(back.dist(Vec2::new(x, y)) <= 0.05 * std::f64::consts::SQRT_2 / 2.0 + 1e-12);
+        }
+    }
+
+    #[test]
+    fn outside_is_blocked_and_discs_touch_walls() {
+        let mut g = OccupancyGrid::new(10, 10, 0.1, Pose::default());
+        assert!(g.blocked(CellIndex { i: -1, j: 0 }));
+        g.set(CellIndex { i: 5, j: 5 }, Cell::Occupied);
+        assert!(g.disc_blocked(Vec2::new(0.45, 0.55), 0.06));
+        assert!(!g.disc_blocked(Vec2::new(0.3, 0.3), 0.05));
+        assert!((g.free_area_m2() - 0.99).abs() < 1e-12);
+    }
+}

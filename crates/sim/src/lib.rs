@@ -1,0 +1,9 @@
+//! The world every navigation experiment runs in: occupancy grids (real
+//! ROS `map_server` maps too), a differential-drive robot, range sensors,
+//! odometry that drifts, and people who walk about.
+#![warn(missing_docs)]
+
+pub mod grid;
+pub mod raycast;
+
+pub use grid::{Cell, CellIndex, OccupancyGrid};
