@@ -3,7 +3,9 @@
 //! odometry that drifts, and people who walk about.
 #![warn(missing_docs)]
 
+pub mod error;
 pub mod grid;
 pub mod raycast;
 
+pub use error::{Error, Result};
 pub use grid::{Cell, CellIndex, OccupancyGrid};

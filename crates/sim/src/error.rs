@@ -1,0 +1,43 @@
+//! The error type of the simulator.
+
+use std::path::PathBuf;
+
+/// What can go wrong when loading worlds or setting up and running a
+/// simulation. User input never panics: it ends up here.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be read or written.
+    #[error("cannot access {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A map or world description is malformed.
+    #[error("{location}: {message}")]
+    Format {
+        /// Where (file, key, line when known).
+        location: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A parameter is out of range (zero resolution, negative radius…).
+    #[error("{what} must be {requirement}, got {value}")]
+    InvalidValue {
+        /// Which parameter.
+        what: String,
+        /// The rule.
+        requirement: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A pose is not usable (start inside a wall, goal outside the map…).
+    #[error("{0}")]
+    Geometry(String),
+}
+
+/// Shorthand for `Result<T, sim::Error>`.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
