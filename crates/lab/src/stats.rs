@@ -1,0 +1,145 @@
+//! Summary statistics with confidence intervals.
+//!
+//! * Proportions (the reliability index `I_R = successes / runs`): Wilson
+//!   score interval, which behaves at 0 and 1 where the normal approximation
+//!   does not (Wilson 1927; Brown, Cai & DasGupta 2001).
+//! * Means (the time index `I_T`, path lengths): Student-t interval
+//!   `x̄ ± t_{1−α/2, n−1} · s/√n`.
+
+use petri::simulation::student_t_quantile;
+
+/// Standard normal quantile at `p`: the Student-t quantile with a huge
+/// number of degrees of freedom, which equals it to far better than needed
+/// at the confidence levels used here.
+fn normal_quantile(p: f64) -> f64 {
+    student_t_quantile(p, 1e9)
+}
+
+/// A proportion with its Wilson interval.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Proportion {
+    /// Successes.
+    pub successes: usize,
+    /// Trials.
+    pub n: usize,
+    /// `successes / n` (NaN when `n = 0`).
+    pub value: f64,
+    /// Lower bound of the interval.
+    pub low: f64,
+    /// Upper bound of the interval.
+    pub high: f64,
+}
+
+impl Proportion {
+    /// The proportion and its interval at `confidence` (e.g. 0.95).
+    pub fn new(successes: usize, n: usize, confidence: f64) -> Proportion {
+        if n == 0 {
+            return Proportion {
+                successes,
+                n,
+                value: f64::NAN,
+                low: f64::NAN,
+                high: f64::NAN,
+            };
+        }
+        let z = normal_quantile(0.5 + confidence / 2.0);
+        let nf = n as f64;
+        let p = successes as f64 / nf;
+        let z2 = z * z;
+        let centre = (p + z2 / (2.0 * nf)) / (1.0 + z2 / nf);
+        let half = z / (1.0 + z2 / nf) * (p * (1.0 - p) / nf + z2 / (4.0 * nf * nf)).sqrt();
+        Proportion {
+            successes,
+            n,
+            value: p,
+            // Exact at the ends (the formula gives 0 and 1 up to rounding).
+            low: if successes == 0 {
+                0.0
+            } else {
+                (centre - half).max(0.0)
+            },
+            high: if successes == n {
+                1.0
+            } else {
+                (centre + half).min(1.0)
+            },
+        }
+    }
+}
+
+/// A mean with its Student-t interval.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Mean {
+    /// Samples.
+    pub n: usize,
+    /// Sample mean (NaN when empty).
+    pub mean: f64,
+    /// Half-width of the interval (NaN when fewer than 2 samples).
+    pub half_width: f64,
+    /// Sample standard deviation.
+    pub std_dev: f64,
+}
+
+impl Mean {
+    /// The mean of `xs` and its interval at `confidence`.
+    pub fn new(xs: &[f64], confidence: f64) -> Mean {
+        let n = xs.len();
+        if n == 0 {
+            return Mean {
+                n,
+                mean: f64::NAN,
+                half_width: f64::NAN,
+                std_dev: f64::NAN,
+            };
+        }
+        let nf = n as f64;
+        let mean = xs.iter().sum::<f64>() / nf;
+        if n < 2 {
+            return Mean {
+                n,
+                mean,
+                half_width: f64::NAN,
+                std_dev: f64::NAN,
+            };
+        }
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (nf - 1.0);
+        let sd = var.sqrt();
+        let t = student_t_quantile(0.5 + confidence / 2.0, nf - 1.0);
+        Mean {
+            n,
+            mean,
+            half_width: t * sd / nf.sqrt(),
+            std_dev: sd,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wilson_interval_known_values() {
+        // 8 of 10 at 95%: (0.4902, 0.9433) (Newcombe 1998, table I).
+        let p = Proportion::new(8, 10, 0.95);
+        assert!(
+            (p.low - 0.4902).abs() < 1e-4 && (p.high - 0.9433).abs() < 1e-4,
+            "{p:?}"
+        );
+        let all = Proportion::new(50, 50, 0.95);
+        assert_eq!(all.value, 1.0);
+        assert!(all.high == 1.0 && all.low > 0.92 && all.low < 0.93, "{all:?}");
+        let none = Proportion::new(0, 50, 0.95);
+        assert!(none.low == 0.0 && none.high > 0.07 && none.high < 0.08);
+        assert!(Proportion::new(0, 0, 0.95).value.is_nan());
+    }
+
+    #[test]
+    fn t_interval() {
+        let m = Mean::new(&[1.0, 2.0, 3.0, 4.0, 5.0], 0.95);
+        assert_eq!(m.mean, 3.0);
+        // s = sqrt(2.5), t(0.975, 4) = 2.776
+        assert!((m.half_width - 2.776 * 2.5f64.sqrt() / 5f64.sqrt()).abs() < 1e-3);
+        assert!(Mean::new(&[1.0], 0.95).half_width.is_nan());
+    }
+}
