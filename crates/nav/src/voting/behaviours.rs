@@ -1,0 +1,193 @@
+//! The four voting behaviours (spec: voting.md). Each maps its sensors to
+//! one vote in [0, 1] per action (1 = most desired).
+
+use std::f64::consts::PI;
+
+use robot::{IrReading, SonarReading, wrap_angle};
+
+use super::actions::{ActionKind, ActionSet};
+
+/// The Π-function `1 / (1 + ((θ_m − θ)/β)²)`, the angle difference wrapped
+/// to [−π, π].
+pub fn pi_function(theta_m: f64, theta: f64, beta_rad: f64) -> f64 {
+    let d = wrap_angle(theta_m - theta) / beta_rad;
+    1.0 / (1.0 + d * d)
+}
+
+/// IR vote of an arc action from the number of its three covering
+/// detectors that are triggered: 0 → 1.0, 1 → 0.7, 2 → 0.3, 3 → 0.0.
+pub fn ir_table(triggered_of_three: usize) -> f64 {
+    match triggered_of_three {
+        0 => 1.0,
+        1 => 0.7,
+        2 => 0.3,
+        _ => 0.0,
+    }
+}
+
+/// The detectors that cover each action, for `b_IR`.
+///
+/// **Decision:** the three detectors that cover an arc action are the three
+/// whose bearings are nearest to the action's heading (ties to the lower
+/// index), so the rule works for any mounting, and at the ends of the arc
+/// (±90°) the hard turns are judged by the three outermost detectors. With
+/// fewer than three detectors all of them are used (and the count is scaled
+/// to "of three" for the table). Computed once per sensor layout.
+pub fn ir_covers(actions: &ActionSet, ir: &[IrReading]) -> Vec<Vec<usize>> {
+    actions
+        .actions
+        .iter()
+        .map(|a| {
+            let mut order: Vec<usize> = (0..ir.len()).collect();
+            order.sort_by(|&i, &j| {
+                let di = wrap_angle(ir[i].mount.theta_rad - a.heading_rad).abs();
+                let dj = wrap_angle(ir[j].mount.theta_rad - a.heading_rad).abs();
+                di.total_cmp(&dj).then(i.cmp(&j))
+            });
+            order.truncate(3);
+            order
+        })
+        .collect()
+}
+
+/// `b_IR`: obstacle avoidance with binary infrared detectors, with the
+/// covers of [`ir_covers`]. Escape votes `triggered / total`.
+pub fn ir_votes(actions: &ActionSet, ir: &[IrReading], covers: &[Vec<usize>], out: &mut [f64]) {
+    let total = ir.len();
+    let triggered = ir.iter().filter(|d| d.triggered).count();
+    for (m, a) in actions.actions.iter().enumerate() {
+        out[m] = match a.kind {
+            ActionKind::Escape if total == 0 => 0.0,
+            ActionKind::Escape => triggered as f64 / total as f64,
+            ActionKind::Arc if covers[m].is_empty() => 1.0,
+            ActionKind::Arc => {
+                let k = covers[m].len();
+                let hit = covers[m].iter().filter(|&&i| ir[i].triggered).count();
+                ir_table((hit * 3).div_ceil(k))
+            }
+        };
+    }
+}
+
+/// Sonar ramp: 1 beyond `d_max`, 0 within `d_min`, linear in between.
+pub fn sonar_ramp(d_obs_m: f64, d_min_m: f64, d_max_m: f64) -> f64 {
+    if d_obs_m > d_max_m {
+        1.0
+    } else if d_obs_m <= d_min_m {
+        0.0
+    } else {
+        (d_obs_m - d_min_m) / (d_max_m - d_min_m)
+    }
+}
+
+/// `b_sonar`: obstacle avoidance with sonar.
+///
+/// **Decision:** the obstacle distance along an arc action is the range of
+/// the transducer whose axis is nearest to the action's heading (a cone
+/// reports the nearest echo anywhere inside it, so the hard turns, outside
+/// every cone, take the outermost transducer's reading). Escape (undefined
+/// in the source) votes the fraction of transducers reading `≤ d_min`.
+pub fn sonar_votes(actions: &ActionSet, sonar: &[SonarReading], d_min_m: f64, d_max_m: f64, out: &mut [f64]) {
+    let close = sonar.iter().filter(|s| s.range_m <= d_min_m).count();
+    for (m, a) in actions.actions.iter().enumerate() {
+        out[m] = match a.kind {
+            ActionKind::Escape => {
+                if sonar.is_empty() {
+                    0.0
+                } else {
+                    close as f64 / sonar.len() as f64
+                }
+            }
+            ActionKind::Arc => sonar
+                .iter()
+                .min_by(|x, y| {
+                    let dx = wrap_angle(x.mount.theta_rad - a.heading_rad).abs();
+                    let dy = wrap_angle(y.mount.theta_rad - a.heading_rad).abs();
+                    dx.total_cmp(&dy)
+                })
+                .map_or(1.0, |s| sonar_ramp(s.range_m, d_min_m, d_max_m)),
+        };
+    }
+}
+
+/// Goal seeking (odometry or planning): the Π-function of each action's
+/// heading against the bearing `theta_rad` (relative to the robot's heading).
+pub fn goal_votes(actions: &ActionSet, theta_rad: f64, beta_rad: f64, out: &mut [f64]) {
+    for (m, a) in actions.actions.iter().enumerate() {
+        out[m] = pi_function(a.heading_rad, theta_rad, beta_rad);
+    }
+}
+
+/// Half a turn, for the docs of Escape's vote.
+pub const ESCAPE_HEADING: f64 = PI;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use robot::Pose;
+
+    fn ir_ring(triggered: &[bool]) -> Vec<IrReading> {
+        let n = triggered.len();
+        (0..n)
+            .map(|i| IrReading {
+                mount: Pose::new(0.0, 0.0, (90.0 - 180.0 * i as f64 / (n - 1) as f64).to_radians()),
+                range_m: 0.8,
+                triggered: triggered[i],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ir_votes_follow_the_table() {
+        let a = ActionSet::default();
+        let mut v = vec![0.0; a.len()];
+        // Detectors at +90 … −90 in 30° steps; the front three triggered.
+        let ring = ir_ring(&[false, false, true, true, true, false, false]);
+        let covers = ir_covers(&a, &ring);
+        ir_votes(&a, &ring, &covers, &mut v);
+        assert_eq!(v[3], 0.0, "Forward: 3 of its 3 triggered");
+        assert_eq!(v[2], 0.3, "Soft Left: detectors at 60, 30, 0 → 2 triggered");
+        assert_eq!(v[1], 0.7, "Left: 90, 60, 30 → 1");
+        assert_eq!(v[0], 0.7, "Hard Left: nearest three are 90, 60, 30 → 1");
+        assert_eq!(v[7], 3.0 / 7.0, "Escape = triggered / total");
+        ir_votes(&a, &ir_ring(&[false; 7]), &covers, &mut v);
+        assert!(v[..7].iter().all(|&x| x == 1.0) && v[7] == 0.0);
+        assert_eq!(
+            (ir_table(0), ir_table(1), ir_table(2), ir_table(3)),
+            (1.0, 0.7, 0.3, 0.0)
+        );
+    }
+
+    #[test]
+    fn sonar_ramp_and_escape() {
+        assert_eq!(sonar_ramp(2.0, 0.2, 1.0), 1.0);
+        assert_eq!(sonar_ramp(0.2, 0.2, 1.0), 0.0);
+        assert!((sonar_ramp(0.6, 0.2, 1.0) - 0.5).abs() < 1e-12);
+        let a = ActionSet::default();
+        let s: Vec<SonarReading> = [30.0f64, 0.0, -30.0]
+            .iter()
+            .zip([0.1, 0.6, 5.0])
+            .map(|(&deg, r)| SonarReading {
+                mount: Pose::new(0.0, 0.0, deg.to_radians()),
+                cone_rad: 25f64.to_radians(),
+                range_m: r,
+            })
+            .collect();
+        let mut v = vec![0.0; a.len()];
+        sonar_votes(&a, &s, 0.2, 1.0, &mut v);
+        assert_eq!(v[0], 0.0, "hard left uses the +30° transducer");
+        assert!((v[3] - 0.5).abs() < 1e-12);
+        assert_eq!(v[6], 1.0);
+        assert!((v[7] - 1.0 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn pi_function_wraps() {
+        let beta = 0.5;
+        assert_eq!(pi_function(0.3, 0.3, beta), 1.0);
+        assert!((pi_function(0.0, 0.5, beta) - 0.5).abs() < 1e-12);
+        // 179° vs −179° are 2° apart, not 358°.
+        let near = pi_function(179f64.to_radians(), (-179f64).to_radians(), beta);
+        assert!(near > 0.99, "{near}");
+    }
+}
