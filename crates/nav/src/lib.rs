@@ -18,5 +18,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod activity;
+pub mod sectors;
 pub mod supervisor;
 pub mod voting;
