@@ -636,3 +636,50 @@ fn long_run_mixes_bottom_components_by_their_absorption_probabilities() {
     assert_close(x(&c, &sol, "c12"), 0.75 * 0.2 * 4.0, 1e-14, "X(c12)");
     assert_close(x(&c, &sol, "c21"), 0.75 * 0.8, 1e-14, "X(c21)");
 }
+
+#[test]
+fn vanishing_initial_marking_chooses_between_bottom_components() {
+    // M0 = {S} is vanishing: `die` (weight 1) to the dead marking D, `live`
+    // (weight 3) into the cycle C1 ⇄ C2. Nothing tangible is transient.
+    let mut n = Net::new("first choice");
+    let s = n.add_place("S", 1u32);
+    let d = n.add_place("D", 0u32);
+    let c1 = n.add_place("C1", 0u32);
+    let c2 = n.add_place("C2", 0u32);
+    let t = n.add_immediate("die", 1.0, 1);
+    arcs(&mut n, t, &[s], &[d]);
+    let t = n.add_immediate("live", 3.0, 1);
+    arcs(&mut n, t, &[s], &[c1]);
+    let t = n.add_timed("c12", 2.0);
+    arcs(&mut n, t, &[c1], &[c2]);
+    let t = n.add_timed("c21", 6.0);
+    arcs(&mut n, t, &[c2], &[c1]);
+    let c = compile(&n);
+    assert_eq!((c.num_tangible(), c.stats().explore.vanishing), (3, 1));
+    assert_eq!(c.stats().transient_states, 0);
+    let sol = solve(&c);
+    let g = c.gspn();
+    let m = |name: &str| sol.mean_tokens(g.place(name).unwrap());
+    assert_close(m("D"), 0.25, 1e-15, "π(D)");
+    assert_close(m("C1"), 0.75 * 0.75, 1e-15, "π(C1) = 3/4 · 6/(2 + 6)");
+    assert_close(m("C2"), 0.75 * 0.25, 1e-15, "π(C2)");
+    assert_eq!(x(&c, &sol, "die"), 0.0, "fired once, at time 0");
+    assert_eq!(x(&c, &sol, "live"), 0.0);
+    assert_close(x(&c, &sol, "c12"), 0.75 * 0.75 * 2.0, 1e-15, "X(c12)");
+}
+
+#[test]
+fn place_capacity_blocks_like_an_inhibitor_arc() {
+    // M/M/1/K with the bound as the queue's capacity instead of an inhibitor
+    // arc on `arrive`: the same chain.
+    let (lambda, mu, k) = (1.3, 0.9, 5u32);
+    let mut n = Net::new("capacity");
+    let q = n.add_place("queue", 0u32);
+    n.places[q.index()].capacity = Some(k);
+    let arrive = n.add_timed("arrive", lambda);
+    n.output(arrive, q);
+    let serve = n.add_timed("serve", mu);
+    n.input(q, serve);
+    let p = birth_death(k, |_| lambda, |_| mu);
+    check_queue(&n, &p, 1, |n| if n > 0 { mu } else { 0.0 }, "M/M/1/5 by capacity");
+}

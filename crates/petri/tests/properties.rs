@@ -15,10 +15,10 @@
 
 mod common;
 
-use common::{close, spec};
+use common::{arbitrary, close, spec};
 use petri::{
-    CompiledGspn, ExploreParams, Expr, FarkasParams, Gspn, MarkingId, Method, Net, Params, ReachabilityGraph,
-    Solution, SolveParams, TransitionId, families, p_invariants,
+    CompiledGspn, Error, ExploreParams, Expr, FarkasParams, Gspn, MarkingId, Method, Net, Params,
+    ReachabilityGraph, Solution, SolveParams, TransitionId, families, p_invariants,
 };
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
@@ -33,14 +33,13 @@ fn compile(net: &Net) -> CompiledGspn {
 
 /// Solves with `method`; iterative methods to a relative residual of 1e-14
 /// (the default, 1e-12, leaves small throughputs ~1e-9 relative apart).
-fn solve_with(c: &CompiledGspn, method: Method) -> Solution {
+fn solve_with(c: &CompiledGspn, method: Method) -> Result<Solution, Error> {
     let params = SolveParams {
         method,
         tolerance: 1e-14,
         ..SolveParams::default()
     };
     c.solve(&Params::new(), None, &params)
-        .unwrap_or_else(|e| panic!("{}, {method:?}: {e}", c.gspn().name()))
 }
 
 /// `π` is a probability distribution (its sum within `sum_tol` of 1), and
@@ -143,14 +142,25 @@ fn check_flow_balance(g: &Gspn, sol: &Solution, rel: f64, what: &str) {
 }
 
 /// Direct, Gauss–Seidel and BiCGSTAB agree to [`AGREE`], and each solution
-/// passes [`check_solution`] and [`check_flow_balance`].
-fn check_solvers_agree(c: &CompiledGspn, what: &str) {
-    let direct = solve_with(c, Method::Direct);
-    check_solution(c, &direct, 1e-12, &format!("{what}, direct"));
+/// passes [`check_solution`] and [`check_flow_balance`]. With
+/// `allow_slow`, an iterative method may give up ([`Error::NoConvergence`]).
+///
+/// `Σπ` must be 1 to 1e-12 for an ergodic chain (normalised); for a
+/// non-ergodic one the absorption probabilities are as accurate as their
+/// system's conditioning allows and are not renormalised: 1e-9.
+fn check_solvers_agree(c: &CompiledGspn, allow_slow: bool, what: &str) {
+    let name = c.gspn().name();
+    let direct = solve_with(c, Method::Direct).unwrap_or_else(|e| panic!("{name}, direct: {e}"));
+    let sum_tol = if c.is_ergodic() { 1e-12 } else { 1e-9 };
+    check_solution(c, &direct, sum_tol, &format!("{what}, direct"));
     check_flow_balance(c.gspn(), &direct, 1e-12, &format!("{what}, direct"));
     let scale = direct.pi.iter().copied().fold(0.0, f64::max);
     for method in [Method::GaussSeidel, Method::Bicgstab] {
-        let other = solve_with(c, method);
+        let other = match solve_with(c, method) {
+            Ok(other) => other,
+            Err(Error::NoConvergence { .. }) if allow_slow => continue,
+            Err(e) => panic!("{name}, {method:?}: {e}"),
+        };
         let ctx = format!("{what}, {method:?} vs direct");
         if c.is_ergodic() && c.num_tangible() > 1 {
             let expected = if method == Method::Bicgstab {
@@ -160,7 +170,7 @@ fn check_solvers_agree(c: &CompiledGspn, what: &str) {
             };
             assert_eq!(other.info.method, expected, "{ctx}: the method asked for is used");
         }
-        check_solution(c, &other, 1e-10, &ctx);
+        check_solution(c, &other, sum_tol.max(1e-10), &ctx);
         check_flow_balance(c.gspn(), &other, 1e-10, &ctx);
         for (s, (&a, &b)) in direct.pi.iter().zip(&other.pi).enumerate() {
             // Relative per state, down to a floor far below the largest probability.
@@ -217,7 +227,7 @@ proptest! {
     #[test]
     fn solvers_agree_and_flows_balance_on_random_nets(spec in spec(3, 3)) {
         let c = compile(&spec.net());
-        check_solvers_agree(&c, "random net");
+        check_solvers_agree(&c, false, "random net");
     }
 
     #[test]
@@ -244,7 +254,7 @@ fn solvers_agree_and_flows_balance_on_the_families() {
         let c = compile(net);
         assert!(c.is_ergodic(), "{} is ergodic", net.name);
         println!("{}: {} tangible markings", net.name, c.num_tangible());
-        check_solvers_agree(&c, &net.name);
+        check_solvers_agree(&c, false, &net.name);
     }
 }
 
@@ -254,10 +264,10 @@ fn solvers_agree_on_a_non_ergodic_family() {
     // and the (trivial) bottom components; throughputs are all 0.
     let c = compile(&families::philosophers(4));
     assert!(!c.is_ergodic());
-    let direct = solve_with(&c, Method::Direct);
+    let direct = solve_with(&c, Method::Direct).unwrap();
     check_solution(&c, &direct, 1e-13, "philosophers(4)");
     for method in [Method::GaussSeidel, Method::Bicgstab] {
-        let other = solve_with(&c, method);
+        let other = solve_with(&c, method).unwrap();
         // The absorption probabilities are as accurate as the iterative
         // solve: Σπ within ~1e-11 of 1 (not renormalised).
         check_solution(&c, &other, 1e-10, &format!("philosophers(4), {method:?}"));
@@ -292,5 +302,32 @@ fn p_invariants_hold_in_every_reachable_marking_of_the_families() {
         assert!(inv.covers_all(), "{}: every place is covered", net.name);
         let n = check_p_invariants(&g, &net.name);
         assert!(n > 1, "{}: {n} markings", net.name);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 2048,
+        rng_seed: RngSeed::Fixed(0xa7b1_7a77),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// On arbitrary nets, compiling gives a chain or a clear error (state
+    /// limit, timeless trap), and the solvers agree on the chain.
+    #[test]
+    fn arbitrary_small_nets_compile_or_fail_cleanly_and_the_solvers_agree(a in arbitrary()) {
+        let g = a.net().instantiate(&Params::new()).unwrap();
+        match CompiledGspn::build(&g, &ExploreParams { max_states: 2000 }) {
+            // A stiff absorption system may be too slow for Gauss–Seidel
+            // (which BiCGSTAB uses for absorption too): e.g. a cycle left
+            // once in ~10^4 rounds needs ~3·10^5 sweeps. That is a clean
+            // error, and the direct solve is still checked.
+            Ok(c) => {
+                check_solvers_agree(&c, true, "arbitrary net");
+            }
+            Err(Error::StateLimit { .. } | Error::TimelessTrap { .. }) => {}
+            Err(other) => prop_assert!(false, "unexpected error: {other}"),
+        }
     }
 }

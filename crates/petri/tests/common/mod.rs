@@ -1,7 +1,11 @@
-//! Shared by the cross-checking tests: random *ergodic* GSPNs described by
-//! plain numbers (so that proptest can shrink them), and comparison helpers.
+//! Shared by the cross-checking tests: random GSPNs described by plain
+//! numbers (so that proptest can shrink them), and comparison helpers.
 //!
-//! # The random nets
+//! [`spec`] gives structured nets built to be ergodic (below); [`arbitrary`]
+//! gives arbitrary small nets — most not ergodic, some unbounded or with
+//! timeless traps — for the properties that must hold anyway.
+//!
+//! # The structured random nets
 //!
 //! A few cyclic token-conserving processes share resources:
 //!
@@ -36,7 +40,7 @@
 
 #![allow(dead_code)]
 
-use petri::{Net, Params, Servers, TransitionKind};
+use petri::{ArcKind, Net, Params, Servers, TransitionKind};
 use proptest::prelude::*;
 
 /// Timing of a step's transition.
@@ -216,7 +220,7 @@ impl Spec {
                         }
                     }
                     if let (0, Some((other, q, m))) = (i, p.inhibitor) {
-                        net.add_arc(petri::ArcKind::Inhibitor, places[other][q], t, m);
+                        net.add_arc(ArcKind::Inhibitor, places[other][q], t, m);
                     }
                 }
             }
@@ -238,6 +242,78 @@ impl Spec {
             p.bounce
                 .is_some_and(|(i, _)| matches!(p.steps[i - 1].main, Kind::Immediate(..)))
         })
+    }
+}
+
+/// An arbitrary small net: per transition (immediate?, priority, weight or
+/// rate, servers, a place it takes a token from, a place it puts one in),
+/// per (transition, place) extra input, output and inhibitor multiplicities
+/// (0: no arc), and an initial marking. Most transitions move one token, so
+/// many nets are bounded; many are not ergodic, some are unbounded or have
+/// timeless traps.
+#[derive(Debug, Clone)]
+pub struct Arbitrary {
+    pub places: usize,
+    pub transitions: Vec<(bool, u32, f64, u8, usize, usize)>,
+    pub arcs: Vec<(u32, u32, u32)>,
+    pub initial: Vec<u32>,
+}
+
+pub fn arbitrary() -> impl Strategy<Value = Arbitrary> {
+    (1usize..=5, 1usize..=7).prop_flat_map(|(np, nt)| {
+        let extra = || prop_oneof![8 => Just(0u32), 1 => 1u32..=2];
+        (
+            proptest::collection::vec(
+                (
+                    proptest::bool::weighted(0.3),
+                    1u32..=2,
+                    0.1f64..10.0,
+                    0u8..3,
+                    0..np,
+                    0..np,
+                ),
+                nt,
+            ),
+            proptest::collection::vec((extra(), extra(), extra()), np * nt),
+            proptest::collection::vec(0u32..=3, np),
+        )
+            .prop_map(move |(transitions, arcs, initial)| Arbitrary {
+                places: np,
+                transitions,
+                arcs,
+                initial,
+            })
+    })
+}
+
+impl Arbitrary {
+    /// The net.
+    pub fn net(&self) -> Net {
+        let mut net = Net::new("arbitrary");
+        let places: Vec<_> = (0..self.places)
+            .map(|p| net.add_place(format!("p{p}"), self.initial[p]))
+            .collect();
+        for (t, &(immediate, priority, value, servers, from, to)) in self.transitions.iter().enumerate() {
+            let id = if immediate {
+                net.add_immediate(format!("t{t}"), value, priority)
+            } else {
+                let id = net.add_timed(format!("t{t}"), value);
+                let s = [Servers::Single, Servers::K(2), Servers::Infinite][servers as usize];
+                net.set_servers(id, s);
+                id
+            };
+            net.input(places[from], id);
+            net.output(id, places[to]);
+            for (p, &place) in places.iter().enumerate() {
+                let (i, o, h) = self.arcs[t * self.places + p];
+                for (kind, m) in [(ArcKind::Input, i), (ArcKind::Output, o), (ArcKind::Inhibitor, h)] {
+                    if m > 0 {
+                        net.add_arc(kind, place, id, m);
+                    }
+                }
+            }
+        }
+        net
     }
 }
 
