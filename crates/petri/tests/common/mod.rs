@@ -34,13 +34,15 @@
 //! Every place is covered by a P-invariant (a process cycle; a resource plus
 //! the places that hold it), so the nets are bounded. From any marking every
 //! token can be driven back to its initial place without firing a first
-//! step, so the untimed net is reversible; priorities may still make part of
-//! the tangible chain transient, which the tests allow, but the chain has
-//! one bottom component, which they check.
+//! step, so the untimed net is reversible and has no dead marking. Under
+//! GSPN semantics priorities may still make part of the tangible chain
+//! transient (about 2% of the nets), and rarely (about 1 in 3,000) split it
+//! into several bottom components: priority races decided once and for all.
+//! The simulation cross-check skips those.
 
 #![allow(dead_code)]
 
-use petri::{ArcKind, Net, Params, Servers, TransitionKind};
+use petri::{ArcKind, Net, Servers};
 use proptest::prelude::*;
 
 /// Timing of a step's transition.
@@ -317,19 +319,7 @@ impl Arbitrary {
     }
 }
 
-/// Whether any transition of `net` is immediate.
-pub fn has_immediate(net: &Net) -> bool {
-    net.transitions
-        .iter()
-        .any(|t| matches!(t.kind, TransitionKind::Immediate { .. }))
-}
-
 /// `|a − b| ≤ rel · max(|a|, |b|) + abs`.
 pub fn close(a: f64, b: f64, rel: f64, abs: f64) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()) + abs
-}
-
-/// No parameter overrides.
-pub fn no_params() -> Params {
-    Params::new()
 }
