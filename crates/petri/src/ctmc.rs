@@ -546,6 +546,12 @@ impl CompiledGspn {
                 }
             }
         }
+        // Absorption probabilities come from a numerical solve: renormalise so
+        // that the distribution sums to 1 to rounding.
+        let total: f64 = pi.iter().sum();
+        if total > 0.0 && (total - 1.0).abs() > 0.0 {
+            pi.iter_mut().for_each(|v| *v /= total);
+        }
         info.residual = steady_state::residual(&chain, &pi, None);
         info.seconds = start.elapsed().as_secs_f64();
         let throughput = self.throughputs(&pi, rates, &values);

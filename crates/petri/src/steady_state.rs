@@ -168,8 +168,10 @@ pub(crate) fn solve(
     }
     let method = match params.method {
         Method::Auto if n <= params.direct_limit => Method::Direct,
-        // BiCGSTAB needs a regular system; absorption systems are well
-        // conditioned M-matrices on which Gauss–Seidel is fine.
+        // Absorption systems (rhs given): our BiCGSTAB is built for the
+        // stationary equations, so large ones use Gauss–Seidel, small ones LU
+        // (Gauss–Seidel can crawl on stiff transient cycles).
+        Method::Bicgstab if rhs.is_some() && n <= params.direct_limit => Method::Direct,
         Method::Auto | Method::Bicgstab if rhs.is_some() => Method::GaussSeidel,
         Method::Auto => Method::Bicgstab,
         m => m,
