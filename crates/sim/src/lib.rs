@@ -3,9 +3,11 @@
 //! odometry that drifts, and people who walk about.
 #![warn(missing_docs)]
 
+pub mod clearance;
 pub mod error;
 pub mod grid;
 pub mod raycast;
 
 pub use error::{Error, Result};
-pub use grid::{Cell, CellIndex, OccupancyGrid};
+pub use grid::{Cell, CellCounts, CellIndex, OccupancyGrid};
+pub use raycast::{cast, cast_many, cast_traversal};

@@ -1,0 +1,2 @@
+//! Ray casting benchmark (filled in with the map loader).
+fn main() {}
