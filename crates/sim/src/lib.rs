@@ -6,6 +6,7 @@
 pub mod clearance;
 pub mod error;
 pub mod grid;
+pub mod map_server;
 pub mod raycast;
 
 pub use error::{Error, Result};
