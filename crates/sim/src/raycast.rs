@@ -47,8 +47,9 @@ struct MapRay {
     /// Reciprocals of the direction (unused where the component is zero).
     inv_dx: f64,
     inv_dy: f64,
-    /// Cell side, metres.
+    /// Cell side, metres, and its reciprocal.
     r: f64,
+    inv_r: f64,
     /// Cell steps (±1) and the offset of the boundary ahead (1 when moving up).
     si: i64,
     sj: i64,
@@ -82,6 +83,7 @@ impl MapRay {
             inv_dx: 1.0 / dx,
             inv_dy: 1.0 / dy,
             r,
+            inv_r: 1.0 / r,
             si,
             sj,
             off_i: i64::from(si > 0),
@@ -123,9 +125,7 @@ impl MapRay {
         let (lo, hi) = if self.sj > 0 { (j, je) } else { (je, j) };
         // A guess from the position, then exact by the boundary comparisons
         // (t_y is monotone along the ray, so the fixes stop).
-        let mut e = ((self.sy + t * self.dy) / self.r)
-            .floor()
-            .clamp(lo as f64, hi as f64) as i64;
+        let mut e = (((self.sy + t * self.dy) * self.inv_r) as i64).clamp(lo, hi);
         while e != je && self.ty(e) <= t {
             e += self.sj;
         }
@@ -143,9 +143,7 @@ impl MapRay {
             return i;
         }
         let (lo, hi) = if self.si > 0 { (i, ie) } else { (ie, i) };
-        let mut e = ((self.sx + t * self.dx) / self.r)
-            .floor()
-            .clamp(lo as f64, hi as f64) as i64;
+        let mut e = (((self.sx + t * self.dx) * self.inv_r) as i64).clamp(lo, hi);
         while e != ie && self.tx(e) < t {
             e += self.si;
         }
@@ -209,8 +207,9 @@ fn cast_map_frame(grid: &OccupancyGrid, start: Vec2, angle_rad: f64, max_range_m
     }
     loop {
         let t;
-        if k >= 2 {
-            // Jump to where the ray leaves the free square around (i, j).
+        if k >= 3 {
+            // Jump to where the ray leaves the free square around (i, j)
+            // (for k = 2 single steps are as cheap).
             let reach = i64::from(k) - 1;
             let (ie, je) = (i + ray.si * reach, j + ray.sj * reach);
             let (txe, tye) = (ray.tx(ie), ray.ty(je));

@@ -233,7 +233,10 @@ fn bad_yaml_gives_the_line() {
     let text = "image: map.pgm\nresolution: 0.1\norigin: [1.0, 2.0, 0.0\nnegate: 0\n";
     let msg = map_server::parse_yaml(text, "bad.yaml").unwrap_err().to_string();
     // The unclosed list is noticed on the next line.
-    assert!(msg.starts_with("bad.yaml, line 4 column 7: invalid YAML"), "{msg}");
+    assert!(
+        msg.starts_with("bad.yaml, line 4 column 7: invalid YAML"),
+        "{msg}"
+    );
     assert!(msg.contains("invalid YAML"), "{msg}");
     let msg = map_server::parse_yaml("", "empty.yaml").unwrap_err().to_string();
     assert!(msg.contains("empty"), "{msg}");
