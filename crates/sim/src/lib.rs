@@ -8,6 +8,7 @@ pub mod error;
 pub mod grid;
 pub mod map_server;
 pub mod raycast;
+pub mod shapes;
 
 pub use error::{Error, Result};
 pub use grid::{Cell, CellCounts, CellIndex, OccupancyGrid};
