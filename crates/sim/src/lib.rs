@@ -5,9 +5,11 @@
 
 pub mod clearance;
 pub mod error;
+mod font;
 pub mod grid;
 pub mod map_server;
 pub mod raycast;
+pub mod render;
 pub mod shapes;
 
 pub use error::{Error, Result};
