@@ -90,12 +90,30 @@ pub enum MarkerKind {
 #[derive(Debug, Clone)]
 enum Item {
     /// Polyline; `labels[k]` is the label index of segment k.
-    Trajectory { points: Vec<Vec2>, labels: Vec<Option<usize>> },
-    Robot { pose: Pose, radius_m: f64 },
-    Ray { from: Vec2, to: Vec2 },
-    Person { center: Vec2, radius_m: f64 },
-    Marker { at: Vec2, kind: MarkerKind },
-    Text { at: Vec2, text: String },
+    Trajectory {
+        points: Vec<Vec2>,
+        labels: Vec<Option<usize>>,
+    },
+    Robot {
+        pose: Pose,
+        radius_m: f64,
+    },
+    Ray {
+        from: Vec2,
+        to: Vec2,
+    },
+    Person {
+        center: Vec2,
+        radius_m: f64,
+    },
+    Marker {
+        at: Vec2,
+        kind: MarkerKind,
+    },
+    Text {
+        at: Vec2,
+        text: String,
+    },
 }
 
 /// A picture of a grid with overlays, built step by step, then written as
@@ -218,12 +236,16 @@ impl<'a> Picture<'a> {
             g.height() as f64 * g.resolution_m(),
         );
         let corners = [(0.0, 0.0), (wm, 0.0), (0.0, hm), (wm, hm)].map(|(x, y)| g.to_world(Vec2::new(x, y)));
-        let lo = corners.iter().fold(Vec2::new(f64::INFINITY, f64::INFINITY), |a, c| {
-            Vec2::new(a.x.min(c.x), a.y.min(c.y))
-        });
-        let hi = corners.iter().fold(Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY), |a, c| {
-            Vec2::new(a.x.max(c.x), a.y.max(c.y))
-        });
+        let lo = corners
+            .iter()
+            .fold(Vec2::new(f64::INFINITY, f64::INFINITY), |a, c| {
+                Vec2::new(a.x.min(c.x), a.y.min(c.y))
+            });
+        let hi = corners
+            .iter()
+            .fold(Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY), |a, c| {
+                Vec2::new(a.x.max(c.x), a.y.max(c.y))
+            });
         (lo, hi)
     }
 
@@ -280,7 +302,11 @@ impl<'a> Picture<'a> {
             w = v.w,
             h = v.h
         );
-        let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"{}\"/>", hex(UNKNOWN));
+        let _ = writeln!(
+            s,
+            "<rect width=\"100%\" height=\"100%\" fill=\"{}\"/>",
+            hex(UNKNOWN)
+        );
         // The grid: one PNG pixel per cell, top row first, placed at the
         // map's top-left corner and turned with the map.
         let o = g.origin();
@@ -493,7 +519,13 @@ impl<'a> Picture<'a> {
                     let r = radius_m * v.s;
                     c.disc(centre, r, ROBOT, 0.25);
                     c.ring(centre, r, line_w, ROBOT);
-                    c.line(centre, v.px(pose.transform(Vec2::new(*radius_m, 0.0))), line_w, ROBOT, 1.0);
+                    c.line(
+                        centre,
+                        v.px(pose.transform(Vec2::new(*radius_m, 0.0))),
+                        line_w,
+                        ROBOT,
+                        1.0,
+                    );
                 }
                 Item::Ray { from, to } => c.line(v.px(*from), v.px(*to), 1.0, RAY, 0.6),
                 Item::Person { center, radius_m } => c.disc(v.px(*center), radius_m * v.s, PERSON, 1.0),
@@ -513,7 +545,11 @@ impl<'a> Picture<'a> {
                             c.line((x - d, y + d), (x + d, y - d), 2.0, red, 1.0);
                         }
                         MarkerKind::Point => {
-                            c.rect((x - r * 0.5, y - r * 0.5), (x + r * 0.5, y + r * 0.5), [31, 119, 180]);
+                            c.rect(
+                                (x - r * 0.5, y - r * 0.5),
+                                (x + r * 0.5, y + r * 0.5),
+                                [31, 119, 180],
+                            );
                         }
                     }
                 }
@@ -530,7 +566,13 @@ impl<'a> Picture<'a> {
             c.rect((5.0, 5.0), (3.0 + w, 3.0 + h), FREE);
             for (k, label) in self.labels.iter().enumerate() {
                 let y = 12.0 + 16.0 * k as f64;
-                c.line((10.0, y + 4.0), (26.0, y + 4.0), 3.0, self.label_colour(Some(k)), 1.0);
+                c.line(
+                    (10.0, y + 4.0),
+                    (26.0, y + 4.0),
+                    3.0,
+                    self.label_colour(Some(k)),
+                    1.0,
+                );
                 c.text(30.0, y - 1.0, label, TEXT);
             }
         }
@@ -548,7 +590,12 @@ impl<'a> Picture<'a> {
             Some("svg") => self.to_svg()?.into_bytes(),
             Some("png") => {
                 let img = self.to_png()?;
-                encode_png(img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)?
+                encode_png(
+                    img.as_raw(),
+                    img.width(),
+                    img.height(),
+                    image::ExtendedColorType::Rgb8,
+                )?
             }
             _ => {
                 return Err(Error::Geometry(format!(
@@ -633,18 +680,30 @@ struct Canvas {
 
 impl Canvas {
     fn blend(&mut self, x: i64, y: i64, c: [u8; 3], alpha: f64) {
-        if x < 0 || y < 0 || x >= i64::from(self.img.width()) || y >= i64::from(self.img.height()) || alpha <= 0.0 {
+        if x < 0
+            || y < 0
+            || x >= i64::from(self.img.width())
+            || y >= i64::from(self.img.height())
+            || alpha <= 0.0
+        {
             return;
         }
         let a = alpha.min(1.0);
         let p = self.img.get_pixel_mut(x as u32, y as u32);
-        for k in 0..3 {
-            p.0[k] = (f64::from(p.0[k]) * (1.0 - a) + f64::from(c[k]) * a).round() as u8;
+        for (v, &target) in p.0.iter_mut().zip(&c) {
+            *v = (f64::from(*v) * (1.0 - a) + f64::from(target) * a).round() as u8;
         }
     }
 
     /// Calls `cover(px, py)` (coverage in 0..1 at the pixel centre) over a box.
-    fn shade(&mut self, lo: (f64, f64), hi: (f64, f64), c: [u8; 3], alpha: f64, cover: impl Fn(f64, f64) -> f64) {
+    fn shade(
+        &mut self,
+        lo: (f64, f64),
+        hi: (f64, f64),
+        c: [u8; 3],
+        alpha: f64,
+        cover: impl Fn(f64, f64) -> f64,
+    ) {
         let (w, h) = (f64::from(self.img.width()), f64::from(self.img.height()));
         let (x0, x1) = (lo.0.floor().max(0.0), hi.0.ceil().min(w));
         let (y0, y1) = (lo.1.floor().max(0.0), hi.1.ceil().min(h));
@@ -762,7 +821,11 @@ mod tests {
     #[test]
     fn same_picture_same_bytes_and_labels_in_the_legend() {
         let g = OccupancyGrid::new(50, 40, 0.1, Pose::new(1.0, 2.0, 0.3));
-        let poses = [Pose::new(2.0, 3.0, 0.0), Pose::new(3.0, 4.0, 0.0), Pose::new(4.0, 4.5, 0.0)];
+        let poses = [
+            Pose::new(2.0, 3.0, 0.0),
+            Pose::new(3.0, 4.0, 0.0),
+            Pose::new(4.0, 4.5, 0.0),
+        ];
         let build = || {
             let mut p = Picture::new(&g);
             p.trajectory(&poses, Some(&["goal <seeking>", "contour", "contour"]))
@@ -779,20 +842,36 @@ mod tests {
         let (svg2, png2) = build();
         assert_eq!(svg, svg2);
         assert_eq!(png, png2);
-        assert!(svg.contains("goal &lt;seeking&gt;") && svg.contains(">contour<"), "{svg}");
+        assert!(
+            svg.contains("goal &lt;seeking&gt;") && svg.contains(">contour<"),
+            "{svg}"
+        );
         assert!(svg.contains("rotate(-17.19)"), "the map is turned by 0.3 rad");
-        assert_eq!(svg.matches("<polyline").count(), 2, "one polyline per run of a label");
+        assert_eq!(
+            svg.matches("<polyline").count(),
+            2,
+            "one polyline per run of a label"
+        );
     }
 
     #[test]
     fn crop_scale_and_format_errors() {
         let g = OccupancyGrid::new(100, 100, 0.05, Pose::default());
         let mut p = Picture::new(&g);
-        assert_eq!(p.to_png().unwrap().dimensions(), (600, 600), "default: 6 px per cell");
+        assert_eq!(
+            p.to_png().unwrap().dimensions(),
+            (600, 600),
+            "default: 6 px per cell"
+        );
         p.crop(Vec2::new(1.0, 1.0), Vec2::new(2.0, 1.5)).scale(100.0);
         assert_eq!(p.to_png().unwrap().dimensions(), (100, 50));
         p.scale(0.0);
-        assert!(p.to_png().unwrap_err().to_string().contains("must be finite and > 0"));
+        assert!(
+            p.to_png()
+                .unwrap_err()
+                .to_string()
+                .contains("must be finite and > 0")
+        );
         p.scale(1e9);
         assert!(p.to_svg().unwrap_err().to_string().contains("too large"));
         let e = Picture::new(&g).save("picture.gif").unwrap_err().to_string();
