@@ -2,6 +2,7 @@
 //! command lives in its own module.
 
 mod gspn;
+mod map;
 mod output;
 
 use std::process::ExitCode;
@@ -22,12 +23,17 @@ enum Command {
     /// Generalized Stochastic Petri Nets: analyse, solve, simulate, convert, draw.
     #[command(subcommand)]
     Gspn(gspn::GspnCommand),
+    /// Occupancy grid maps (ROS map_server YAML, or a TOML world of shapes):
+    /// describe, draw.
+    #[command(subcommand)]
+    Map(map::MapCommand),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Gspn(cmd) => gspn::run(cmd),
+        Command::Map(cmd) => map::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,8 +6,16 @@
 //! the map frame is the world frame moved by `origin`). Row `j` is `y`, column
 //! `i` is `x` in the map frame. Unknown cells count as occupied for
 //! collisions and sensing.
+//!
+//! The grid keeps a clearance field (distance to the nearest blocked cell,
+//! see [`crate::clearance`]) in step with its cells, built once when the grid
+//! is made and repaired locally by [`OccupancyGrid::set`]; the ray caster
+//! uses it to skip free space.
 
 use robot::{Pose, Vec2};
+
+use crate::clearance::Clearance;
+use crate::error::{Error, Result};
 
 /// State of a cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -31,6 +39,17 @@ pub struct CellIndex {
     pub j: i64,
 }
 
+/// How many cells of each state a grid has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct CellCounts {
+    /// Free cells.
+    pub free: usize,
+    /// Occupied cells.
+    pub occupied: usize,
+    /// Unknown cells.
+    pub unknown: usize,
+}
+
 /// An occupancy grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OccupancyGrid {
@@ -39,6 +58,7 @@ pub struct OccupancyGrid {
     resolution_m: f64,
     origin: Pose,
     cells: Vec<Cell>,
+    clearance: Clearance,
 }
 
 impl OccupancyGrid {
@@ -49,13 +69,64 @@ impl OccupancyGrid {
             resolution_m.is_finite() && resolution_m > 0.0,
             "resolution must be > 0"
         );
+        let cells = vec![Cell::Free; width * height];
         OccupancyGrid {
             width,
             height,
             resolution_m,
             origin,
-            cells: vec![Cell::Free; width * height],
+            clearance: Clearance::build(width, height, &cells),
+            cells,
         }
+    }
+
+    /// A grid from its cells, row by row from the bottom (`cells[j * width +
+    /// i]` is cell `(i, j)`). Fails if `resolution_m` is not finite and > 0,
+    /// if the origin is not finite, or if there are not `width × height`
+    /// cells. Faster than [`OccupancyGrid::new`] followed by one
+    /// [`OccupancyGrid::set`] per cell.
+    pub fn from_cells(
+        width: usize,
+        height: usize,
+        resolution_m: f64,
+        origin: Pose,
+        cells: Vec<Cell>,
+    ) -> Result<OccupancyGrid> {
+        if !(resolution_m.is_finite() && resolution_m > 0.0) {
+            return Err(Error::InvalidValue {
+                what: "resolution_m".into(),
+                requirement: "finite and > 0",
+                value: resolution_m,
+            });
+        }
+        for (what, value) in [
+            ("origin x", origin.x_m),
+            ("origin y", origin.y_m),
+            ("origin yaw", origin.theta_rad),
+        ] {
+            if !value.is_finite() {
+                return Err(Error::InvalidValue {
+                    what: what.into(),
+                    requirement: "finite",
+                    value,
+                });
+            }
+        }
+        if width.checked_mul(height) != Some(cells.len()) {
+            return Err(Error::Geometry(format!(
+                "a {width} × {height} grid needs {} cells, got {}",
+                width.saturating_mul(height),
+                cells.len()
+            )));
+        }
+        Ok(OccupancyGrid {
+            width,
+            height,
+            resolution_m,
+            origin,
+            clearance: Clearance::build(width, height, &cells),
+            cells,
+        })
     }
 
     /// Columns.
@@ -101,11 +172,50 @@ impl OccupancyGrid {
         self.get(c) != Cell::Free
     }
 
-    /// Sets a cell (ignored outside the grid).
+    /// Sets a cell (ignored outside the grid). Changing a cell between free
+    /// and blocked also repairs the clearance field around it: a few
+    /// microseconds for a new obstacle, well under a millisecond for a freed
+    /// cell. To
+    /// fill a whole grid, build it with [`OccupancyGrid::from_cells`].
     pub fn set(&mut self, c: CellIndex, v: Cell) {
         if self.contains(c) {
-            self.cells[c.j as usize * self.width + c.i as usize] = v;
+            let (i, j) = (c.i as usize, c.j as usize);
+            let k = j * self.width + i;
+            let was_blocked = self.cells[k] != Cell::Free;
+            self.cells[k] = v;
+            if was_blocked != (v != Cell::Free) {
+                self.clearance.update(&self.cells, i, j);
+            }
         }
+    }
+
+    /// Clearance of an in-grid cell: chessboard distance in cells to the
+    /// nearest blocked cell or to the outside, capped at
+    /// [`crate::clearance::CLEARANCE_CAP`]; 0 for a blocked cell.
+    /// `None` outside the grid.
+    #[inline]
+    pub fn clearance(&self, c: CellIndex) -> Option<u8> {
+        self.contains(c)
+            .then(|| self.clearance.at(c.i as usize, c.j as usize))
+    }
+
+    /// The clearance field, for the ray caster.
+    #[inline]
+    pub(crate) fn clearance_field(&self) -> &Clearance {
+        &self.clearance
+    }
+
+    /// Counts of free, occupied and unknown cells.
+    pub fn counts(&self) -> CellCounts {
+        let mut n = CellCounts::default();
+        for &c in &self.cells {
+            match c {
+                Cell::Free => n.free += 1,
+                Cell::Occupied => n.occupied += 1,
+                Cell::Unknown => n.unknown += 1,
+            }
+        }
+        n
     }
 
     /// All cells, row by row from the bottom.
