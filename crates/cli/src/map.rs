@@ -74,9 +74,7 @@ fn load(path: &Path) -> Result<Loaded> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("yaml" | "yml") => {
-            // sim::Error's message already includes its cause: flatten it so
-            // the cause is not printed twice.
-            let m = map_server::load(path).map_err(|e| anyhow!("{e}"))?;
+            let m = map_server::load(path)?;
             Ok(Loaded {
                 grid: m.grid.clone(),
                 yaml: Some(m),
