@@ -199,6 +199,7 @@ impl DistanceField {
         }
         let i = ((m.x / r) as usize).min(self.width - 1);
         let j = ((m.y / r) as usize).min(self.height - 1);
+        let mut best_d2 = best_d * best_d;
         let mut last = NONE;
         for jj in j.saturating_sub(1)..=(j + 1).min(self.height - 1) {
             for ii in i.saturating_sub(1)..=(i + 1).min(self.width - 1) {
@@ -212,17 +213,44 @@ impl DistanceField {
                     m.x.clamp(fi * r, (fi + 1.0) * r),
                     m.y.clamp(fj * r, (fj + 1.0) * r),
                 );
-                let d = (q.x - m.x).hypot(q.y - m.y);
-                if d < best_d {
+                let d2 = (q.x - m.x) * (q.x - m.x) + (q.y - m.y) * (q.y - m.y);
+                if d2 < best_d2 {
                     best = q;
-                    best_d = d;
+                    best_d2 = d2;
                 }
             }
         }
         NearestObstacle {
             point: self.to_world(best),
-            distance_m: best_d,
+            distance_m: best_d2.sqrt(),
         }
+    }
+
+    /// A radius around `p` guaranteed free of obstacles, metres: the exact
+    /// distance between the centre of `p`'s cell and the nearest blocked
+    /// cell's centre, less one cell diagonal (half for `p` within its cell,
+    /// half for the blocked cell's extent), and at most the distance to the
+    /// map's edge. One look-up; 0 in or next to an obstacle. Sensors start
+    /// their rays there.
+    #[inline]
+    pub fn free_radius_m(&self, p: Vec2) -> f64 {
+        let m = self.to_map(p);
+        let r = self.resolution_m;
+        let (wm, hm) = (self.width as f64 * r, self.height as f64 * r);
+        if !(m.x > 0.0 && m.y > 0.0 && m.x < wm && m.y < hm) {
+            return 0.0;
+        }
+        let edge = m.x.min(m.y).min(wm - m.x).min(hm - m.y);
+        let i = ((m.x / r) as usize).min(self.width - 1);
+        let j = ((m.y / r) as usize).min(self.height - 1);
+        let f = self.nearest[j * self.width + i];
+        if f == NONE {
+            return edge;
+        }
+        let di = (f as usize % self.width) as f64 - i as f64;
+        let dj = (f as usize / self.width) as f64 - j as f64;
+        let centres = (di * di + dj * dj).sqrt() * r;
+        (centres - std::f64::consts::SQRT_2 * r).max(0.0).min(edge)
     }
 
     /// Distance from `p` to the nearest obstacle, metres.
@@ -315,6 +343,28 @@ mod tests {
         }
         // Far below the 3/√2-cell bound.
         assert!(worst < 0.1 * 0.05, "worst overestimate {worst}");
+    }
+
+    #[test]
+    fn free_radius_is_a_lower_bound() {
+        let mut rng = RandomStream::new(6, 0);
+        let mut g = OccupancyGrid::new(80, 50, 0.05, Pose::new(0.5, 0.5, 0.2));
+        for _ in 0..30 {
+            g.set(
+                CellIndex {
+                    i: rng.index(80) as i64,
+                    j: rng.index(50) as i64,
+                },
+                Cell::Occupied,
+            );
+        }
+        let f = DistanceField::new(&g);
+        for _ in 0..3000 {
+            let p = g.to_world(Vec2::new(rng.uniform_in(0.0, 4.0), rng.uniform_in(0.0, 2.5)));
+            let lb = f.free_radius_m(p);
+            assert!(lb <= brute(&g, p) + 1e-12);
+            assert!(!g.disc_blocked(p, lb));
+        }
     }
 
     #[test]

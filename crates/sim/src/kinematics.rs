@@ -18,7 +18,7 @@
 use robot::Pose;
 
 use crate::error::Result;
-use crate::validate;
+use crate::{fast_math, validate};
 
 /// Parameters of a differential-drive base with a circular footprint.
 ///
@@ -143,7 +143,7 @@ pub fn integrate(pose: Pose, left_mps: f64, right_mps: f64, wheel_base_m: f64, d
     let half = 0.5 * dtheta;
     let chord = v * dt_s * sinc(half);
     let (s, c) = (pose.theta_rad + half).sin_cos();
-    Pose::new(
+    fast_math::pose(
         pose.x_m + chord * c,
         pose.y_m + chord * s,
         pose.theta_rad + dtheta,

@@ -56,6 +56,7 @@
 
 pub mod distance_field;
 pub mod error;
+mod fast_math;
 pub mod generators;
 pub mod grid;
 pub mod kinematics;

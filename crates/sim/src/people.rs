@@ -39,6 +39,7 @@
 use robot::Vec2;
 
 use crate::error::{Error, Result};
+use crate::fast_math::{dist, norm};
 use crate::noise::{RandomStream, streams};
 use crate::spatial_hash::SpatialHash;
 use crate::validate;
@@ -376,7 +377,7 @@ impl Crowd {
         let reach = radius_m + self.radius_m;
         let mut hit = false;
         self.hash.for_each_near(centre, reach, |k| {
-            hit |= self.people[k].position.dist(centre) < reach;
+            hit |= dist(self.people[k].position, centre) < reach;
         });
         hit
     }
@@ -387,7 +388,7 @@ impl Crowd {
         let reach = radius_m + self.radius_m;
         self.people
             .iter()
-            .map(|q| q.position.dist(centre) - reach)
+            .map(|q| dist(q.position, centre) - reach)
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -415,7 +416,7 @@ impl Crowd {
                     me.activity = Activity::Walking { since_s: time_s };
                 }
                 Activity::Walking { since_s } => {
-                    if me.position.dist(me.target) <= p.arrival_tolerance_m {
+                    if dist(me.position, me.target) <= p.arrival_tolerance_m {
                         if self.rng.chance(p.linger_probability) {
                             me.activity = Activity::Lingering {
                                 until_s: time_s + self.rng.exponential(p.linger_mean_s),
@@ -437,7 +438,7 @@ impl Crowd {
             let desired = match me.activity {
                 Activity::Walking { .. } => {
                     let to = me.target - me.position;
-                    let d = to.norm();
+                    let d = norm(to);
                     if d > 1e-9 {
                         to.scale(me.preferred_speed_mps / d)
                     } else {
@@ -448,12 +449,8 @@ impl Crowd {
             };
             let mut force = (desired - me.velocity).scale(1.0 / p.relaxation_time_s);
             let heading = {
-                let h = if desired.norm() > 0.0 {
-                    desired
-                } else {
-                    me.velocity
-                };
-                let n = h.norm();
+                let h = if norm(desired) > 0.0 { desired } else { me.velocity };
+                let n = norm(h);
                 if n > 1e-9 { Some(h.scale(1.0 / n)) } else { None }
             };
             let fov = |n: Vec2| match heading {
@@ -466,7 +463,7 @@ impl Crowd {
                     return;
                 }
                 let n = me.position - people[j].position;
-                let d = n.norm();
+                let d = norm(n);
                 if d >= reach || d <= 1e-12 {
                     return;
                 }
@@ -476,7 +473,7 @@ impl Crowd {
             });
             if let Some((c, rr)) = robot {
                 let n = me.position - c;
-                let d = n.norm();
+                let d = norm(n);
                 if d > 1e-12 && d < r + rr + 4.0 * p.person_range_m {
                     let u = n.scale(1.0 / d);
                     let mag = p.robot_repulsion_mps2 * ((r + rr - d) / p.person_range_m).exp();
@@ -492,18 +489,18 @@ impl Crowd {
             // Integrate, capped, without interpenetration.
             let mut v = me.velocity + force.scale(dt_s);
             let vmax = MAX_SPEED_RATIO * me.preferred_speed_mps;
-            let speed = v.norm();
+            let speed = norm(v);
             if speed > vmax {
                 v = v.scale(vmax / speed);
             }
             let next = me.position + v.scale(dt_s);
             let mut free = field.distance_m(next) >= r;
             if let Some((c, rr)) = robot {
-                free &= next.dist(c) >= r + rr;
+                free &= dist(next, c) >= r + rr;
             }
             if free {
                 self.hash.for_each_near(next, 2.0 * r + slack, |j| {
-                    if j != i && people[j].position.dist(next) < 2.0 * r {
+                    if j != i && dist(people[j].position, next) < 2.0 * r {
                         free = false;
                     }
                 });

@@ -29,7 +29,6 @@ use robot::{Command, Controller, Notes, Perception, Pose, Step, Vec2};
 
 use crate::error::{Error, Result};
 use crate::grid::OccupancyGrid;
-use crate::kinematics;
 use crate::noise::{RandomStream, streams};
 use crate::people::Crowd;
 use crate::robot_params::RobotParams;
@@ -37,6 +36,7 @@ use crate::sensors::{Ir, Laser, Odometry, Scene, Sonar};
 use crate::trace::{StepKind, Trace, TraceParams, TraceTick};
 use crate::validate;
 use crate::world::World;
+use crate::{fast_math, kinematics};
 
 /// How a run is clocked and judged.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -387,7 +387,7 @@ impl Simulation {
     fn goal_reached(&self) -> bool {
         self.task
             .goal
-            .is_some_and(|g| g.dist(self.pose.position()) <= self.run.goal_tolerance_m)
+            .is_some_and(|g| fast_math::dist(g, self.pose.position()) <= self.run.goal_tolerance_m)
     }
 
     /// Gap between the footprint and the nearest wall or person, metres.
@@ -406,6 +406,7 @@ impl Simulation {
     fn sense(&mut self, time_s: f64) {
         let scene = Scene {
             grid: self.world.grid(),
+            field: Some(self.world.distance_field()),
             people: self.crowd.people(),
             person_radius_m: self.crowd.radius_m(),
         };

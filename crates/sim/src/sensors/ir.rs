@@ -12,9 +12,10 @@ use robot::{IrReading, Pose, Vec2};
 
 use super::{Scene, Schedule, into_frame, rim_mounts, spread_angles, validate_mounts, validate_period};
 use crate::error::Result;
+use crate::fast_math::{mounted, norm};
 use crate::noise::RandomStream;
 use crate::ray_disc::ray_disc;
-use crate::{raycast, validate};
+use crate::validate;
 
 /// Parameters of an array of infrared detectors (all alike).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -106,16 +107,21 @@ impl Ir {
             return false;
         }
         let r = scene.person_radius_m;
+        let (rsin, rcos) = robot.theta_rad.sin_cos();
         for (k, reading) in out.iter_mut().enumerate() {
-            let o = robot.compose(&self.params.mounts[k]);
+            let (origin, heading) = mounted(robot, rsin, rcos, &self.params.mounts[k]);
             let range = (self.params.range_m + self.rng.gaussian(self.params.range_sigma_m)).max(0.0);
-            let origin = o.position();
-            let (sin, cos) = o.theta_rad.sin_cos();
+            let (sin, cos) = heading.sin_cos();
             let person = scene.people.iter().any(|q| {
                 let rel = into_frame(q.position, origin, sin, cos);
-                rel.norm() - r <= range && ray_disc(rel, Vec2::new(1.0, 0.0), r).is_some_and(|t| t <= range)
+                norm(rel) - r <= range && ray_disc(rel, Vec2::new(1.0, 0.0), r).is_some_and(|t| t <= range)
             });
-            reading.triggered = person || raycast::cast(scene.grid, origin, o.theta_rad, range).is_some();
+            reading.triggered = person || {
+                let skip = scene.free_radius_m(origin);
+                scene
+                    .cast(origin, Vec2::new(cos, sin), heading, skip, range)
+                    .is_some()
+            };
         }
         true
     }

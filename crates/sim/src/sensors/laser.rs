@@ -18,9 +18,10 @@ use robot::{LaserScan, Pose, Vec2};
 
 use super::{Scene, Schedule, into_frame, validate_period};
 use crate::error::Result;
+use crate::fast_math::{mounted, norm};
 use crate::noise::RandomStream;
 use crate::ray_disc::ray_disc;
-use crate::{raycast, validate};
+use crate::validate;
 
 /// Parameters of a laser range finder.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -152,16 +153,16 @@ impl Laser {
         if !self.schedule.due(time_s) {
             return false;
         }
-        let o = robot.compose(&self.params.mount);
-        let origin = o.position();
+        let (rsin, rcos) = robot.theta_rad.sin_cos();
+        let (origin, heading) = mounted(robot, rsin, rcos, &self.params.mount);
         let max = self.params.max_range_m;
         let n = self.params.beams;
         self.near.iter_mut().for_each(|x| *x = max);
         let r = scene.person_radius_m;
-        let (sin, cos) = o.theta_rad.sin_cos();
+        let (sin, cos) = heading.sin_cos();
         for person in scene.people {
             let rel = into_frame(person.position, origin, sin, cos);
-            let d = rel.norm();
+            let d = norm(rel);
             if d - r >= max {
                 continue;
             }
@@ -193,15 +194,13 @@ impl Laser {
         }
         let sigma = self.params.range_sigma_m;
         let dropout = self.params.dropout_probability;
-        let heading0 = o.theta_rad + self.angle_min_rad;
+        let heading0 = heading + self.angle_min_rad;
+        let skip = scene.free_radius_m(origin);
         for k in 0..n {
             let limit = self.near[k];
-            let hit = raycast::cast(
-                scene.grid,
-                origin,
-                heading0 + k as f64 * self.increment_rad,
-                limit,
-            );
+            let d = self.dirs[k];
+            let dir = Vec2::new(cos * d.x - sin * d.y, sin * d.x + cos * d.y);
+            let hit = scene.cast(origin, dir, heading0 + k as f64 * self.increment_rad, skip, limit);
             let found = hit.is_some() || limit < max;
             let range = hit.map_or(limit, |t| t.min(limit));
             scan.ranges_m[k] = if self.rng.chance(dropout) {
@@ -219,8 +218,10 @@ impl Laser {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::distance_field::DistanceField;
     use crate::grid::{Cell, CellIndex, OccupancyGrid};
     use crate::people::{Activity, Person};
+    use crate::raycast;
 
     fn person(x: f64, y: f64) -> Person {
         Person {
@@ -275,8 +276,10 @@ mod tests {
         let people: Vec<Person> = (0..40)
             .map(|_| person(rng.uniform_in(0.0, 10.0), rng.uniform_in(0.0, 10.0)))
             .collect();
+        let field = DistanceField::new(&g);
         let scene = Scene {
             grid: &g,
+            field: Some(&field),
             people: &people,
             person_radius_m: 0.25,
         };

@@ -24,16 +24,21 @@ pub use sonar::{Sonar, SonarParams};
 
 use robot::{Pose, Vec2};
 
+use crate::distance_field::DistanceField;
 use crate::error::Result;
 use crate::grid::OccupancyGrid;
 use crate::people::Person;
-use crate::validate;
+use crate::{raycast, validate};
 
 /// What range sensors see: the static grid and the people's discs.
 #[derive(Debug, Clone, Copy)]
 pub struct Scene<'a> {
     /// The occupancy grid (blocked cells reflect).
     pub grid: &'a OccupancyGrid,
+    /// The grid's distance field, if available: rays then skip the free
+    /// disc around the sensor ([`DistanceField::free_radius_m`]) — same
+    /// readings (to rounding), fewer cells visited.
+    pub field: Option<&'a DistanceField>,
     /// The people.
     pub people: &'a [Person],
     /// Radius of every person's disc, metres.
@@ -41,13 +46,48 @@ pub struct Scene<'a> {
 }
 
 impl<'a> Scene<'a> {
-    /// A scene without people.
+    /// A scene without people (and without a distance field).
     pub fn static_only(grid: &'a OccupancyGrid) -> Scene<'a> {
         Scene {
             grid,
+            field: None,
             people: &[],
             person_radius_m: 0.0,
         }
+    }
+
+    /// A radius around `p` known to be free of grid obstacles, metres (0
+    /// without a distance field).
+    #[inline]
+    pub fn free_radius_m(&self, p: Vec2) -> f64 {
+        self.field.map_or(0.0, |f| f.free_radius_m(p))
+    }
+
+    /// [`raycast::cast`] from `origin` along `angle_rad` (unit direction
+    /// `dir`) up to `max_range_m`, starting `skip_m` along the ray — the
+    /// caller knows the cells before are free.
+    #[inline]
+    pub(crate) fn cast(
+        &self,
+        origin: Vec2,
+        dir: Vec2,
+        angle_rad: f64,
+        skip_m: f64,
+        max_range_m: f64,
+    ) -> Option<f64> {
+        if skip_m <= 0.0 {
+            return raycast::cast(self.grid, origin, angle_rad, max_range_m);
+        }
+        if skip_m >= max_range_m {
+            return None;
+        }
+        raycast::cast(
+            self.grid,
+            origin + dir.scale(skip_m),
+            angle_rad,
+            max_range_m - skip_m,
+        )
+        .map(|t| t + skip_m)
     }
 }
 

@@ -26,13 +26,14 @@
 //! is within range — specular reflection away from the transducer).
 //! Specular reflection itself is not modelled.
 
-use robot::{Pose, SonarReading};
+use robot::{Pose, SonarReading, Vec2};
 
 use super::{Scene, Schedule, into_frame, rim_mounts, spread_angles, validate_mounts, validate_period};
 use crate::error::Result;
+use crate::fast_math::{mounted, norm};
 use crate::noise::RandomStream;
 use crate::ray_disc::cone_disc;
-use crate::{raycast, validate};
+use crate::validate;
 
 /// Parameters of a sonar array (all transducers alike).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -114,6 +115,10 @@ pub struct Sonar {
     params: SonarParams,
     /// Ray angles relative to the cone's axis.
     rays: Vec<f64>,
+    /// Their sines and cosines.
+    rays_sin_cos: Vec<(f64, f64)>,
+    /// Per transducer, the ray that found the last echo.
+    first_ray: Vec<usize>,
     rng: RandomStream,
     schedule: Schedule,
 }
@@ -122,8 +127,11 @@ impl Sonar {
     /// A sonar array with these (validated) parameters drawing from `rng`.
     pub fn new(params: SonarParams, rng: RandomStream) -> Result<Sonar> {
         params.validate()?;
+        let rays = spread_angles(params.rays_per_cone, params.cone_rad);
         Ok(Sonar {
-            rays: spread_angles(params.rays_per_cone, params.cone_rad),
+            rays_sin_cos: rays.iter().map(|a| a.sin_cos()).collect(),
+            first_ray: vec![params.rays_per_cone / 2; params.mounts.len()],
+            rays,
             schedule: Schedule::new(params.period_s),
             params,
             rng,
@@ -148,18 +156,20 @@ impl Sonar {
             .collect()
     }
 
-    /// The nearest echo inside the cone of a transducer at `o` (world
-    /// frame), before noise, if any within the maximum range.
-    fn nearest(&self, scene: &Scene, o: &Pose) -> Option<f64> {
-        let origin = o.position();
+    /// The nearest echo inside the cone of transducer `k` at `origin`,
+    /// heading `heading` (world frame), before noise, if any within the
+    /// maximum range. The ray that found the last echo is cast first: the
+    /// robot moves little between reads, so it usually bounds the others
+    /// at once (the answer, a minimum, does not depend on the order).
+    fn nearest(&mut self, scene: &Scene, k: usize, origin: Vec2, heading: f64) -> Option<f64> {
         let mut best = self.params.max_range_m;
         let mut found = false;
         let half = 0.5 * self.params.cone_rad;
         let r = scene.person_radius_m;
-        let (sin, cos) = o.theta_rad.sin_cos();
+        let (sin, cos) = heading.sin_cos();
         for person in scene.people {
             let rel = into_frame(person.position, origin, sin, cos);
-            if rel.norm() - r >= best {
+            if norm(rel) - r >= best {
                 continue;
             }
             if let Some(t) = cone_disc(rel, half, r) {
@@ -169,8 +179,22 @@ impl Sonar {
                 }
             }
         }
-        for &a in &self.rays {
-            if let Some(t) = raycast::cast(scene.grid, origin, o.theta_rad + a, best) {
+        let skip = scene.free_radius_m(origin);
+        let first = self.first_ray[k];
+        let n = self.rays.len();
+        for m in 0..n {
+            // `first`, then the others in order.
+            let j = match m {
+                0 => first,
+                m if m <= first => m - 1,
+                m => m,
+            };
+            let (s, c) = self.rays_sin_cos[j];
+            let dir = Vec2::new(cos * c - sin * s, sin * c + cos * s);
+            if let Some(t) = scene.cast(origin, dir, heading + self.rays[j], skip, best) {
+                if !found || t < best {
+                    self.first_ray[k] = j;
+                }
                 best = best.min(t);
                 found = true;
             }
@@ -185,9 +209,10 @@ impl Sonar {
             return false;
         }
         let (lo, hi) = (self.params.min_range_m, self.params.max_range_m);
+        let (sin, cos) = robot.theta_rad.sin_cos();
         for (k, reading) in out.iter_mut().enumerate() {
-            let o = robot.compose(&self.params.mounts[k]);
-            let echo = self.nearest(scene, &o);
+            let (origin, heading) = mounted(robot, sin, cos, &self.params.mounts[k]);
+            let echo = self.nearest(scene, k, origin, heading);
             reading.range_m = match echo {
                 _ if self.rng.chance(self.params.dropout_probability) => f64::INFINITY,
                 None => f64::INFINITY,
@@ -202,7 +227,6 @@ impl Sonar {
 mod tests {
     use super::*;
     use crate::grid::{Cell, CellIndex, OccupancyGrid};
-    use robot::Vec2;
 
     fn noiseless() -> SonarParams {
         SonarParams {
