@@ -480,11 +480,14 @@ impl Crowd {
                     force = force + u.scale(mag * fov(u));
                 }
             }
-            let wall = field.nearest(me.position);
-            if wall.distance_m > 1e-12 && wall.distance_m < wall_reach {
-                let u = (me.position - wall.point).scale(1.0 / wall.distance_m);
-                force =
-                    force + u.scale(p.wall_repulsion_mps2 * ((r - wall.distance_m) / p.wall_range_m).exp());
+            // Walls (the free radius, one look-up, rules most people out).
+            if field.free_radius_m(me.position) < wall_reach {
+                let wall = field.nearest(me.position);
+                if wall.distance_m > 1e-12 && wall.distance_m < wall_reach {
+                    let u = (me.position - wall.point).scale(1.0 / wall.distance_m);
+                    let mag = p.wall_repulsion_mps2 * ((r - wall.distance_m) / p.wall_range_m).exp();
+                    force = force + u.scale(mag);
+                }
             }
             // Integrate, capped, without interpenetration.
             let mut v = me.velocity + force.scale(dt_s);
@@ -494,7 +497,7 @@ impl Crowd {
                 v = v.scale(vmax / speed);
             }
             let next = me.position + v.scale(dt_s);
-            let mut free = field.distance_m(next) >= r;
+            let mut free = field.free_radius_m(next) >= r || field.distance_m(next) >= r;
             if let Some((c, rr)) = robot {
                 free &= dist(next, c) >= r + rr;
             }
