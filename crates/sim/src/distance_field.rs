@@ -92,8 +92,8 @@ impl DistanceField {
             };
             let mut k: usize = 0;
             let mut any = false;
-            for q in 0..w {
-                if row[q] < 0 {
+            for (q, &near_row) in row.iter().enumerate() {
+                if near_row < 0 {
                     continue;
                 }
                 if !any {

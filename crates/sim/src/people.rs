@@ -78,8 +78,13 @@ impl Default for CrowdSize {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CrowdParams {
-    /// How many people. Default: density 0 (nobody).
+    /// How many people are placed at random. Default: density 0 (nobody).
     pub size: CrowdSize,
+    /// People placed at these positions (world frame) before the random
+    /// ones — someone standing on the goal, a group blocking a door. They
+    /// must not overlap a wall, each other or the robot's start footprint
+    /// (`keep_clear_m` does not apply). Default empty.
+    pub positions: Vec<Vec2>,
     /// Radius of a person's disc, metres. Default 0.25.
     pub radius_m: f64,
     /// Mean preferred walking speed, m/s. Default 1.0.
@@ -130,6 +135,7 @@ impl Default for CrowdParams {
     fn default() -> CrowdParams {
         CrowdParams {
             size: CrowdSize::default(),
+            positions: Vec::new(),
             radius_m: 0.25,
             speed_mean_mps: 1.0,
             speed_sigma_mps: 0.2,
@@ -167,6 +173,9 @@ impl CrowdParams {
         for (k, w) in self.waypoints.iter().enumerate() {
             validate::point(&format!("crowd.waypoints[{k}]"), *w)?;
         }
+        for (k, w) in self.positions.iter().enumerate() {
+            validate::point(&format!("crowd.positions[{k}]"), *w)?;
+        }
         validate::non_negative("crowd.gather_radius_m", self.gather_radius_m)?;
         validate::positive("crowd.wander_radius_m", self.wander_radius_m)?;
         validate::positive("crowd.arrival_tolerance_m", self.arrival_tolerance_m)?;
@@ -183,8 +192,8 @@ impl CrowdParams {
         validate::non_negative("crowd.keep_clear_m", self.keep_clear_m)
     }
 
-    /// How many people this crowd has on a map with `free_area_m2` of free
-    /// space.
+    /// How many people this crowd places at random on a map with
+    /// `free_area_m2` of free space (besides [`CrowdParams::positions`]).
     pub fn count(&self, free_area_m2: f64) -> usize {
         match self.size {
             CrowdSize::PerArea { people_per_100m2 } => {
@@ -290,7 +299,10 @@ impl Crowd {
     /// person gets a preferred speed and a first target; with probability
     /// `linger_probability` they start lingering.
     ///
-    /// Errors: [`Error::InvalidValue`] when the people do not fit (after
+    /// The people at [`CrowdParams::positions`] come first, in order.
+    ///
+    /// Errors: [`Error::Geometry`] when a given position is not free;
+    /// [`Error::InvalidValue`] when the random people do not fit (after
     /// 10 000 tries per person).
     pub fn new(world: &World, seed: u64, keep_clear: &[(Vec2, f64)]) -> Result<Crowd> {
         let p = world.crowd();
@@ -302,7 +314,22 @@ impl Crowd {
             g.width() as f64 * g.resolution_m(),
             g.height() as f64 * g.resolution_m(),
         );
-        let mut people: Vec<Person> = Vec::with_capacity(count);
+        let mut people: Vec<Person> = Vec::with_capacity(count + p.positions.len());
+        for (k, &q) in p.positions.iter().enumerate() {
+            let overlaps_robot = keep_clear.iter().any(|&(c, rc)| dist(q, c) < r + rc);
+            if !world.on_map(q)
+                || g.disc_blocked(q, r)
+                || overlaps_robot
+                || people.iter().any(|o| dist(o.position, q) < 2.0 * r)
+            {
+                return Err(Error::Geometry(format!(
+                    "crowd position {k} ({:.3}, {:.3}): the person (radius {r} m) overlaps a wall, \
+                     another person or the robot",
+                    q.x, q.y
+                )));
+            }
+            people.push(Self::person(world, &mut place, q));
+        }
         for _ in 0..count {
             let mut placed = None;
             for _ in 0..10_000 {
@@ -326,25 +353,7 @@ impl Crowd {
                     value: count as f64,
                 });
             };
-            let z = place.normal();
-            let preferred_speed_mps = (p.speed_mean_mps + p.speed_sigma_mps * z)
-                .clamp(0.2 * p.speed_mean_mps, 1.8 * p.speed_mean_mps);
-            let (target, waypoint) = pick_target(world, &mut place, position, None);
-            let activity = if place.chance(p.linger_probability) {
-                Activity::Lingering {
-                    until_s: place.exponential(p.linger_mean_s),
-                }
-            } else {
-                Activity::Walking { since_s: 0.0 }
-            };
-            people.push(Person {
-                position,
-                velocity: Vec2::default(),
-                preferred_speed_mps,
-                target,
-                activity,
-                waypoint,
-            });
+            people.push(Self::person(world, &mut place, position));
         }
         let (lo, hi) = world.bounds();
         let mut hash = SpatialHash::new(lo, hi, Self::reach_m(p));
@@ -355,6 +364,31 @@ impl Crowd {
             hash,
             rng: RandomStream::new(seed, streams::PEOPLE),
         })
+    }
+
+    /// A new person at `position`: preferred speed, first target, and
+    /// whether they start lingering.
+    fn person(world: &World, place: &mut RandomStream, position: Vec2) -> Person {
+        let p = world.crowd();
+        let z = place.normal();
+        let preferred_speed_mps =
+            (p.speed_mean_mps + p.speed_sigma_mps * z).clamp(0.2 * p.speed_mean_mps, 1.8 * p.speed_mean_mps);
+        let (target, waypoint) = pick_target(world, place, position, None);
+        let activity = if place.chance(p.linger_probability) {
+            Activity::Lingering {
+                until_s: place.exponential(p.linger_mean_s),
+            }
+        } else {
+            Activity::Walking { since_s: 0.0 }
+        };
+        Person {
+            position,
+            velocity: Vec2::default(),
+            preferred_speed_mps,
+            target,
+            activity,
+            waypoint,
+        }
     }
 
     /// Range beyond which people do not push each other: `2r + 4B`.

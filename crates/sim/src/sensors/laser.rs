@@ -294,8 +294,7 @@ mod tests {
             ] {
                 assert!(laser.read(&scene, &robot, 0.0, &mut scan));
                 let want = naive(&scene, &p, &robot);
-                for k in 0..beams {
-                    let (a, b) = (scan.ranges_m[k], want[k]);
+                for (k, (&a, &b)) in scan.ranges_m.iter().zip(&want).enumerate() {
                     assert!(a == b || (a - b).abs() < 1e-9, "beams {beams} k {k}: {a} vs {b}");
                 }
             }
