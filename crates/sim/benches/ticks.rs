@@ -98,7 +98,7 @@ fn run_params() -> RunParams {
 
 #[divan::bench(sample_count = 50)]
 fn aibot_field(bencher: Bencher) {
-    let world = World::new(generators::cluttered_field(10.0, 0.05, 20, 1));
+    let world = World::new(generators::cluttered_field(10.0, 0.05, 20, 1).unwrap());
     let seed = Cell::new(0u64);
     bencher
         .counter(ItemsCount::new(TICKS))

@@ -3,8 +3,26 @@
 
 use robot::{Pose, Vec2};
 
+use crate::error::{Error, Result};
 use crate::grid::{Cell, CellIndex, OccupancyGrid};
 use crate::noise::RandomStream;
+use crate::validate;
+
+/// Largest grid the generators make, cells.
+pub const MAX_CELLS: usize = 1 << 28;
+
+/// Checks a generator's size and resolution.
+fn check(width: usize, height: usize, resolution_m: f64) -> Result<()> {
+    validate::positive("resolution_m", resolution_m)?;
+    if width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) {
+        return Err(Error::InvalidValue {
+            what: "grid cells (width × height)".to_string(),
+            requirement: "at most 2^28",
+            value: width as f64 * height as f64,
+        });
+    }
+    Ok(())
+}
 
 /// Sets the cells whose centres lie in the rectangle `[x0, x1] × [y0, y1]`
 /// (map frame, metres).
@@ -34,7 +52,11 @@ const WALL_M: f64 = 0.15;
 /// 1 m door onto the nearer corridor and a 1.2 m × 0.6 m table in its
 /// middle; the middle slot between the corridors is an open hall joining
 /// them.
-pub fn office(width: usize, height: usize, resolution_m: f64) -> OccupancyGrid {
+///
+/// Errors: [`Error::InvalidValue`] for a resolution that is not > 0 or more
+/// than [`MAX_CELLS`] cells.
+pub fn office(width: usize, height: usize, resolution_m: f64) -> Result<OccupancyGrid> {
+    check(width, height, resolution_m)?;
     let mut g = OccupancyGrid::new(width, height, resolution_m, Pose::default());
     let (w, h) = (width as f64 * resolution_m, height as f64 * resolution_m);
     let t = WALL_M;
@@ -98,22 +120,28 @@ pub fn office(width: usize, height: usize, resolution_m: f64) -> OccupancyGrid {
         yb - 1.0,
         occ,
     );
-    g
+    Ok(g)
 }
 
 /// An office floor the size of the `building_31` map: 693 × 648 cells at
 /// 0.05 m (34.65 m × 32.4 m). Corridor A runs along `y = 10.8 m`,
 /// corridor B along `y = 21.6 m`.
 pub fn building_31_like() -> OccupancyGrid {
-    office(693, 648, 0.05)
+    office(693, 648, 0.05).expect("a valid size")
 }
 
 /// A square field of side `side_m` with 0.1 m walls around and `obstacles`
 /// boxes (sides 0.2–0.6 m, axis-aligned) at positions drawn from `seed`,
 /// none within 1 m of the corners `(1, 1)` and `(side − 1, side − 1)` (start
 /// and goal areas).
-pub fn cluttered_field(side_m: f64, resolution_m: f64, obstacles: usize, seed: u64) -> OccupancyGrid {
-    let n = (side_m / resolution_m).round().max(1.0) as usize;
+///
+/// Errors: [`Error::InvalidValue`] for a side or resolution that is not
+/// > 0, or more than [`MAX_CELLS`] cells.
+pub fn cluttered_field(side_m: f64, resolution_m: f64, obstacles: usize, seed: u64) -> Result<OccupancyGrid> {
+    validate::positive("side_m", side_m)?;
+    validate::positive("resolution_m", resolution_m)?;
+    let n = (side_m / resolution_m).round().clamp(1.0, MAX_CELLS as f64) as usize;
+    check(n, n, resolution_m)?;
     let mut g = OccupancyGrid::new(n, n, resolution_m, Pose::default());
     let s = n as f64 * resolution_m;
     let occ = Cell::Occupied;
@@ -142,7 +170,7 @@ pub fn cluttered_field(side_m: f64, resolution_m: f64, obstacles: usize, seed: u
         );
         placed += 1;
     }
-    g
+    Ok(g)
 }
 
 #[cfg(test)]
@@ -168,9 +196,12 @@ mod tests {
 
     #[test]
     fn field_keeps_start_and_goal_clear() {
-        let g = cluttered_field(10.0, 0.05, 25, 1);
+        let g = cluttered_field(10.0, 0.05, 25, 1).unwrap();
         assert!(!g.disc_blocked(Vec2::new(1.0, 1.0), 0.5));
         assert!(!g.disc_blocked(Vec2::new(9.0, 9.0), 0.5));
         assert!(g.free_area_m2() < 99.0);
+        assert!(cluttered_field(10.0, 0.0, 1, 1).is_err());
+        assert!(office(1 << 20, 1 << 20, 0.05).is_err());
+        assert!(office(10, 10, f64::NAN).is_err());
     }
 }

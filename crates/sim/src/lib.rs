@@ -28,7 +28,7 @@
 //!     }
 //! }
 //!
-//! let world = World::new(generators::cluttered_field(10.0, 0.05, 0, 1));
+//! let world = World::new(generators::cluttered_field(10.0, 0.05, 0, 1)?);
 //! let task = Task { start: Pose::new(1.0, 1.0, 0.0), goal: None };
 //! let run = RunParams { time_limit_s: 60.0, ..RunParams::default() };
 //! let mut sim = Simulation::new(&world, RobotParams::aibot(), run, task, 42)?;

@@ -308,6 +308,15 @@ impl Crowd {
         let p = world.crowd();
         let count = p.count(world.free_area_m2());
         let r = p.radius_m;
+        // Discs of radius r pack at best one per 2√3 r² (hexagonal packing).
+        let most = world.free_area_m2() / (2.0 * 3f64.sqrt() * r * r);
+        if count as f64 > most {
+            return Err(Error::InvalidValue {
+                what: "crowd size (people)".to_string(),
+                requirement: "at most the free area over 2√3 r² (densest packing)",
+                value: count as f64,
+            });
+        }
         let mut place = RandomStream::new(seed, streams::PLACEMENT);
         let g = world.grid();
         let (wm, hm) = (
@@ -645,6 +654,20 @@ mod tests {
             })
             .unwrap();
         assert!(matches!(Crowd::new(&w, 1, &[]), Err(Error::InvalidValue { .. })));
+        for size in [
+            CrowdSize::Count { people: usize::MAX },
+            CrowdSize::PerArea {
+                people_per_100m2: 1e300,
+            },
+        ] {
+            let w = room()
+                .with_crowd(CrowdParams {
+                    size,
+                    ..CrowdParams::default()
+                })
+                .unwrap();
+            assert!(matches!(Crowd::new(&w, 1, &[]), Err(Error::InvalidValue { .. })));
+        }
         let bad = CrowdParams {
             radius_m: -1.0,
             ..CrowdParams::default()

@@ -58,7 +58,18 @@ pub(crate) fn within(what: &str, value: f64, lo: f64, hi: f64, requirement: &'st
 
 /// A count is at least `min`.
 pub(crate) fn count_at_least(what: &str, value: usize, min: usize, requirement: &'static str) -> Result<()> {
-    if value >= min {
+    count_within(what, value, min, usize::MAX, requirement)
+}
+
+/// A count lies in `[min, max]`.
+pub(crate) fn count_within(
+    what: &str,
+    value: usize,
+    min: usize,
+    max: usize,
+    requirement: &'static str,
+) -> Result<()> {
+    if value >= min && value <= max {
         Ok(())
     } else {
         Err(fail(what, requirement, value as f64))

@@ -152,3 +152,10 @@ fn the_trace_is_json_lines_and_off_by_default() {
     assert!(first.get("perception").is_none(), "perception not asked for");
     assert_eq!(first["true_pose"]["x_m"], 2.0);
 }
+
+#[test]
+fn runs_can_move_between_threads() {
+    fn send_and_sync<T: Send + Sync>() {}
+    send_and_sync::<Simulation>();
+    send_and_sync::<World>();
+}

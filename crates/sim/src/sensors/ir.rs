@@ -100,15 +100,16 @@ impl Ir {
             .collect()
     }
 
-    /// Reads every detector into `out` (from [`Ir::empty_readings`]) if the
-    /// array is due at `time_s`; returns whether it read.
+    /// Reads every detector into `out` (from [`Ir::empty_readings`]; entry
+    /// `k` for mount `k`, extra entries left alone) if the array is due at
+    /// `time_s`; returns whether it read.
     pub fn read(&mut self, scene: &Scene, robot: &Pose, time_s: f64, out: &mut [IrReading]) -> bool {
         if !self.schedule.due(time_s) {
             return false;
         }
         let r = scene.person_radius_m;
         let (rsin, rcos) = robot.theta_rad.sin_cos();
-        for (k, reading) in out.iter_mut().enumerate() {
+        for (k, reading) in out.iter_mut().enumerate().take(self.params.mounts.len()) {
             let (origin, heading) = mounted(robot, rsin, rcos, &self.params.mounts[k]);
             let range = (self.params.range_m + self.rng.gaussian(self.params.range_sigma_m)).max(0.0);
             let (sin, cos) = heading.sin_cos();

@@ -30,7 +30,7 @@ pub struct LaserParams {
     /// Pose of the sensor on the robot (robot frame). Default: the centre,
     /// facing forwards.
     pub mount: Pose,
-    /// Number of beams. Default 181.
+    /// Number of beams, 1 to 100 000. Default 181.
     pub beams: usize,
     /// Field of view, radians, centred on the sensor's axis, in (0, 2π]:
     /// beams from `−fov/2` to `+fov/2` inclusive (a full circle spaces them
@@ -64,7 +64,7 @@ impl LaserParams {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
         validate::pose("laser.mount", &self.mount)?;
-        validate::count_at_least("laser.beams", self.beams, 1, "at least 1")?;
+        validate::count_within("laser.beams", self.beams, 1, 100_000, "between 1 and 100 000")?;
         validate::within(
             "laser.fov_rad",
             self.fov_rad,
@@ -157,6 +157,8 @@ impl Laser {
         let (origin, heading) = mounted(robot, rsin, rcos, &self.params.mount);
         let max = self.params.max_range_m;
         let n = self.params.beams;
+        // A buffer of the wrong length is fixed (allocates only then).
+        scan.ranges_m.resize(n, f64::INFINITY);
         self.near.iter_mut().for_each(|x| *x = max);
         let r = scene.person_radius_m;
         let (sin, cos) = heading.sin_cos();

@@ -45,7 +45,8 @@ pub struct SonarParams {
     pub mounts: Vec<Pose>,
     /// Full cone width, radians, in (0, π). Default 25°.
     pub cone_rad: f64,
-    /// Rays sampling the grid across the cone (module docs). Default 9.
+    /// Rays sampling the grid across the cone (module docs), 1 to 10 000.
+    /// Default 9.
     pub rays_per_cone: usize,
     /// Minimum range, metres. Default 0.15.
     pub min_range_m: f64,
@@ -93,7 +94,13 @@ impl SonarParams {
             std::f64::consts::PI - 1e-9,
             "in (0, π)",
         )?;
-        validate::count_at_least("sonar.rays_per_cone", self.rays_per_cone, 1, "at least 1")?;
+        validate::count_within(
+            "sonar.rays_per_cone",
+            self.rays_per_cone,
+            1,
+            10_000,
+            "between 1 and 10 000",
+        )?;
         validate::non_negative("sonar.min_range_m", self.min_range_m)?;
         validate::positive("sonar.max_range_m", self.max_range_m)?;
         if self.min_range_m >= self.max_range_m {
@@ -202,15 +209,16 @@ impl Sonar {
         found.then_some(best)
     }
 
-    /// Reads every transducer into `out` (from [`Sonar::empty_readings`])
-    /// if the array is due at `time_s`; returns whether it read.
+    /// Reads every transducer into `out` (from [`Sonar::empty_readings`];
+    /// entry `k` for mount `k`, extra entries left alone) if the array is
+    /// due at `time_s`; returns whether it read.
     pub fn read(&mut self, scene: &Scene, robot: &Pose, time_s: f64, out: &mut [SonarReading]) -> bool {
         if !self.schedule.due(time_s) {
             return false;
         }
         let (lo, hi) = (self.params.min_range_m, self.params.max_range_m);
         let (sin, cos) = robot.theta_rad.sin_cos();
-        for (k, reading) in out.iter_mut().enumerate() {
+        for (k, reading) in out.iter_mut().enumerate().take(self.params.mounts.len()) {
             let (origin, heading) = mounted(robot, sin, cos, &self.params.mounts[k]);
             let echo = self.nearest(scene, k, origin, heading);
             reading.range_m = match echo {
