@@ -45,7 +45,7 @@
 //! | [`kinematics`] | exact arc integration, drive limits, AIBOT/Jinny presets |
 //! | [`sensors`] | laser, sonar, IR, odometry, bumper |
 //! | [`ray_disc`] | ray–disc and cone–disc ranges (people) |
-//! | [`people`], [`spatial_hash`] | social-force crowd; neighbour buckets |
+//! | [`people`], [`spatial_hash`], [`routes`] | social-force crowd; neighbour buckets; walking-distance fields to exhibits |
 //! | [`world`], [`robot_params`] | world and robot set-up |
 //! | [`simulation`] | the control loop, outcomes, run summary |
 //! | [`trace`] | optional per-tick record, JSON lines |
@@ -65,6 +65,7 @@ pub mod people;
 pub mod ray_disc;
 pub mod raycast;
 pub mod robot_params;
+pub mod routes;
 pub mod scripted;
 pub mod sensors;
 pub mod simulation;
@@ -80,6 +81,7 @@ pub use kinematics::DriveParams;
 pub use noise::RandomStream;
 pub use people::{Activity, Crowd, CrowdParams, CrowdSize, Person};
 pub use robot_params::RobotParams;
+pub use routes::Routes;
 pub use scripted::ScriptedController;
 pub use sensors::{BumperParams, IrParams, LaserParams, OdometryParams, Scene, SonarParams};
 pub use simulation::{Outcome, RunParams, RunResult, Simulation, Task};

@@ -27,8 +27,14 @@
 //! `gather_radius_m` of it (people gather *around* exhibits), and on arrival
 //! lingers with probability `linger_probability` for an exponential time of
 //! mean `linger_mean_s`; without waypoints a person wanders to random free
-//! points within `wander_radius_m`. A target not reached within
-//! `target_timeout_s` (blocked, behind a wall) is given up for a new one.
+//! points within `wander_radius_m`. Towards an exhibit people follow the
+//! world's walking-distance field of that exhibit ([`crate::routes`]:
+//! around obstacles, through doors) until within `gather_radius_m + 1 m`,
+//! then walk straight at their target; wanderers walk straight, so their
+//! targets are drawn among points they can reach in a straight line when
+//! there are any (three rays: centre line and flanks). A target not reached
+//! within `target_timeout_s`, or a person who has not moved their own radius
+//! in `stuck_timeout_s`, gets a new target.
 //! Lingering people stand still but can still be pushed: they block
 //! corridors and exhibits, and people crossing to the next target step in
 //! front of the robot.
@@ -42,8 +48,8 @@ use crate::error::{Error, Result};
 use crate::fast_math::{dist, norm};
 use crate::noise::{RandomStream, streams};
 use crate::spatial_hash::SpatialHash;
-use crate::validate;
 use crate::world::World;
+use crate::{raycast, validate};
 
 /// Ratio of a person's top speed to their preferred speed (Helbing & Molnár).
 pub const MAX_SPEED_RATIO: f64 = 1.3;
@@ -110,6 +116,9 @@ pub struct CrowdParams {
     /// A target not reached within this time is given up, seconds.
     /// Default 60.
     pub target_timeout_s: f64,
+    /// A walking person who has moved less than their radius in this time
+    /// gives up their target (stuck behind an obstacle), seconds. Default 5.
+    pub stuck_timeout_s: f64,
     /// Relaxation time `τ` of the driving force, seconds. Default 0.5.
     pub relaxation_time_s: f64,
     /// Strength `A` of the repulsion between people, m/s². Default 2.0.
@@ -146,6 +155,7 @@ impl Default for CrowdParams {
             linger_probability: 0.5,
             linger_mean_s: 20.0,
             target_timeout_s: 60.0,
+            stuck_timeout_s: 5.0,
             relaxation_time_s: 0.5,
             person_repulsion_mps2: 2.0,
             person_range_m: 0.3,
@@ -182,6 +192,7 @@ impl CrowdParams {
         validate::probability("crowd.linger_probability", self.linger_probability)?;
         validate::non_negative("crowd.linger_mean_s", self.linger_mean_s)?;
         validate::positive("crowd.target_timeout_s", self.target_timeout_s)?;
+        validate::positive("crowd.stuck_timeout_s", self.stuck_timeout_s)?;
         validate::positive("crowd.relaxation_time_s", self.relaxation_time_s)?;
         validate::non_negative("crowd.person_repulsion_mps2", self.person_repulsion_mps2)?;
         validate::positive("crowd.person_range_m", self.person_range_m)?;
@@ -207,16 +218,31 @@ impl CrowdParams {
 /// What a person is doing.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub enum Activity {
-    /// Walking to the target since this time, seconds.
+    /// Walking to the target.
     Walking {
         /// When the walk started, seconds.
         since_s: f64,
+        /// Where the person was at the last progress check.
+        checkpoint: Vec2,
+        /// When that was, seconds.
+        checkpoint_s: f64,
     },
     /// Standing until this time, seconds.
     Lingering {
         /// When the pause ends, seconds.
         until_s: f64,
     },
+}
+
+impl Activity {
+    /// Starting a walk from `position` at `time_s`.
+    pub fn walking(position: Vec2, time_s: f64) -> Activity {
+        Activity::Walking {
+            since_s: time_s,
+            checkpoint: position,
+            checkpoint_s: time_s,
+        }
+    }
 }
 
 /// One person.
@@ -245,11 +271,35 @@ pub struct Crowd {
     rng: RandomStream,
 }
 
-/// A free point for a person's target, or `None` after a few tries.
-fn free_point(world: &World, radius_m: f64, try_point: &mut dyn FnMut() -> Vec2) -> Option<Vec2> {
+/// Whether a disc of radius `radius_m` can walk straight from `a` to `b`:
+/// three rays (its centre line and both flanks) meet no wall.
+fn walkable(world: &World, a: Vec2, b: Vec2, radius_m: f64) -> bool {
+    let d = b - a;
+    let len = norm(d);
+    if len < 1e-9 {
+        return true;
+    }
+    let side = Vec2::new(-d.y, d.x).scale(radius_m / len);
+    let angle = d.y.atan2(d.x);
+    [Vec2::default(), side, side.scale(-1.0)]
+        .iter()
+        .all(|&o| raycast::cast(world.grid(), a + o, angle, len).is_none())
+}
+
+/// A free point for a person's target, or `None` after a few tries; with
+/// `seen_from`, only points a person there can walk to straight.
+fn free_point(
+    world: &World,
+    radius_m: f64,
+    seen_from: Option<Vec2>,
+    try_point: &mut dyn FnMut() -> Vec2,
+) -> Option<Vec2> {
     for _ in 0..20 {
         let p = try_point();
-        if world.on_map(p) && world.distance_field().distance_m(p) >= radius_m + 0.05 {
+        if world.on_map(p)
+            && world.distance_field().distance_m(p) >= radius_m + 0.05
+            && seen_from.is_none_or(|a| walkable(world, a, p, radius_m))
+        {
             return Some(p);
         }
     }
@@ -265,10 +315,11 @@ fn pick_target(
 ) -> (Vec2, Option<usize>) {
     let p = world.crowd();
     let n = p.waypoints.len();
+    let tau = std::f64::consts::TAU;
     if n == 0 {
         let reach = p.wander_radius_m;
-        let target = free_point(world, p.radius_m, &mut || {
-            let a = rng.uniform_in(-std::f64::consts::PI, std::f64::consts::PI);
+        let target = free_point(world, p.radius_m, Some(from), &mut || {
+            let a = rng.uniform_in(0.0, tau);
             let d = reach * rng.uniform().sqrt();
             from + Vec2::new(a.cos(), a.sin()).scale(d)
         });
@@ -283,11 +334,13 @@ fn pick_target(
     };
     let centre = p.waypoints[k];
     let gather = p.gather_radius_m;
-    let target = free_point(world, p.radius_m, &mut || {
-        let a = rng.uniform_in(-std::f64::consts::PI, std::f64::consts::PI);
+    let mut around = || {
+        let a = rng.uniform_in(0.0, tau);
         let d = gather * rng.uniform().sqrt();
         centre + Vec2::new(a.cos(), a.sin()).scale(d)
-    });
+    };
+    let target = free_point(world, p.radius_m, Some(from), &mut around)
+        .or_else(|| free_point(world, p.radius_m, None, &mut around));
     (target.unwrap_or(centre), Some(k))
 }
 
@@ -388,7 +441,7 @@ impl Crowd {
                 until_s: place.exponential(p.linger_mean_s),
             }
         } else {
-            Activity::Walking { since_s: 0.0 }
+            Activity::walking(position, 0.0)
         };
         Person {
             position,
@@ -453,39 +506,54 @@ impl Crowd {
         for i in 0..self.people.len() {
             let mut me = self.people[i];
             // What to do.
+            let mut new_target = false;
             match me.activity {
-                Activity::Lingering { until_s } if time_s >= until_s => {
-                    (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
-                    me.activity = Activity::Walking { since_s: time_s };
-                }
-                Activity::Walking { since_s } => {
+                Activity::Lingering { until_s } => new_target = time_s >= until_s,
+                Activity::Walking {
+                    since_s,
+                    checkpoint,
+                    checkpoint_s,
+                } => {
                     if dist(me.position, me.target) <= p.arrival_tolerance_m {
                         if self.rng.chance(p.linger_probability) {
                             me.activity = Activity::Lingering {
                                 until_s: time_s + self.rng.exponential(p.linger_mean_s),
                             };
                         } else {
-                            (me.target, me.waypoint) =
-                                pick_target(world, &mut self.rng, me.position, me.waypoint);
-                            me.activity = Activity::Walking { since_s: time_s };
+                            new_target = true;
                         }
-                    } else if time_s - since_s > p.target_timeout_s {
-                        (me.target, me.waypoint) =
-                            pick_target(world, &mut self.rng, me.position, me.waypoint);
-                        me.activity = Activity::Walking { since_s: time_s };
+                    } else if time_s - checkpoint_s >= p.stuck_timeout_s {
+                        // Progress check: stuck behind something?
+                        new_target = dist(me.position, checkpoint) < r;
+                        me.activity = Activity::Walking {
+                            since_s,
+                            checkpoint: me.position,
+                            checkpoint_s: time_s,
+                        };
                     }
+                    new_target |= time_s - since_s > p.target_timeout_s;
                 }
-                Activity::Lingering { .. } => {}
+            }
+            if new_target {
+                (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
+                me.activity = Activity::walking(me.position, time_s);
             }
             // Forces.
             let desired = match me.activity {
                 Activity::Walking { .. } => {
+                    // Far from the exhibit: follow the route; near it (or
+                    // wandering): straight at the target.
+                    let routed = me.waypoint.and_then(|k| {
+                        (world.routes().distance_m(k, me.position) > p.gather_radius_m + 1.0)
+                            .then(|| world.routes().direction(k, me.position))
+                            .flatten()
+                    });
                     let to = me.target - me.position;
                     let d = norm(to);
-                    if d > 1e-9 {
-                        to.scale(me.preferred_speed_mps / d)
-                    } else {
-                        Vec2::default()
+                    match routed {
+                        Some(u) => u.scale(me.preferred_speed_mps),
+                        None if d > 1e-9 => to.scale(me.preferred_speed_mps / d),
+                        None => Vec2::default(),
                     }
                 }
                 Activity::Lingering { .. } => Vec2::default(),
@@ -643,6 +711,36 @@ mod tests {
             .filter(|(a, s)| a.position.dist(**s) > 1.0)
             .count();
         assert!(moved > 20, "only {moved} people moved");
+    }
+
+    #[test]
+    fn people_find_the_door_to_an_exhibit() {
+        // A wall across the room at x = 3 m with a 1 m door near the top.
+        let mut g = OccupancyGrid::new(200, 120, 0.05, Pose::default());
+        for j in 0..100 {
+            for i in 58..62 {
+                g.set(CellIndex { i, j }, Cell::Occupied);
+            }
+        }
+        let w = World::new(g)
+            .with_crowd(CrowdParams {
+                positions: vec![Vec2::new(1.0, 1.0), Vec2::new(1.0, 2.0)],
+                waypoints: vec![Vec2::new(8.0, 1.0)],
+                gather_radius_m: 0.5,
+                linger_probability: 0.0,
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let mut c = Crowd::new(&w, 4, &[]).unwrap();
+        let mut nearest = [f64::INFINITY; 2];
+        for t in 1..=400 {
+            c.step(&w, None, t as f64 * 0.1, 0.1);
+            for (k, q) in c.people().iter().enumerate() {
+                nearest[k] = nearest[k].min(dist(q.position, Vec2::new(8.0, 1.0)));
+            }
+        }
+        // Straight at it they would press against the wall for ever.
+        assert!(nearest.iter().all(|&d| d < 1.0), "{nearest:?}");
     }
 
     #[test]

@@ -9,9 +9,11 @@ use crate::distance_field::DistanceField;
 use crate::error::Result;
 use crate::grid::OccupancyGrid;
 use crate::people::CrowdParams;
+use crate::routes::Routes;
 
 /// The static part of every run in one place: the occupancy grid, its
-/// distance field (built once here), and the crowd's parameters.
+/// distance field (built once here), the crowd's parameters and the
+/// people's routes to their waypoints.
 ///
 /// Cloning is cheap (the grid and the field are shared), so one world can be
 /// given to thousands of runs on any number of threads, and variants (other
@@ -34,6 +36,7 @@ pub struct World {
     field: Arc<DistanceField>,
     free_area_m2: f64,
     crowd: CrowdParams,
+    routes: Arc<Routes>,
 }
 
 impl World {
@@ -42,16 +45,19 @@ impl World {
     pub fn new(grid: OccupancyGrid) -> World {
         let field = DistanceField::new(&grid);
         let free_area_m2 = grid.free_area_m2();
+        let routes = Routes::new(&grid, &field, &[], CrowdParams::default().radius_m);
         World {
             grid: Arc::new(grid),
             field: Arc::new(field),
             free_area_m2,
             crowd: CrowdParams::default(),
+            routes: Arc::new(routes),
         }
     }
 
     /// The same map with this crowd (parameters checked, waypoints must lie
-    /// on the map).
+    /// on the map). Builds the people's routes to the waypoints
+    /// ([`Routes`]): a few milliseconds per waypoint.
     pub fn with_crowd(mut self, crowd: CrowdParams) -> Result<World> {
         crowd.validate()?;
         for (k, w) in crowd.waypoints.iter().enumerate() {
@@ -62,8 +68,19 @@ impl World {
                 )));
             }
         }
+        self.routes = Arc::new(Routes::new(
+            &self.grid,
+            &self.field,
+            &crowd.waypoints,
+            crowd.radius_m,
+        ));
         self.crowd = crowd;
         Ok(self)
+    }
+
+    /// The people's routes to the crowd's waypoints.
+    pub fn routes(&self) -> &Routes {
+        &self.routes
     }
 
     /// The occupancy grid.
