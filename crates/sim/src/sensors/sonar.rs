@@ -298,6 +298,51 @@ mod tests {
     }
 
     #[test]
+    fn the_distance_field_shortcut_changes_nothing() {
+        let mut rng = RandomStream::new(8, 0);
+        let mut g = OccupancyGrid::new(120, 120, 0.05, Pose::new(0.3, -0.2, 0.4));
+        for _ in 0..60 {
+            let c = CellIndex {
+                i: rng.index(120) as i64,
+                j: rng.index(120) as i64,
+            };
+            g.set(c, Cell::Occupied);
+        }
+        let field = crate::distance_field::DistanceField::new(&g);
+        let plain = Scene::static_only(&g);
+        let fast = Scene {
+            field: Some(&field),
+            ..plain
+        };
+        let mut a = Sonar::new(noiseless(), RandomStream::new(1, 4)).unwrap();
+        let mut b = Sonar::new(noiseless(), RandomStream::new(1, 4)).unwrap();
+        let mut ir_a =
+            crate::sensors::Ir::new(crate::sensors::IrParams::default(), RandomStream::new(1, 3)).unwrap();
+        let mut ir_b = ir_a.clone();
+        let (mut out_a, mut out_b) = (a.empty_readings(), b.empty_readings());
+        let (mut ir_out_a, mut ir_out_b) = (ir_a.empty_readings(), ir_b.empty_readings());
+        for t in 0..300 {
+            let robot = g.to_world(robot::Vec2::new(
+                rng.uniform_in(0.3, 5.7),
+                rng.uniform_in(0.3, 5.7),
+            ));
+            let robot = Pose::new(robot.x, robot.y, rng.uniform_in(-3.0, 3.0));
+            let time = t as f64 * 0.1;
+            a.read(&plain, &robot, time, &mut out_a);
+            b.read(&fast, &robot, time, &mut out_b);
+            for (x, y) in out_a.iter().zip(&out_b) {
+                assert!(
+                    x.range_m == y.range_m || (x.range_m - y.range_m).abs() < 1e-9,
+                    "{x:?} vs {y:?}"
+                );
+            }
+            ir_a.read(&plain, &robot, time, &mut ir_out_a);
+            ir_b.read(&fast, &robot, time, &mut ir_out_b);
+            assert_eq!(ir_out_a, ir_out_b);
+        }
+    }
+
+    #[test]
     fn bad_parameters_are_rejected() {
         for p in [
             SonarParams {
