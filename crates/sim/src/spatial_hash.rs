@@ -1,10 +1,12 @@
 //! A uniform grid of buckets over a rectangle, for neighbour queries among
 //! moving discs.
 //!
-//! Rebuilt from scratch by a counting sort (`O(n + buckets)`, no allocation
-//! once sized); a query visits the buckets overlapping the query square, and
-//! items come out in a fixed order (bucket by bucket, by index within a
-//! bucket), so results never depend on anything but the positions.
+//! The items are kept sorted by (bucket, index): a rebuild is one sort of
+//! `n` keys (`O(n log n)`, whatever the size of the map, no allocation once
+//! sized), and a query looks up, by binary search, the run of each row of
+//! buckets overlapping the query square. Items come out in a fixed order
+//! (bucket by bucket, by index within a bucket), so results depend on
+//! nothing but the positions.
 
 use robot::Vec2;
 
@@ -15,10 +17,8 @@ pub struct SpatialHash {
     cell_m: f64,
     nx: usize,
     ny: usize,
-    /// `starts[b]..starts[b + 1]` index `items` for bucket `b`.
-    starts: Vec<u32>,
-    items: Vec<u32>,
-    bucket_of: Vec<u32>,
+    /// `(bucket, item)`, sorted.
+    keys: Vec<(u32, u32)>,
 }
 
 impl SpatialHash {
@@ -40,9 +40,7 @@ impl SpatialHash {
             cell_m: cell,
             nx,
             ny,
-            starts: vec![0; nx * ny + 1],
-            items: Vec::new(),
-            bucket_of: Vec::new(),
+            keys: Vec::new(),
         }
     }
 
@@ -53,30 +51,13 @@ impl SpatialHash {
     }
 
     /// Rebuilds the buckets from the positions (item `k` is `points[k]`).
-    pub fn rebuild(&mut self, points: impl ExactSizeIterator<Item = Vec2>) {
-        let n = points.len();
-        self.bucket_of.clear();
-        self.starts.iter_mut().for_each(|s| *s = 0);
-        for p in points {
+    pub fn rebuild(&mut self, points: impl Iterator<Item = Vec2>) {
+        self.keys.clear();
+        for (k, p) in points.enumerate() {
             let b = self.coord(p.y, self.min.y, self.ny) * self.nx + self.coord(p.x, self.min.x, self.nx);
-            self.bucket_of.push(b as u32);
-            self.starts[b + 1] += 1;
+            self.keys.push((b as u32, k as u32));
         }
-        for b in 0..self.nx * self.ny {
-            self.starts[b + 1] += self.starts[b];
-        }
-        self.items.resize(n, 0);
-        // Fill each bucket in index order: use `starts[b]` as a cursor, then
-        // shift back.
-        for (k, &b) in self.bucket_of.iter().enumerate() {
-            let slot = &mut self.starts[b as usize];
-            self.items[*slot as usize] = k as u32;
-            *slot += 1;
-        }
-        for b in (1..=self.nx * self.ny).rev() {
-            self.starts[b] = self.starts[b - 1];
-        }
-        self.starts[0] = 0;
+        self.keys.sort_unstable();
     }
 
     /// Calls `f` with every item whose bucket overlaps the square of
@@ -84,6 +65,9 @@ impl SpatialHash {
     /// `radius_m` of `p` at the last rebuild).
     #[inline]
     pub fn for_each_near(&self, p: Vec2, radius_m: f64, mut f: impl FnMut(usize)) {
+        if self.keys.is_empty() {
+            return;
+        }
         let (i0, i1) = (
             self.coord(p.x - radius_m, self.min.x, self.nx),
             self.coord(p.x + radius_m, self.min.x, self.nx),
@@ -93,9 +77,12 @@ impl SpatialHash {
             self.coord(p.y + radius_m, self.min.y, self.ny),
         );
         for j in j0..=j1 {
-            let row = j * self.nx;
-            let (a, b) = (self.starts[row + i0] as usize, self.starts[row + i1 + 1] as usize);
-            for &k in &self.items[a..b] {
+            let (lo, hi) = ((j * self.nx + i0) as u32, (j * self.nx + i1) as u32);
+            let a = self.keys.partition_point(|&(b, _)| b < lo);
+            for &(b, k) in &self.keys[a..] {
+                if b > hi {
+                    break;
+                }
                 f(k as usize);
             }
         }
