@@ -15,12 +15,16 @@
 //!
 //! Run with `cargo bench -p sim --bench ticks`.
 
-use std::cell::Cell;
+use std::cell::Cell as SeedCell;
 
 use divan::counter::ItemsCount;
 use divan::{AllocProfiler, Bencher};
+use robot::Vec2;
 use robot::{Command, Controller, Notes, Perception, Pose, Step};
-use sim::{CrowdParams, CrowdSize, RobotParams, RunParams, Simulation, Task, World, generators};
+use sim::{
+    Cell, CellIndex, CrowdParams, CrowdSize, OccupancyGrid, RobotParams, RunParams, Simulation, Task, World,
+    generators,
+};
 
 #[global_allocator]
 static ALLOC: AllocProfiler = AllocProfiler::system();
@@ -99,7 +103,7 @@ fn run_params() -> RunParams {
 #[divan::bench(sample_count = 50)]
 fn aibot_field(bencher: Bencher) {
     let world = World::new(generators::cluttered_field(10.0, 0.05, 20, 1).unwrap());
-    let seed = Cell::new(0u64);
+    let seed = SeedCell::new(0u64);
     bencher
         .counter(ItemsCount::new(TICKS))
         .with_inputs(|| {
@@ -126,13 +130,73 @@ fn laser_office_crowd(bencher: Bencher) {
             ..CrowdParams::default()
         })
         .unwrap();
-    let seed = Cell::new(0u64);
+    let seed = SeedCell::new(0u64);
     bencher
         .counter(ItemsCount::new(TICKS))
         .with_inputs(|| {
             seed.set(seed.get() + 1);
             let task = Task {
                 start: Pose::new(2.0, 10.8, 0.0),
+                goal: None,
+            };
+            Simulation::new(&world, RobotParams::jinny(), run_params(), task, seed.get()).unwrap()
+        })
+        .bench_local_refs(|sim| {
+            let mut c = LaserWander;
+            for _ in 0..TICKS {
+                sim.tick(&mut c);
+            }
+        });
+}
+
+/// A 15 m × 35 m hall at 0.05 m, walls around, eight exhibit cases of
+/// 1 m × 2 m in two rows; the exhibits' front points.
+fn hall() -> (OccupancyGrid, Vec<Vec2>) {
+    let (w, h) = (300i64, 700i64);
+    let mut g = OccupancyGrid::new(w as usize, h as usize, 0.05, Pose::default());
+    for i in 0..w {
+        for j in [0, 1, h - 2, h - 1] {
+            g.set(CellIndex { i, j }, Cell::Occupied);
+        }
+    }
+    for j in 0..h {
+        for i in [0, 1, w - 2, w - 1] {
+            g.set(CellIndex { i, j }, Cell::Occupied);
+        }
+    }
+    let mut fronts = Vec::new();
+    for row in 0..4 {
+        for (col, x) in [(0, 4.0), (1, 10.0)] {
+            let y = 6.0 + 7.0 * row as f64;
+            for j in (y / 0.05) as i64..((y + 2.0) / 0.05) as i64 {
+                for i in ((x - 0.5) / 0.05) as i64..((x + 0.5) / 0.05) as i64 {
+                    g.set(CellIndex { i, j }, Cell::Occupied);
+                }
+            }
+            let side = if col == 0 { 1.0 } else { -1.0 };
+            fronts.push(Vec2::new(x + side * 1.2, y + 1.0));
+        }
+    }
+    (g, fronts)
+}
+
+#[divan::bench(sample_count = 10, args = [0, 30, 100, 300])]
+fn laser_hall_crowd(bencher: Bencher, people: usize) {
+    let (grid, exhibits) = hall();
+    let world = World::new(grid)
+        .with_crowd(CrowdParams {
+            size: CrowdSize::Count { people },
+            waypoints: exhibits,
+            ..CrowdParams::default()
+        })
+        .unwrap();
+    let seed = SeedCell::new(0u64);
+    bencher
+        .counter(ItemsCount::new(TICKS))
+        .with_inputs(|| {
+            seed.set(seed.get() + 1);
+            let task = Task {
+                start: Pose::new(7.0, 2.0, std::f64::consts::FRAC_PI_2),
                 goal: None,
             };
             Simulation::new(&world, RobotParams::jinny(), run_params(), task, seed.get()).unwrap()

@@ -574,10 +574,11 @@ impl Crowd {
                     return;
                 }
                 let n = me.position - people[j].position;
-                let d = norm(n);
-                if d >= reach || d <= 1e-12 {
+                let d2 = n.dot(n);
+                if d2 >= reach * reach || d2 <= 1e-24 {
                     return;
                 }
+                let d = d2.sqrt();
                 let u = n.scale(1.0 / d);
                 let mag = p.person_repulsion_mps2 * ((2.0 * r - d) / p.person_range_m).exp();
                 force = force + u.scale(mag * fov(u));
@@ -613,8 +614,10 @@ impl Crowd {
                 free &= dist(next, c) >= r + rr;
             }
             if free {
+                let contact2 = 4.0 * r * r;
                 self.hash.for_each_near(next, 2.0 * r + slack, |j| {
-                    if j != i && dist(people[j].position, next) < 2.0 * r {
+                    let n = people[j].position - next;
+                    if j != i && n.dot(n) < contact2 {
                         free = false;
                     }
                 });
