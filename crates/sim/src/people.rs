@@ -1,0 +1,778 @@
+//! People: discs that walk between exhibits (or wander), linger, avoid walls,
+//! each other and the robot, and get in the way.
+//!
+//! **Model.** Each person is a disc of radius `radius_m` moved by the social
+//! force model (D. Helbing, P. Molnár, *Social force model for pedestrian
+//! dynamics*, Phys. Rev. E 51, 1995), per unit mass:
+//!
+//! - driving: `(v⁰ e − v)/τ`, `e` the unit vector to the current target,
+//!   `v⁰` the person's preferred speed (zero while lingering);
+//! - other people: `A exp((2r − d)/B) n`, `n` the unit vector from the other
+//!   person, `d` the centre distance, weighted by Helbing's field of view
+//!   `λ + (1 − λ)(1 + cos φ)/2` (`φ` between the walking direction and the
+//!   other person), ignored beyond `2r + 4B`;
+//! - the robot: the same, with its footprint radius and its own strength;
+//! - walls: `A_w exp((r − d_w)/B_w) n_w` from the nearest obstacle point
+//!   (the world's distance field).
+//!
+//! The velocity is integrated explicitly (`v += F Δt`), capped at 1.3 `v⁰`
+//! (Helbing's maximal speed), and the position moved by `v Δt`. Discs never
+//! interpenetrate: a move that would overlap a wall, another person or the
+//! robot is refused and the person stops for that step (the forces then
+//! turn them away). People are updated in index order with the positions
+//! already updated, so a step is deterministic.
+//!
+//! **Behaviour.** With waypoints (exhibits) a person picks one at random
+//! (not the one just visited), aims at a random free point within
+//! `gather_radius_m` of it (people gather *around* exhibits), and on arrival
+//! lingers with probability `linger_probability` for an exponential time of
+//! mean `linger_mean_s`; without waypoints a person wanders to random free
+//! points within `wander_radius_m`. Towards an exhibit people follow the
+//! world's walking-distance field of that exhibit ([`crate::routes`]:
+//! around obstacles, through doors) until within `gather_radius_m + 1 m`,
+//! then walk straight at their target; wanderers walk straight, so their
+//! targets are drawn among points they can reach in a straight line when
+//! there are any (three rays: centre line and flanks). A target not reached
+//! within `target_timeout_s`, or a person who has not moved their own radius
+//! in `stuck_timeout_s`, gets a new target.
+//! Lingering people stand still but can still be pushed: they block
+//! corridors and exhibits, and people crossing to the next target step in
+//! front of the robot.
+//!
+//! **Cost.** A uniform spatial hash with buckets of the interaction range:
+//! `O(n)` per step for bounded density, no allocation.
+
+use robot::Vec2;
+
+use crate::error::{Error, Result};
+use crate::fast_math::{dist, norm};
+use crate::noise::{RandomStream, streams};
+use crate::spatial_hash::SpatialHash;
+use crate::world::World;
+use crate::{raycast, validate};
+
+/// Ratio of a person's top speed to their preferred speed (Helbing & Molnár).
+pub const MAX_SPEED_RATIO: f64 = 1.3;
+
+/// How many people a crowd has.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CrowdSize {
+    /// A density: people per 100 m² of free space (rounded to the nearest
+    /// whole person).
+    PerArea {
+        /// People per 100 m² of free map area.
+        people_per_100m2: f64,
+    },
+    /// An exact number of people.
+    Count {
+        /// How many.
+        people: usize,
+    },
+}
+
+impl Default for CrowdSize {
+    fn default() -> CrowdSize {
+        CrowdSize::PerArea {
+            people_per_100m2: 0.0,
+        }
+    }
+}
+
+/// Parameters of the crowd (module docs for the model). The defaults give no
+/// people; set [`CrowdParams::size`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CrowdParams {
+    /// How many people are placed at random. Default: density 0 (nobody).
+    pub size: CrowdSize,
+    /// People placed at these positions (world frame) before the random
+    /// ones — someone standing on the goal, a group blocking a door. They
+    /// must not overlap a wall, each other or the robot's start footprint
+    /// (`keep_clear_m` does not apply). Default empty.
+    pub positions: Vec<Vec2>,
+    /// Radius of a person's disc, metres. Default 0.25.
+    pub radius_m: f64,
+    /// Mean preferred walking speed, m/s. Default 1.0.
+    pub speed_mean_mps: f64,
+    /// Standard deviation of the preferred speed across people, m/s (the
+    /// draw is clamped to [0.2, 1.8] × the mean). Default 0.2.
+    pub speed_sigma_mps: f64,
+    /// Exhibits people walk between, world frame; empty: people wander.
+    /// Default empty.
+    pub waypoints: Vec<Vec2>,
+    /// People aim at a random free point within this distance of the
+    /// exhibit, metres. Default 1.0.
+    pub gather_radius_m: f64,
+    /// Wanderers pick targets within this distance, metres. Default 5.0.
+    pub wander_radius_m: f64,
+    /// A target counts as reached within this distance, metres. Default 0.5.
+    pub arrival_tolerance_m: f64,
+    /// Probability of lingering on reaching a target (and of starting the
+    /// run lingering). Default 0.5.
+    pub linger_probability: f64,
+    /// Mean lingering time (exponential), seconds. Default 20.
+    pub linger_mean_s: f64,
+    /// A target not reached within this time is given up, seconds.
+    /// Default 60.
+    pub target_timeout_s: f64,
+    /// A walking person who has moved less than their radius in this time
+    /// gives up their target (stuck behind an obstacle), seconds. Default 5.
+    pub stuck_timeout_s: f64,
+    /// Relaxation time `τ` of the driving force, seconds. Default 0.5.
+    pub relaxation_time_s: f64,
+    /// Strength `A` of the repulsion between people, m/s². Default 2.0.
+    pub person_repulsion_mps2: f64,
+    /// Range `B` of the repulsion between people, metres. Default 0.3.
+    pub person_range_m: f64,
+    /// Strength of the repulsion from the robot, m/s² (0: people ignore the
+    /// robot, but still never walk into it). Default 2.0.
+    pub robot_repulsion_mps2: f64,
+    /// Strength `A_w` of the repulsion from walls, m/s². Default 5.0.
+    pub wall_repulsion_mps2: f64,
+    /// Range `B_w` of the repulsion from walls, metres. Default 0.1.
+    pub wall_range_m: f64,
+    /// Field-of-view weight `λ` in [0, 1] of people and robots behind a
+    /// person (1: isotropic). Default 0.5.
+    pub anisotropy: f64,
+    /// Nobody is placed within this distance of the robot's footprint at
+    /// the start, metres. Default 1.0.
+    pub keep_clear_m: f64,
+}
+
+impl Default for CrowdParams {
+    fn default() -> CrowdParams {
+        CrowdParams {
+            size: CrowdSize::default(),
+            positions: Vec::new(),
+            radius_m: 0.25,
+            speed_mean_mps: 1.0,
+            speed_sigma_mps: 0.2,
+            waypoints: Vec::new(),
+            gather_radius_m: 1.0,
+            wander_radius_m: 5.0,
+            arrival_tolerance_m: 0.5,
+            linger_probability: 0.5,
+            linger_mean_s: 20.0,
+            target_timeout_s: 60.0,
+            stuck_timeout_s: 5.0,
+            relaxation_time_s: 0.5,
+            person_repulsion_mps2: 2.0,
+            person_range_m: 0.3,
+            robot_repulsion_mps2: 2.0,
+            wall_repulsion_mps2: 5.0,
+            wall_range_m: 0.1,
+            anisotropy: 0.5,
+            keep_clear_m: 1.0,
+        }
+    }
+}
+
+impl CrowdParams {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        match self.size {
+            CrowdSize::PerArea { people_per_100m2 } => {
+                validate::non_negative("crowd.size.people_per_100m2", people_per_100m2)?
+            }
+            CrowdSize::Count { .. } => {}
+        }
+        validate::positive("crowd.radius_m", self.radius_m)?;
+        validate::positive("crowd.speed_mean_mps", self.speed_mean_mps)?;
+        validate::non_negative("crowd.speed_sigma_mps", self.speed_sigma_mps)?;
+        for (k, w) in self.waypoints.iter().enumerate() {
+            validate::point(&format!("crowd.waypoints[{k}]"), *w)?;
+        }
+        for (k, w) in self.positions.iter().enumerate() {
+            validate::point(&format!("crowd.positions[{k}]"), *w)?;
+        }
+        validate::non_negative("crowd.gather_radius_m", self.gather_radius_m)?;
+        validate::positive("crowd.wander_radius_m", self.wander_radius_m)?;
+        validate::positive("crowd.arrival_tolerance_m", self.arrival_tolerance_m)?;
+        validate::probability("crowd.linger_probability", self.linger_probability)?;
+        validate::non_negative("crowd.linger_mean_s", self.linger_mean_s)?;
+        validate::positive("crowd.target_timeout_s", self.target_timeout_s)?;
+        validate::positive("crowd.stuck_timeout_s", self.stuck_timeout_s)?;
+        validate::positive("crowd.relaxation_time_s", self.relaxation_time_s)?;
+        validate::non_negative("crowd.person_repulsion_mps2", self.person_repulsion_mps2)?;
+        validate::positive("crowd.person_range_m", self.person_range_m)?;
+        validate::non_negative("crowd.robot_repulsion_mps2", self.robot_repulsion_mps2)?;
+        validate::non_negative("crowd.wall_repulsion_mps2", self.wall_repulsion_mps2)?;
+        validate::positive("crowd.wall_range_m", self.wall_range_m)?;
+        validate::within("crowd.anisotropy", self.anisotropy, 0.0, 1.0, "in [0, 1]")?;
+        validate::non_negative("crowd.keep_clear_m", self.keep_clear_m)
+    }
+
+    /// How many people this crowd places at random on a map with
+    /// `free_area_m2` of free space (besides [`CrowdParams::positions`]).
+    pub fn count(&self, free_area_m2: f64) -> usize {
+        match self.size {
+            CrowdSize::PerArea { people_per_100m2 } => {
+                (people_per_100m2 * free_area_m2 / 100.0).round() as usize
+            }
+            CrowdSize::Count { people } => people,
+        }
+    }
+}
+
+/// What a person is doing.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub enum Activity {
+    /// Walking to the target.
+    Walking {
+        /// When the walk started, seconds.
+        since_s: f64,
+        /// Where the person was at the last progress check.
+        checkpoint: Vec2,
+        /// When that was, seconds.
+        checkpoint_s: f64,
+    },
+    /// Standing until this time, seconds.
+    Lingering {
+        /// When the pause ends, seconds.
+        until_s: f64,
+    },
+}
+
+impl Activity {
+    /// Starting a walk from `position` at `time_s`.
+    pub fn walking(position: Vec2, time_s: f64) -> Activity {
+        Activity::Walking {
+            since_s: time_s,
+            checkpoint: position,
+            checkpoint_s: time_s,
+        }
+    }
+}
+
+/// One person.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Person {
+    /// Centre of the disc, world frame.
+    pub position: Vec2,
+    /// Velocity, m/s.
+    pub velocity: Vec2,
+    /// Preferred walking speed, m/s.
+    pub preferred_speed_mps: f64,
+    /// Where the person is heading, world frame.
+    pub target: Vec2,
+    /// Walking or lingering.
+    pub activity: Activity,
+    /// The exhibit the target belongs to, if any.
+    pub waypoint: Option<usize>,
+}
+
+/// The people of one run (module docs).
+#[derive(Debug, Clone)]
+pub struct Crowd {
+    people: Vec<Person>,
+    radius_m: f64,
+    hash: SpatialHash,
+    rng: RandomStream,
+}
+
+/// Whether a disc of radius `radius_m` can walk straight from `a` to `b`:
+/// three rays (its centre line and both flanks) meet no wall.
+fn walkable(world: &World, a: Vec2, b: Vec2, radius_m: f64) -> bool {
+    let d = b - a;
+    let len = norm(d);
+    if len < 1e-9 {
+        return true;
+    }
+    let side = Vec2::new(-d.y, d.x).scale(radius_m / len);
+    let angle = d.y.atan2(d.x);
+    [Vec2::default(), side, side.scale(-1.0)]
+        .iter()
+        .all(|&o| raycast::cast(world.grid(), a + o, angle, len).is_none())
+}
+
+/// A free point for a person's target, or `None` after a few tries; with
+/// `seen_from`, only points a person there can walk to straight.
+fn free_point(
+    world: &World,
+    radius_m: f64,
+    seen_from: Option<Vec2>,
+    try_point: &mut dyn FnMut() -> Vec2,
+) -> Option<Vec2> {
+    for _ in 0..20 {
+        let p = try_point();
+        if world.on_map(p)
+            && world.distance_field().distance_m(p) >= radius_m + 0.05
+            && seen_from.is_none_or(|a| walkable(world, a, p, radius_m))
+        {
+            return Some(p);
+        }
+    }
+    None
+}
+
+/// A new target for a person at `from` (module docs).
+fn pick_target(
+    world: &World,
+    rng: &mut RandomStream,
+    from: Vec2,
+    last: Option<usize>,
+) -> (Vec2, Option<usize>) {
+    let p = world.crowd();
+    let n = p.waypoints.len();
+    let tau = std::f64::consts::TAU;
+    if n == 0 {
+        let reach = p.wander_radius_m;
+        let target = free_point(world, p.radius_m, Some(from), &mut || {
+            let a = rng.uniform_in(0.0, tau);
+            let d = reach * rng.uniform().sqrt();
+            from + Vec2::new(a.cos(), a.sin()).scale(d)
+        });
+        return (target.unwrap_or(from), None);
+    }
+    let k = match last {
+        Some(l) if n > 1 => {
+            let k = rng.index(n - 1);
+            if k >= l { k + 1 } else { k }
+        }
+        _ => rng.index(n),
+    };
+    let centre = p.waypoints[k];
+    let gather = p.gather_radius_m;
+    let mut around = || {
+        let a = rng.uniform_in(0.0, tau);
+        let d = gather * rng.uniform().sqrt();
+        centre + Vec2::new(a.cos(), a.sin()).scale(d)
+    };
+    let target = free_point(world, p.radius_m, Some(from), &mut around)
+        .or_else(|| free_point(world, p.radius_m, None, &mut around));
+    (target.unwrap_or(centre), Some(k))
+}
+
+impl Crowd {
+    /// Places the world's crowd at random free positions drawn from the
+    /// run's `seed` (its placement stream): no person overlaps a wall or
+    /// another person, nor comes within `keep_clear_m` of the discs
+    /// `keep_clear` (centre, radius: the robot's start footprint). Each
+    /// person gets a preferred speed and a first target; with probability
+    /// `linger_probability` they start lingering.
+    ///
+    /// The people at [`CrowdParams::positions`] come first, in order.
+    ///
+    /// Errors: [`Error::Geometry`] when a given position is not free;
+    /// [`Error::InvalidValue`] when the random people do not fit (after
+    /// 10 000 tries per person).
+    pub fn new(world: &World, seed: u64, keep_clear: &[(Vec2, f64)]) -> Result<Crowd> {
+        let p = world.crowd();
+        let count = p.count(world.free_area_m2());
+        let r = p.radius_m;
+        // Discs of radius r pack at best one per 2√3 r² (hexagonal packing).
+        let most = world.free_area_m2() / (2.0 * 3f64.sqrt() * r * r);
+        if count as f64 > most {
+            return Err(Error::InvalidValue {
+                what: "crowd size (people)".to_string(),
+                requirement: "at most the free area over 2√3 r² (densest packing)",
+                value: count as f64,
+            });
+        }
+        let mut place = RandomStream::new(seed, streams::PLACEMENT);
+        let g = world.grid();
+        let (wm, hm) = (
+            g.width() as f64 * g.resolution_m(),
+            g.height() as f64 * g.resolution_m(),
+        );
+        let mut people: Vec<Person> = Vec::with_capacity(count + p.positions.len());
+        for (k, &q) in p.positions.iter().enumerate() {
+            let overlaps_robot = keep_clear.iter().any(|&(c, rc)| dist(q, c) < r + rc);
+            if !world.on_map(q)
+                || g.disc_blocked(q, r)
+                || overlaps_robot
+                || people.iter().any(|o| dist(o.position, q) < 2.0 * r)
+            {
+                return Err(Error::Geometry(format!(
+                    "crowd position {k} ({:.3}, {:.3}): the person (radius {r} m) overlaps a wall, \
+                     another person or the robot",
+                    q.x, q.y
+                )));
+            }
+            people.push(Self::person(world, &mut place, q));
+        }
+        for _ in 0..count {
+            let mut placed = None;
+            for _ in 0..10_000 {
+                let q = g.to_world(Vec2::new(place.uniform() * wm, place.uniform() * hm));
+                let clear_of_robot = keep_clear
+                    .iter()
+                    .all(|&(c, rc)| q.dist(c) >= r + rc + p.keep_clear_m);
+                if clear_of_robot
+                    && world.distance_field().distance_m(q) >= r
+                    && !g.disc_blocked(q, r)
+                    && people.iter().all(|o| o.position.dist(q) >= 2.0 * r)
+                {
+                    placed = Some(q);
+                    break;
+                }
+            }
+            let Some(position) = placed else {
+                return Err(Error::InvalidValue {
+                    what: "crowd size (people)".to_string(),
+                    requirement: "small enough for the people to fit in the free space",
+                    value: count as f64,
+                });
+            };
+            people.push(Self::person(world, &mut place, position));
+        }
+        let (lo, hi) = world.bounds();
+        let mut hash = SpatialHash::new(lo, hi, Self::reach_m(p));
+        hash.rebuild(people.iter().map(|q| q.position));
+        Ok(Crowd {
+            people,
+            radius_m: r,
+            hash,
+            rng: RandomStream::new(seed, streams::PEOPLE),
+        })
+    }
+
+    /// A new person at `position`: preferred speed, first target, and
+    /// whether they start lingering.
+    fn person(world: &World, place: &mut RandomStream, position: Vec2) -> Person {
+        let p = world.crowd();
+        let z = place.normal();
+        let preferred_speed_mps =
+            (p.speed_mean_mps + p.speed_sigma_mps * z).clamp(0.2 * p.speed_mean_mps, 1.8 * p.speed_mean_mps);
+        let (target, waypoint) = pick_target(world, place, position, None);
+        let activity = if place.chance(p.linger_probability) {
+            Activity::Lingering {
+                until_s: place.exponential(p.linger_mean_s),
+            }
+        } else {
+            Activity::walking(position, 0.0)
+        };
+        Person {
+            position,
+            velocity: Vec2::default(),
+            preferred_speed_mps,
+            target,
+            activity,
+            waypoint,
+        }
+    }
+
+    /// Range beyond which people do not push each other: `2r + 4B`.
+    fn reach_m(p: &CrowdParams) -> f64 {
+        2.0 * p.radius_m + 4.0 * p.person_range_m
+    }
+
+    /// The people, in a fixed order.
+    pub fn people(&self) -> &[Person] {
+        &self.people
+    }
+
+    /// Radius of every person's disc, metres.
+    pub fn radius_m(&self) -> f64 {
+        self.radius_m
+    }
+
+    /// Whether a disc (the robot's footprint) overlaps a person.
+    pub fn overlaps(&self, centre: Vec2, radius_m: f64) -> bool {
+        let reach = radius_m + self.radius_m;
+        let mut hit = false;
+        self.hash.for_each_near(centre, reach, |k| {
+            hit |= dist(self.people[k].position, centre) < reach;
+        });
+        hit
+    }
+
+    /// Gap between a disc and the nearest person's disc, metres (negative
+    /// when they overlap; infinite without people).
+    pub fn gap_m(&self, centre: Vec2, radius_m: f64) -> f64 {
+        let reach = radius_m + self.radius_m;
+        self.people
+            .iter()
+            .map(|q| dist(q.position, centre) - reach)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Moves everybody by one step of `dt_s` seconds ending at `time_s`
+    /// (module docs), with the robot's footprint `(centre, radius)` as an
+    /// obstacle if given.
+    pub fn step(&mut self, world: &World, robot: Option<(Vec2, f64)>, time_s: f64, dt_s: f64) {
+        if self.people.is_empty() {
+            return;
+        }
+        let p = world.crowd();
+        let r = self.radius_m;
+        let reach = Self::reach_m(p);
+        let field = world.distance_field();
+        // People move at most this far in a step: query with that slack so
+        // the buckets (built at the start) stay a superset.
+        let slack = 2.0 * MAX_SPEED_RATIO * 1.8 * p.speed_mean_mps * dt_s;
+        let wall_reach = r + 4.0 * p.wall_range_m;
+        for i in 0..self.people.len() {
+            let mut me = self.people[i];
+            // What to do.
+            let mut new_target = false;
+            match me.activity {
+                Activity::Lingering { until_s } => new_target = time_s >= until_s,
+                Activity::Walking {
+                    since_s,
+                    checkpoint,
+                    checkpoint_s,
+                } => {
+                    if dist(me.position, me.target) <= p.arrival_tolerance_m {
+                        if self.rng.chance(p.linger_probability) {
+                            me.activity = Activity::Lingering {
+                                until_s: time_s + self.rng.exponential(p.linger_mean_s),
+                            };
+                        } else {
+                            new_target = true;
+                        }
+                    } else if time_s - checkpoint_s >= p.stuck_timeout_s {
+                        // Progress check: stuck behind something?
+                        new_target = dist(me.position, checkpoint) < r;
+                        me.activity = Activity::Walking {
+                            since_s,
+                            checkpoint: me.position,
+                            checkpoint_s: time_s,
+                        };
+                    }
+                    new_target |= time_s - since_s > p.target_timeout_s;
+                }
+            }
+            if new_target {
+                (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
+                me.activity = Activity::walking(me.position, time_s);
+            }
+            // Forces.
+            let desired = match me.activity {
+                Activity::Walking { .. } => {
+                    // Far from the exhibit: follow the route; near it (or
+                    // wandering): straight at the target.
+                    let routed = me.waypoint.and_then(|k| {
+                        (world.routes().distance_m(k, me.position) > p.gather_radius_m + 1.0)
+                            .then(|| world.routes().direction(k, me.position))
+                            .flatten()
+                    });
+                    let to = me.target - me.position;
+                    let d = norm(to);
+                    match routed {
+                        Some(u) => u.scale(me.preferred_speed_mps),
+                        None if d > 1e-9 => to.scale(me.preferred_speed_mps / d),
+                        None => Vec2::default(),
+                    }
+                }
+                Activity::Lingering { .. } => Vec2::default(),
+            };
+            let mut force = (desired - me.velocity).scale(1.0 / p.relaxation_time_s);
+            let heading = {
+                let h = if norm(desired) > 0.0 { desired } else { me.velocity };
+                let n = norm(h);
+                if n > 1e-9 { Some(h.scale(1.0 / n)) } else { None }
+            };
+            let fov = |n: Vec2| match heading {
+                Some(e) => p.anisotropy + (1.0 - p.anisotropy) * 0.5 * (1.0 - e.dot(n)),
+                None => 1.0,
+            };
+            let people = &self.people;
+            self.hash.for_each_near(me.position, reach + slack, |j| {
+                if j == i {
+                    return;
+                }
+                let n = me.position - people[j].position;
+                let d2 = n.dot(n);
+                if d2 >= reach * reach || d2 <= 1e-24 {
+                    return;
+                }
+                let d = d2.sqrt();
+                let u = n.scale(1.0 / d);
+                let mag = p.person_repulsion_mps2 * ((2.0 * r - d) / p.person_range_m).exp();
+                force = force + u.scale(mag * fov(u));
+            });
+            if let Some((c, rr)) = robot {
+                let n = me.position - c;
+                let d = norm(n);
+                if d > 1e-12 && d < r + rr + 4.0 * p.person_range_m {
+                    let u = n.scale(1.0 / d);
+                    let mag = p.robot_repulsion_mps2 * ((r + rr - d) / p.person_range_m).exp();
+                    force = force + u.scale(mag * fov(u));
+                }
+            }
+            // Walls (the free radius, one look-up, rules most people out).
+            if field.free_radius_m(me.position) < wall_reach {
+                let wall = field.nearest(me.position);
+                if wall.distance_m > 1e-12 && wall.distance_m < wall_reach {
+                    let u = (me.position - wall.point).scale(1.0 / wall.distance_m);
+                    let mag = p.wall_repulsion_mps2 * ((r - wall.distance_m) / p.wall_range_m).exp();
+                    force = force + u.scale(mag);
+                }
+            }
+            // Integrate, capped, without interpenetration.
+            let mut v = me.velocity + force.scale(dt_s);
+            let vmax = MAX_SPEED_RATIO * me.preferred_speed_mps;
+            let speed = norm(v);
+            if speed > vmax {
+                v = v.scale(vmax / speed);
+            }
+            let next = me.position + v.scale(dt_s);
+            let mut free = field.free_radius_m(next) >= r || field.distance_m(next) >= r;
+            if let Some((c, rr)) = robot {
+                free &= dist(next, c) >= r + rr;
+            }
+            if free {
+                let contact2 = 4.0 * r * r;
+                self.hash.for_each_near(next, 2.0 * r + slack, |j| {
+                    let n = people[j].position - next;
+                    if j != i && n.dot(n) < contact2 {
+                        free = false;
+                    }
+                });
+            }
+            if free {
+                me.position = next;
+                me.velocity = v;
+            } else {
+                me.velocity = Vec2::default();
+            }
+            self.people[i] = me;
+        }
+        self.hash.rebuild(self.people.iter().map(|q| q.position));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Cell, CellIndex, OccupancyGrid};
+    use robot::Pose;
+
+    fn room() -> World {
+        // 10 m × 6 m, walls around, a pillar in the middle.
+        let mut g = OccupancyGrid::new(200, 120, 0.05, Pose::default());
+        for i in 0..200 {
+            g.set(CellIndex { i, j: 0 }, Cell::Occupied);
+            g.set(CellIndex { i, j: 119 }, Cell::Occupied);
+        }
+        for j in 0..120 {
+            g.set(CellIndex { i: 0, j }, Cell::Occupied);
+            g.set(CellIndex { i: 199, j }, Cell::Occupied);
+        }
+        for j in 50..70 {
+            for i in 90..110 {
+                g.set(CellIndex { i, j }, Cell::Occupied);
+            }
+        }
+        World::new(g)
+    }
+
+    #[test]
+    fn density_gives_the_count_and_placement_is_free() {
+        let w = room()
+            .with_crowd(CrowdParams {
+                size: CrowdSize::PerArea {
+                    people_per_100m2: 30.0,
+                },
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let c = Crowd::new(&w, 1, &[(Vec2::new(2.0, 3.0), 0.3)]).unwrap();
+        let expected = (30.0 * w.free_area_m2() / 100.0).round() as usize;
+        assert_eq!(c.people().len(), expected);
+        for (k, a) in c.people().iter().enumerate() {
+            assert!(!w.grid().disc_blocked(a.position, 0.25));
+            assert!(a.position.dist(Vec2::new(2.0, 3.0)) >= 0.25 + 0.3 + 1.0);
+            for b in &c.people()[k + 1..] {
+                assert!(a.position.dist(b.position) >= 0.5);
+            }
+        }
+    }
+
+    #[test]
+    fn walking_never_overlaps_and_people_move() {
+        let w = room()
+            .with_crowd(CrowdParams {
+                size: CrowdSize::Count { people: 40 },
+                waypoints: vec![Vec2::new(2.0, 2.0), Vec2::new(8.0, 4.0), Vec2::new(5.0, 5.0)],
+                linger_mean_s: 3.0,
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let robot = (Vec2::new(1.0, 1.0), 0.2);
+        let mut c = Crowd::new(&w, 2, &[robot]).unwrap();
+        let start: Vec<Vec2> = c.people().iter().map(|q| q.position).collect();
+        for t in 1..=600 {
+            c.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+            for (k, a) in c.people().iter().enumerate() {
+                assert!(
+                    w.distance_field().distance_m(a.position) >= 0.25 - 1e-9,
+                    "person {k} in a wall"
+                );
+                assert!(a.position.dist(robot.0) >= 0.45 - 1e-9);
+                for b in &c.people()[k + 1..] {
+                    assert!(a.position.dist(b.position) >= 0.5 - 1e-9);
+                }
+            }
+        }
+        let moved = c
+            .people()
+            .iter()
+            .zip(&start)
+            .filter(|(a, s)| a.position.dist(**s) > 1.0)
+            .count();
+        assert!(moved > 20, "only {moved} people moved");
+    }
+
+    #[test]
+    fn people_find_the_door_to_an_exhibit() {
+        // A wall across the room at x = 3 m with a 1 m door near the top.
+        let mut g = OccupancyGrid::new(200, 120, 0.05, Pose::default());
+        for j in 0..100 {
+            for i in 58..62 {
+                g.set(CellIndex { i, j }, Cell::Occupied);
+            }
+        }
+        let w = World::new(g)
+            .with_crowd(CrowdParams {
+                positions: vec![Vec2::new(1.0, 1.0), Vec2::new(1.0, 2.0)],
+                waypoints: vec![Vec2::new(8.0, 1.0)],
+                gather_radius_m: 0.5,
+                linger_probability: 0.0,
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let mut c = Crowd::new(&w, 4, &[]).unwrap();
+        let mut nearest = [f64::INFINITY; 2];
+        for t in 1..=400 {
+            c.step(&w, None, t as f64 * 0.1, 0.1);
+            for (k, q) in c.people().iter().enumerate() {
+                nearest[k] = nearest[k].min(dist(q.position, Vec2::new(8.0, 1.0)));
+            }
+        }
+        // Straight at it they would press against the wall for ever.
+        assert!(nearest.iter().all(|&d| d < 1.0), "{nearest:?}");
+    }
+
+    #[test]
+    fn too_many_people_is_an_error() {
+        let w = room()
+            .with_crowd(CrowdParams {
+                size: CrowdSize::Count { people: 1000 },
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        assert!(matches!(Crowd::new(&w, 1, &[]), Err(Error::InvalidValue { .. })));
+        for size in [
+            CrowdSize::Count { people: usize::MAX },
+            CrowdSize::PerArea {
+                people_per_100m2: 1e300,
+            },
+        ] {
+            let w = room()
+                .with_crowd(CrowdParams {
+                    size,
+                    ..CrowdParams::default()
+                })
+                .unwrap();
+            assert!(matches!(Crowd::new(&w, 1, &[]), Err(Error::InvalidValue { .. })));
+        }
+        let bad = CrowdParams {
+            radius_m: -1.0,
+            ..CrowdParams::default()
+        };
+        assert!(matches!(room().with_crowd(bad), Err(Error::InvalidValue { .. })));
+    }
+}
