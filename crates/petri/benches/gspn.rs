@@ -17,9 +17,9 @@
 //! computed once per input and printed to stderr after the tables.
 //!
 //! ```text
-//! cargo bench -p petri --bench gspn                      # everything but Kanban 5, ~2–3 min
-//! cargo bench -p petri --bench gspn -- solve             # one group
-//! cargo bench -p petri --bench gspn -- --ignored         # Kanban 5 end to end (~10 s per sample)
+//! cargo bench -p petri --bench gspn                      # everything but Kanban 5, ~1.5 min
+//! cargo bench -p petri --bench gspn -- gspn::solve       # one group (a regex on gspn::group::bench)
+//! cargo bench -p petri --bench gspn -- --ignored         # Kanban 5 end to end, ~70 s
 //! /usr/bin/time -v target/release/examples/family kanban 5   # its peak memory
 //! ```
 //!
