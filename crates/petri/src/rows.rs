@@ -138,7 +138,7 @@ impl Rows {
     }
 
     /// Dot product over entries `a..b`, with `x[i - offset]` for state `i`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn dot_span_offset(
         &self,
         a: usize,

@@ -13,8 +13,9 @@
 //!   system with one equation replaced by fixing `x_k = 1` (then normalised)
 //!   — any principal submatrix of an irreducible generator is non-singular,
 //!   so this is exact and needs no dense normalisation row. `O(fill-in)`
-//!   memory: for small and medium chains.
-//! * **BiCGSTAB** preconditioned by a Gauss–Seidel sweep, for large chains
+//!   time and memory, and the fill-in of GSPN state spaces (many places,
+//!   hence many dimensions) grows fast: for small chains.
+//! * **BiCGSTAB** preconditioned by a Gauss–Seidel sweep, for larger chains
 //!   (the default above [`SolveParams::direct_limit`] states): see
 //!   [`crate::krylov`].
 //! * **Gauss–Seidel / SOR**: `x_j ← (1−ω) x_j + ω (inflow_j + b_j) / exit_j`
@@ -61,7 +62,11 @@ pub struct SolveParams {
     pub max_iterations: usize,
     /// Relaxation factor ω of SOR in (0, 2); 1 is Gauss–Seidel. Default 1.
     pub omega: f64,
-    /// Largest chain that [`Method::Auto`] solves directly. Default 50,000.
+    /// Largest chain that [`Method::Auto`] solves directly. Default 2,000:
+    /// the sparse LU's fill-in grows fast on the high-dimensional state
+    /// spaces of GSPNs (Kanban N = 2, 4,600 states: 0.27 s against 6 ms for
+    /// BiCGSTAB; FMS N = 4, 35,910 states: 218 s against 0.08 s — see
+    /// `BENCHMARKS.md`).
     pub direct_limit: usize,
 }
 
@@ -72,7 +77,7 @@ impl Default for SolveParams {
             tolerance: 1e-12,
             max_iterations: 100_000,
             omega: 1.0,
-            direct_limit: 50_000,
+            direct_limit: 2_000,
         }
     }
 }
