@@ -174,10 +174,7 @@ pub(crate) fn bicgstab(chain: &Chain<'_>, params: &SolveParams) -> Result<(Vec<f
             x[j] = chain.inflow(j, &x) / chain.exit(j);
         }
     }
-    let k = (0..n)
-        .max_by(|&a, &b| x[a].total_cmp(&x[b]))
-        .filter(|&k| x[k] > 0.0 && x[k].is_finite())
-        .unwrap_or(0);
+    let k = crate::steady_state::most_probable(&x);
     let xk = x[k];
     if xk > 0.0 && xk.is_finite() {
         x.iter_mut().for_each(|v| *v /= xk);

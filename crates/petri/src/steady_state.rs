@@ -118,6 +118,31 @@ pub struct SolveInfo {
     pub seconds: f64,
 }
 
+/// Largest residual accepted from a direct solve before falling back.
+const DIRECT_ACCEPT: f64 = 1e-9;
+
+/// Whether a sparse LU of the chain is cheap: the lower envelope of the
+/// matrix in its numbering (BFS order) bounds the fill-in a banded
+/// elimination would create, and its squares the work. COLAMD, which faer
+/// uses, does at least as well in practice.
+fn lu_is_cheap(rows: &Chain<'_>) -> bool {
+    let n = rows.n();
+    let (mut envelope, mut work) = (0f64, 0f64);
+    for j in 0..n {
+        let (a, b) = rows.incoming.range(j);
+        let lowest = rows.incoming.index[a..b]
+            .first()
+            .map_or(j, |&i| (i as usize).min(j));
+        let e = (j - lowest) as f64;
+        envelope += e;
+        work += e * e;
+        if envelope > 2e7 || work > 2e9 {
+            return false;
+        }
+    }
+    true
+}
+
 /// Relative residual of `x` (see the module docs); `rhs` is `b` or none for
 /// the stationary equations.
 pub(crate) fn residual(rows: &Chain<'_>, x: &[f64], rhs: Option<&[f64]>) -> f64 {
@@ -172,7 +197,10 @@ pub(crate) fn solve(
         ));
     }
     let method = match params.method {
-        Method::Auto if n <= params.direct_limit => Method::Direct,
+        // Small chains, and larger ones whose LU stays cheap (narrow
+        // envelope in the BFS numbering, e.g. nearly one-dimensional chains
+        // on which Krylov methods crawl), are solved directly.
+        Method::Auto if n <= params.direct_limit || lu_is_cheap(rows) => Method::Direct,
         // Absorption systems (rhs given): our BiCGSTAB is built for the
         // stationary equations, so large ones use Gauss–Seidel, small ones LU
         // (Gauss–Seidel can crawl on stiff transient cycles).
@@ -181,43 +209,56 @@ pub(crate) fn solve(
         Method::Auto => Method::Bicgstab,
         m => m,
     };
-    let direct = method == Method::Direct;
-    if method == Method::Bicgstab {
-        let (x, iterations) = crate::krylov::bicgstab(rows, params)?;
-        let residual = residual(rows, &x, rhs);
-        return Ok((
-            x,
-            SolveInfo {
-                method: "bicgstab",
-                iterations,
-                residual,
-                seconds: start.elapsed().as_secs_f64(),
-            },
-        ));
-    }
-    let (x, method, iterations) = if direct && rhs.is_none() && n <= linear::DENSE_LIMIT {
-        (gth(rows)?, "direct-gth", 0)
-    } else if direct {
-        (solve_direct(rows, rhs)?, "direct-lu", 0)
-    } else {
-        let (x, it) = gauss_seidel(rows, rhs, params)?;
-        (
-            x,
-            if params.omega == 1.0 {
-                "gauss-seidel"
-            } else {
-                "sor"
-            },
-            it,
-        )
+    let (x, name, iterations) = match method {
+        Method::Bicgstab => {
+            let (x, it) = crate::krylov::bicgstab(rows, params)?;
+            (x, "bicgstab", it)
+        }
+        Method::Direct if rhs.is_none() && n <= linear::DENSE_LIMIT => (gth(rows)?, "direct-gth", 0),
+        Method::Direct => (solve_direct(rows, rhs)?, "direct-lu", 0),
+        _ => {
+            let (x, it) = gauss_seidel(rows, rhs, params)?;
+            (
+                x,
+                if params.omega == 1.0 {
+                    "gauss-seidel"
+                } else {
+                    "sor"
+                },
+                it,
+            )
+        }
     };
-    let residual = residual(rows, &x, rhs);
+    let residual_now = residual(rows, &x, rhs);
+    // A direct solve is checked like an iterative one: LU loses accuracy on
+    // badly conditioned chains, and a wrong answer must not pass silently.
+    if name == "direct-lu" && residual_now > DIRECT_ACCEPT.max(params.tolerance) {
+        if params.method == Method::Auto && rhs.is_none() {
+            let (x, it) = crate::krylov::bicgstab(rows, params)?;
+            let r = residual(rows, &x, rhs);
+            return Ok((
+                x,
+                SolveInfo {
+                    method: "bicgstab",
+                    iterations: it,
+                    residual: r,
+                    seconds: start.elapsed().as_secs_f64(),
+                },
+            ));
+        }
+        return Err(Error::Singular {
+            what: "the balance equations",
+            detail: format!(
+                "sparse LU is inaccurate on this chain (residual {residual_now:.2e}); use an iterative method"
+            ),
+        });
+    }
     Ok((
         x,
         SolveInfo {
-            method,
+            method: name,
             iterations,
-            residual,
+            residual: residual_now,
             seconds: start.elapsed().as_secs_f64(),
         },
     ))
@@ -267,6 +308,27 @@ fn gth(rows: &Chain<'_>) -> Result<Vec<f64>> {
     Ok(x)
 }
 
+/// The most probable state after `sweeps` Gauss–Seidel sweeps from the
+/// uniform distribution (a cheap guess for the state to pin).
+pub(crate) fn probable_state(rows: &Chain<'_>, sweeps: usize) -> usize {
+    let n = rows.n();
+    let mut x = vec![1.0 / n as f64; n];
+    for _ in 0..sweeps {
+        for j in 0..n {
+            x[j] = rows.inflow(j, &x) / rows.exit(j);
+        }
+    }
+    most_probable(&x)
+}
+
+/// Index of the largest finite positive entry (0 if none).
+pub(crate) fn most_probable(x: &[f64]) -> usize {
+    (0..x.len())
+        .max_by(|&a, &b| x[a].total_cmp(&x[b]))
+        .filter(|&k| x[k] > 0.0 && x[k].is_finite())
+        .unwrap_or(0)
+}
+
 fn solve_direct(rows: &Chain<'_>, rhs: Option<&[f64]>) -> Result<Vec<f64>> {
     let n = rows.n();
     let mut triplets: Vec<(u32, u32, f64)> = Vec::new();
@@ -283,23 +345,26 @@ fn solve_direct(rows: &Chain<'_>, rhs: Option<&[f64]>) -> Result<Vec<f64>> {
             Ok(x)
         }
         None => {
-            // Fix x_k = 1 for the last state k and drop its equation.
-            let k = n - 1;
-            let mut b = vec![0.0; k];
-            for (j, bj) in b.iter_mut().enumerate() {
-                triplets.push((j as u32, j as u32, rows.exit(j)));
+            // Fix x_k = 1 for a probable state k (a few Gauss–Seidel sweeps
+            // tell): pinning an improbable one loses all accuracy.
+            let k = probable_state(rows, 5);
+            let local = |i: usize| if i < k { i } else { i - 1 };
+            let mut b = vec![0.0; n - 1];
+            for j in (0..n).filter(|&j| j != k) {
+                let lj = local(j) as u32;
+                triplets.push((lj, lj, rows.exit(j)));
                 rows.for_each_in(j, &mut |i, v| {
                     if i == k {
-                        *bj += v;
+                        b[lj as usize] += v;
                     } else {
-                        triplets.push((j as u32, i as u32, -v));
+                        triplets.push((lj, local(i) as u32, -v));
                     }
                 });
             }
             let mut sol = vec![b];
-            linear::solve("the steady-state equations", k, &triplets, &mut sol)?;
+            linear::solve("the steady-state equations", n - 1, &triplets, &mut sol)?;
             let mut x = sol.pop().unwrap_or_default();
-            x.push(1.0);
+            x.insert(k, 1.0);
             x.iter_mut().for_each(|v| *v = v.max(0.0));
             let sum: f64 = x.iter().sum();
             if !(sum.is_finite() && sum > 0.0) {
