@@ -4,6 +4,7 @@
 mod gspn;
 mod map;
 mod output;
+mod sim_cmd;
 
 use std::process::ExitCode;
 
@@ -27,6 +28,9 @@ enum Command {
     /// describe, draw.
     #[command(subcommand)]
     Map(map::MapCommand),
+    /// The simulator: drive a robot through a world.
+    #[command(subcommand)]
+    Sim(sim_cmd::SimCommand),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +38,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Gspn(cmd) => gspn::run(cmd),
         Command::Map(cmd) => map::run(cmd),
+        Command::Sim(cmd) => sim_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -61,6 +61,11 @@ struct Loaded {
     yaml: Option<map_server::MapServerMap>,
 }
 
+/// The occupancy grid of a map_server `.yaml` map or a `.toml` world.
+pub(crate) fn load_grid(path: &Path) -> Result<OccupancyGrid> {
+    Ok(load(path)?.grid)
+}
+
 /// A scenario-like file: the world under `[world]`, other tables ignored.
 #[derive(serde::Deserialize)]
 struct WithWorld {
