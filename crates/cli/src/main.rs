@@ -2,6 +2,7 @@
 //! command lives in its own module.
 
 mod gspn;
+mod lab_cmd;
 mod map;
 mod output;
 mod sim_cmd;
@@ -28,6 +29,9 @@ enum Command {
     /// describe, draw.
     #[command(subcommand)]
     Map(map::MapCommand),
+    /// Experiments: run suites and scenario files as batches, write reports.
+    #[command(subcommand)]
+    Lab(lab_cmd::LabCommand),
     /// The simulator: drive a robot through a world.
     #[command(subcommand)]
     Sim(sim_cmd::SimCommand),
@@ -39,6 +43,7 @@ fn main() -> ExitCode {
         Command::Gspn(cmd) => gspn::run(cmd),
         Command::Map(cmd) => map::run(cmd),
         Command::Sim(cmd) => sim_cmd::run(cmd),
+        Command::Lab(cmd) => lab_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -253,8 +253,9 @@ pub struct Perception {
 pub enum Step {
     /// Keep running with this command.
     Run(Command),
-    /// The controller believes the task is done (the run still ends only on
-    /// the simulator's own goal test).
+    /// The controller believes the task is done. The simulator judges by
+    /// the true position: within the goal tolerance the run succeeds,
+    /// otherwise it ends as lost (the controller's estimate was wrong).
     Done(Command),
     /// The controller gives up (the run ends as a failure).
     GiveUp,

@@ -12,7 +12,8 @@
 //!    checked against the grid ([`OccupancyGrid::disc_blocked`]) and the
 //!    people's discs (the same discs the sensors see), then the people move
 //!    (never into the robot);
-//! 4. goal (true position within `goal_tolerance_m`) and time limit.
+//! 4. goal (true position within `goal_tolerance_m`); a controller that
+//!    answered `Done` away from the goal ends the run as `Lost`; time limit.
 //!
 //! **Collision rule.** A footprint that overlaps a blocked cell or a person
 //! after a sub-step is a collision. If `collision_fatal` (the default) the
@@ -103,6 +104,11 @@ pub enum Outcome {
     TimeLimit,
     /// The controller gave up.
     GaveUp,
+    /// The controller declared the task done ([`Step::Done`]) while the
+    /// true position is not within the goal tolerance: its own position
+    /// estimate (odometry) is wrong, and it has stopped where it believes
+    /// the goal is.
+    Lost,
 }
 
 impl Outcome {
@@ -447,6 +453,7 @@ impl Simulation {
         };
         self.notes.clear();
         let step = controller.step(&self.perception, &mut self.notes);
+        let declared_done = matches!(step, Step::Done(_));
         let command = match step {
             Step::Run(c) | Step::Done(c) => Some(c),
             Step::GiveUp => None,
@@ -471,6 +478,8 @@ impl Simulation {
         if self.outcome.is_none() {
             if self.goal_reached() {
                 self.outcome = Some(Outcome::Goal);
+            } else if declared_done && self.task.goal.is_some() {
+                self.outcome = Some(Outcome::Lost);
             } else if self.time_s() >= self.run.time_limit_s - 1e-9 {
                 self.outcome = Some(Outcome::TimeLimit);
             }

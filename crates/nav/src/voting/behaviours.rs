@@ -80,14 +80,82 @@ pub fn sonar_ramp(d_obs_m: f64, d_min_m: f64, d_max_m: f64) -> f64 {
     }
 }
 
-/// `b_sonar`: obstacle avoidance with sonar.
+/// The ground each arc action would sweep: the robot's path over the
+/// look-ahead (the arc), continued straight along the final heading, as a
+/// polyline in the robot frame, with the half-width the footprint needs.
 ///
-/// **Decision:** the obstacle distance along an arc action is the range of
-/// the transducer whose axis is nearest to the action's heading (a cone
-/// reports the nearest echo anywhere inside it, so the hard turns, outside
-/// every cone, take the outermost transducer's reading). Escape (undefined
-/// in the source) votes the fraction of transducers reading `≤ d_min`.
-pub fn sonar_votes(actions: &ActionSet, sonar: &[SonarReading], d_min_m: f64, d_max_m: f64, out: &mut [f64]) {
+/// **Decision:** the source says only "the obstacle distance the sonar sees
+/// along action `m`". We place each echo on its transducer's axis at the
+/// range read (the usual reading of a sonar return; the whole cone would
+/// make one echo ahead block every action alike) and call it "along" an
+/// action when that point lies on the ground the action sweeps: the path
+/// widened by the robot's radius plus a margin. `D_obs(m)` is the nearest
+/// such echo; an action no echo lies along gets 1. A close echo at the side
+/// thus counts against Forward too, which a nearest-axis rule misses (a
+/// robot that looks only along its heading scrapes the corners it passes).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweptPaths {
+    /// One polyline per action (empty for Escape).
+    paths: Vec<Vec<(f64, f64)>>,
+    /// Half-width of the swept ground, metres.
+    half_width_m: f64,
+}
+
+impl SweptPaths {
+    /// Paths of `actions` out to `reach_m` of travel, for a footprint of
+    /// `half_width_m` (robot radius + margin).
+    pub fn new(actions: &ActionSet, reach_m: f64, half_width_m: f64) -> SweptPaths {
+        let step = 0.02;
+        let n = (reach_m / step).ceil().max(1.0) as usize;
+        let arc_len = actions.cruise_mps * actions.lookahead_s;
+        let paths = actions
+            .actions
+            .iter()
+            .map(|a| match a.kind {
+                ActionKind::Escape => Vec::new(),
+                ActionKind::Arc => {
+                    let kappa = a.heading_rad / arc_len;
+                    (0..=n)
+                        .map(|k| {
+                            let s = k as f64 * step;
+                            let sa = s.min(arc_len);
+                            let (x, y, th) = if kappa.abs() < 1e-9 {
+                                (sa, 0.0, 0.0)
+                            } else {
+                                let th = kappa * sa;
+                                (th.sin() / kappa, (1.0 - th.cos()) / kappa, th)
+                            };
+                            let rest = s - sa;
+                            (x + rest * th.cos(), y + rest * th.sin())
+                        })
+                        .collect()
+                }
+            })
+            .collect();
+        SweptPaths { paths, half_width_m }
+    }
+
+    /// Whether the point (robot frame) lies on the ground action `m` sweeps.
+    pub fn contains(&self, m: usize, x: f64, y: f64) -> bool {
+        let hw2 = self.half_width_m * self.half_width_m;
+        self.paths[m].iter().any(|&(px, py)| {
+            let (dx, dy) = (x - px, y - py);
+            dx * dx + dy * dy <= hw2
+        })
+    }
+}
+
+/// `b_sonar`: obstacle avoidance with sonar, `D_obs(m)` per [`SweptPaths`].
+/// Escape (undefined in the source) votes the fraction of transducers
+/// reading `≤ d_min`.
+pub fn sonar_votes(
+    actions: &ActionSet,
+    sonar: &[SonarReading],
+    swept: &SweptPaths,
+    d_min_m: f64,
+    d_max_m: f64,
+    out: &mut [f64],
+) {
     let close = sonar.iter().filter(|s| s.range_m <= d_min_m).count();
     for (m, a) in actions.actions.iter().enumerate() {
         out[m] = match a.kind {
@@ -98,14 +166,18 @@ pub fn sonar_votes(actions: &ActionSet, sonar: &[SonarReading], d_min_m: f64, d_
                     close as f64 / sonar.len() as f64
                 }
             }
-            ActionKind::Arc => sonar
-                .iter()
-                .min_by(|x, y| {
-                    let dx = wrap_angle(x.mount.theta_rad - a.heading_rad).abs();
-                    let dy = wrap_angle(y.mount.theta_rad - a.heading_rad).abs();
-                    dx.total_cmp(&dy)
-                })
-                .map_or(1.0, |s| sonar_ramp(s.range_m, d_min_m, d_max_m)),
+            ActionKind::Arc => {
+                let mut d_obs = f64::INFINITY;
+                for s in sonar.iter().filter(|s| s.range_m <= d_max_m) {
+                    let ang = s.mount.theta_rad;
+                    let x = s.mount.x_m + s.range_m * ang.cos();
+                    let y = s.mount.y_m + s.range_m * ang.sin();
+                    if swept.contains(m, x, y) {
+                        d_obs = d_obs.min(s.range_m);
+                    }
+                }
+                sonar_ramp(d_obs, d_min_m, d_max_m)
+            }
         };
     }
 }
@@ -174,11 +246,31 @@ mod tests {
             })
             .collect();
         let mut v = vec![0.0; a.len()];
-        sonar_votes(&a, &s, 0.2, 1.0, &mut v);
-        assert_eq!(v[0], 0.0, "hard left uses the +30° transducer");
-        assert!((v[3] - 0.5).abs() < 1e-12);
-        assert_eq!(v[6], 1.0);
-        assert!((v[7] - 1.0 / 3.0).abs() < 1e-12);
+        let swept = SweptPaths::new(&a, 1.0, 0.2);
+        sonar_votes(&a, &s, &swept, 0.2, 1.0, &mut v);
+        assert!(
+            v[..7].iter().all(|&x| x == 0.0),
+            "0.1 m at +30° is beside every path: {v:?}"
+        );
+        assert!((v[7] - 1.0 / 3.0).abs() < 1e-12, "Escape: one of three ≤ d_min");
+        // Echoes at 0.3 m (+30°), 0.6 m (0°), none (−30°).
+        let mid: Vec<SonarReading> = s
+            .iter()
+            .zip([0.3, 0.6, f64::INFINITY])
+            .map(|(r, range_m)| SonarReading { range_m, ..*r })
+            .collect();
+        sonar_votes(&a, &mid, &swept, 0.2, 1.0, &mut v);
+        let ramp = |d: f64| (d - 0.2) / 0.8;
+        assert!(
+            (v[0] - ramp(0.3)).abs() < 1e-12,
+            "Hard Left runs into the +30° echo"
+        );
+        assert!(
+            (v[3] - ramp(0.3)).abs() < 1e-12,
+            "Forward passes the +30° echo within the footprint"
+        );
+        assert_eq!(v[6], 1.0, "Hard Right sweeps away from both echoes");
+        assert_eq!(v[7], 0.0);
     }
 
     #[test]

@@ -23,6 +23,7 @@
 pub mod actions;
 pub mod behaviours;
 pub mod memory;
+pub mod trace_layer;
 
 use robot::{Controller, Notes, Perception, Step, Vec2, wrap_angle};
 
@@ -89,7 +90,15 @@ pub struct VotingParams {
     pub teams: Teams,
     /// The action set. Default: [`ActionSet::default`].
     pub actions: ActionSet,
-    /// Window width β of the Π-function, radians. Default 30° (0.5236).
+    /// Window width β of the Π-function, radians. Default 60° (1.0472).
+    ///
+    /// **Decision** (the source gives no value): β sets how hard goal
+    /// seeking resists a detour. One triggered detector in an action's
+    /// cover lowers its IR vote from 1.0 to 0.7, worth `0.3 · W_obs ≥ 0.19`
+    /// at the centre; the goal's preference for Forward over a 60° turn is
+    /// `(1 − Π(60°)) · W_goal ≤ 0.36 · (1 − Π(60°))`. With β ≥ 55° a single
+    /// detection straight ahead is enough to turn the robot; with a narrow
+    /// β (30°) the robot drives on into a pole that only one beam sees.
     pub beta_rad: f64,
     /// Sonar: distance below which an action gets 0, metres. Default 0.25.
     pub sonar_d_min_m: f64,
@@ -104,6 +113,10 @@ pub struct VotingParams {
     /// Stop (done) within this distance of the goal by odometry, metres.
     /// Default 0.2.
     pub arrive_m: f64,
+    /// Half-width of the ground an action sweeps, for the sonar's
+    /// `D_obs`: the robot's radius plus a margin, metres. Default 0.2
+    /// (AIBOT: 0.15 + 0.05).
+    pub swept_half_width_m: f64,
 }
 
 impl Default for VotingParams {
@@ -116,13 +129,14 @@ impl Default for VotingParams {
                 planning: true,
             }),
             actions: ActionSet::default(),
-            beta_rad: 30f64.to_radians(),
+            beta_rad: 60f64.to_radians(),
             sonar_d_min_m: 0.25,
             sonar_d_max_m: 1.0,
             mark_min: 6.0,
             mark_max: 20.0,
             memory: MemoryParams::default(),
             arrive_m: 0.2,
+            swept_half_width_m: 0.2,
         }
     }
 }
@@ -148,6 +162,12 @@ impl VotingParams {
         }
         if !(self.teams.ir || self.teams.sonar) || !(self.teams.odometry || self.teams.planning) {
             return Err("each team needs at least one behaviour".into());
+        }
+        if !(self.swept_half_width_m.is_finite() && self.swept_half_width_m > 0.0) {
+            return Err(format!(
+                "swept_half_width_m must be > 0, got {}",
+                self.swept_half_width_m
+            ));
         }
         if !(self.memory.cell_m > 0.0 && self.memory.size > 0) {
             return Err("the spatial memory needs cell_m > 0 and size > 0".into());
@@ -219,7 +239,9 @@ pub struct VotingController {
     memory: Option<SpatialMemory>,
     ir_covers: Vec<Vec<usize>>,
     ir_layout: usize,
+    swept: behaviours::SweptPaths,
     ballot: Ballot,
+    steer: Option<f64>,
 }
 
 impl VotingController {
@@ -231,12 +253,15 @@ impl VotingController {
             fused: vec![0.0; m],
             ..Ballot::default()
         };
+        let swept = behaviours::SweptPaths::new(&p.actions, p.sonar_d_max_m, p.swept_half_width_m);
         Ok(VotingController {
+            swept,
             p,
             memory: None,
             ir_covers: Vec::new(),
             ir_layout: usize::MAX,
             ballot,
+            steer: None,
         })
     }
 
@@ -248,6 +273,13 @@ impl VotingController {
     /// What the last tick computed.
     pub fn ballot(&self) -> &Ballot {
         &self.ballot
+    }
+
+    /// Makes goal seeking steer towards this heading (odometry frame,
+    /// radians) instead of the goal's bearing, or back to the goal with
+    /// `None` (used by the activity-trace layer's recovery).
+    pub fn steer_towards(&mut self, heading_rad: Option<f64>) {
+        self.steer = heading_rad;
     }
 
     /// The index of the action whose heading is nearest Forward among those
@@ -286,7 +318,7 @@ impl Controller for VotingController {
         if to_goal.norm() <= self.p.arrive_m {
             return Step::Done(robot::Command::Stop);
         }
-        let goal_bearing = wrap_angle(to_goal.angle() - pose.theta_rad);
+        let goal_bearing = wrap_angle(self.steer.unwrap_or_else(|| to_goal.angle()) - pose.theta_rad);
         let memory = self
             .memory
             .get_or_insert_with(|| SpatialMemory::new(self.p.memory, pose.position()));
@@ -320,6 +352,7 @@ impl Controller for VotingController {
             behaviours::sonar_votes(
                 &self.p.actions,
                 &perception.sonar,
+                &self.swept,
                 self.p.sonar_d_min_m,
                 self.p.sonar_d_max_m,
                 &mut b.sonar,

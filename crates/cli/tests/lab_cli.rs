@@ -1,0 +1,201 @@
+//! `petrinav lab`, run as a user would: determinism across thread counts,
+//! resuming a killed batch, replays, and bad scenario files.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn petrinav(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_petrinav"))
+        .args(args)
+        .output()
+        .expect("the petrinav binary runs")
+}
+
+fn fresh(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("lab_{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn run_voting(out: &Path, runs: &str, jobs: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "lab",
+        "run",
+        "voting",
+        "--runs",
+        runs,
+        "--jobs",
+        jobs,
+        "--no-pictures",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    petrinav(&args)
+}
+
+fn lines(path: &Path) -> usize {
+    std::fs::read_to_string(path).map_or(0, |s| s.lines().count())
+}
+
+#[test]
+fn one_thread_and_two_threads_write_the_same_results_file() {
+    let (a, b) = (fresh("jobs1"), fresh("jobs2"));
+    let out_a = run_voting(&a, "2", "1", &[]);
+    assert!(
+        out_a.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out_a.stderr)
+    );
+    let out_b = run_voting(&b, "2", "2", &[]);
+    assert!(
+        out_b.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out_b.stderr)
+    );
+    let ra = std::fs::read(a.join("results.jsonl")).unwrap();
+    let rb = std::fs::read(b.join("results.jsonl")).unwrap();
+    assert_eq!(lines(&a.join("results.jsonl")), 4 * 14 * 2);
+    assert!(ra == rb, "results differ between --jobs 1 and --jobs 2");
+    // The printed tables and the report's tables are the same too.
+    let tables_only = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter(|l| !l.starts_with("report:"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(tables_only(&out_a), tables_only(&out_b));
+    assert_eq!(
+        std::fs::read(a.join("tables.md")).unwrap(),
+        std::fs::read(b.join("tables.md")).unwrap()
+    );
+    let tables = String::from_utf8_lossy(&out_a.stdout);
+    assert!(tables.contains("field14") && tables.contains("e4"), "{tables}");
+}
+
+#[test]
+fn a_killed_batch_resumes_to_the_uninterrupted_results() {
+    let (whole, cut) = (fresh("whole"), fresh("cut"));
+    let out = run_voting(&whole, "3", "1", &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let total = lines(&whole.join("results.jsonl"));
+    assert_eq!(total, 4 * 14 * 3);
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_petrinav"))
+        .args([
+            "lab",
+            "run",
+            "voting",
+            "--runs",
+            "3",
+            "--jobs",
+            "1",
+            "--no-pictures",
+            "--out",
+            cut.to_str().unwrap(),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the petrinav binary runs");
+    let results = cut.join("results.jsonl");
+    let start = Instant::now();
+    while lines(&results) < total / 4 && start.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().expect("kill the batch");
+    child.wait().unwrap();
+    let done = lines(&results);
+    assert!(
+        done > 0 && done < total,
+        "the batch should be cut half-way, has {done} of {total} runs"
+    );
+
+    let out = run_voting(&cut, "3", "2", &["--resume"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("already done"), "{stderr}");
+    assert_eq!(
+        std::fs::read(&results).unwrap(),
+        std::fs::read(whole.join("results.jsonl")).unwrap(),
+        "resumed results differ from an uninterrupted batch"
+    );
+    // Resuming with other arguments is refused.
+    let out = run_voting(&cut, "4", "1", &["--resume"]);
+    assert!(!out.status.success());
+    // And a second run without --resume does not overwrite anything.
+    let out = run_voting(&cut, "3", "1", &[]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--resume"));
+}
+
+#[test]
+fn a_run_is_replayed_with_its_picture_and_trace() {
+    let dir = fresh("replay");
+    let out = run_voting(&dir, "1", "2", &[]);
+    assert!(out.status.success());
+    let png = dir.join("run.png");
+    let trace = dir.join("run.jsonl");
+    let out = petrinav(&[
+        "lab",
+        "replay",
+        dir.to_str().unwrap(),
+        "e4/field12#0",
+        "-o",
+        png.to_str().unwrap(),
+        "--trace",
+        trace.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let replayed: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let results = std::fs::read_to_string(dir.join("results.jsonl")).unwrap();
+    let original: serde_json::Value = results
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .find(|r| r["key"] == "e4/field12#0")
+        .unwrap();
+    for k in ["outcome", "time_s", "path_length_m", "ticks"] {
+        assert_eq!(replayed[k], original[k], "{k}");
+    }
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    assert_eq!(lines(&trace) as u64, original["ticks"].as_u64().unwrap());
+    let bad = petrinav(&["lab", "replay", dir.to_str().unwrap(), "e9/field99#0"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("no scenario"));
+}
+
+#[test]
+fn a_malformed_scenario_names_the_key_and_line() {
+    let dir = fresh("bad_scenario");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bad.toml");
+    std::fs::write(
+        &file,
+        "name = \"bad\"\nruns = 3\n\n[start]\nx = 1.0\ny = 1.0\nspeed = 2\n\n[goal]\nx = 3.0\ny = 1.0\n",
+    )
+    .unwrap();
+    let out = petrinav(&[
+        "lab",
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("speed") && err.contains("line 7"), "{err}");
+    std::fs::write(&file, "name = \"bad\"\nruns = -3\n").unwrap();
+    let out = petrinav(&[
+        "lab",
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("runs") && err.contains("line 2"), "{err}");
+}

@@ -1,0 +1,305 @@
+//! One run of a scenario: the world (with its per-run variation), the
+//! robot, the controller, the simulation, and the run's record.
+//!
+//! A run is reproducible from its seed alone: the start pose and obstacle
+//! jitter come from a ChaCha8 stream of the seed, the simulator draws its
+//! own streams from the same seed.
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result};
+use nav::activity::PriorityController;
+use nav::voting::VotingController;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use robot::{Controller, Notes, Perception, Pose, Step, Vec2};
+use sim::shapes::WorldSpec;
+use sim::{
+    CrowdParams, CrowdSize, OccupancyGrid, RobotParams, RunParams, Simulation, Task, Trace, TraceParams,
+    World,
+};
+
+use crate::scenario::{ControllerKind, Preset, Scenario};
+
+/// What one run produced (one line of a results file).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RunRecord {
+    /// Reached the goal.
+    pub success: bool,
+    /// `goal`, `collision`, `time_limit`, `gave_up` or `lost`.
+    pub outcome: String,
+    /// Simulated time, seconds.
+    pub time_s: f64,
+    /// Length of the true path, metres.
+    pub path_length_m: f64,
+    /// Contact episodes.
+    pub collisions: u32,
+    /// Smallest clearance to walls and people, metres.
+    pub min_clearance_m: f64,
+    /// Final distance between the true and dead-reckoned positions, metres.
+    pub odometry_error_m: f64,
+    /// Final distance to the goal, metres.
+    pub goal_distance_m: f64,
+    /// Control ticks.
+    pub ticks: u64,
+    /// Ticks during which each behaviour / action was in control.
+    pub behaviour_ticks: BTreeMap<String, u64>,
+    /// Dead-locks detected (controllers with an activity trace).
+    pub deadlocks: u32,
+    /// The start pose actually used (after jitter).
+    pub start: [f64; 3],
+}
+
+/// A scenario ready to run many times: the world is built once when it does
+/// not vary between runs.
+pub struct Prepared {
+    scenario: Scenario,
+    fixed_world: Option<World>,
+    base_grid: Option<OccupancyGrid>,
+}
+
+fn jitter_world(spec: &WorldSpec, amount_m: f64, rng: &mut ChaCha8Rng) -> WorldSpec {
+    let mut w = spec.clone();
+    let mut shift = || {
+        let r = amount_m * rng.random::<f64>().sqrt();
+        let a = std::f64::consts::TAU * rng.random::<f64>();
+        (r * a.cos(), r * a.sin())
+    };
+    for s in &mut w.rects {
+        let (dx, dy) = shift();
+        s.x += dx;
+        s.y += dy;
+    }
+    for s in &mut w.circles {
+        let (dx, dy) = shift();
+        s.x += dx;
+        s.y += dy;
+    }
+    for s in &mut w.polygons {
+        let (dx, dy) = shift();
+        for p in &mut s.points {
+            p[0] += dx;
+            p[1] += dy;
+        }
+    }
+    for s in &mut w.segments {
+        let (dx, dy) = shift();
+        s.from[0] += dx;
+        s.from[1] += dy;
+        s.to[0] += dx;
+        s.to[1] += dy;
+    }
+    w
+}
+
+impl Prepared {
+    /// Loads maps and builds the world if it is the same for every run.
+    pub fn new(scenario: Scenario) -> Result<Prepared> {
+        let base_grid = match (&scenario.world, &scenario.map) {
+            (_, Some(map)) => Some(
+                sim::map_server::load(map)
+                    .with_context(|| format!("scenario `{}`", scenario.name))?
+                    .grid,
+            ),
+            (Some(w), None) if scenario.jitter.obstacles_m == 0.0 => Some(w.rasterise()?),
+            _ => None,
+        };
+        let fixed_world = match &base_grid {
+            Some(g) => Some(Prepared::populate(&scenario, World::new(g.clone()))?),
+            None => None,
+        };
+        Ok(Prepared {
+            scenario,
+            fixed_world,
+            base_grid,
+        })
+    }
+
+    /// The scenario.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    fn populate(s: &Scenario, world: World) -> Result<World> {
+        let size = match (s.people.count, s.people.density) {
+            (Some(n), _) if n > 0 => CrowdSize::Count { people: n },
+            (_, Some(d)) if d > 0.0 => CrowdSize::PerArea { people_per_100m2: d },
+            _ => return Ok(world),
+        };
+        Ok(world.with_crowd(CrowdParams {
+            size,
+            ..CrowdParams::default()
+        })?)
+    }
+
+    /// The world of a run (built for this run if obstacles vary).
+    fn world_for(&self, rng: &mut ChaCha8Rng) -> Result<std::borrow::Cow<'_, World>> {
+        if let Some(w) = &self.fixed_world {
+            return Ok(std::borrow::Cow::Borrowed(w));
+        }
+        let spec = self.scenario.world.as_ref().context("no world")?;
+        let varied = jitter_world(spec, self.scenario.jitter.obstacles_m, rng);
+        let grid = varied.rasterise()?;
+        Ok(std::borrow::Cow::Owned(Prepared::populate(
+            &self.scenario,
+            World::new(grid),
+        )?))
+    }
+
+    /// The grid without per-run variation (for pictures).
+    pub fn base_grid(&self) -> Result<OccupancyGrid> {
+        match &self.base_grid {
+            Some(g) => Ok(g.clone()),
+            None => Ok(self.scenario.world.as_ref().context("no world")?.rasterise()?),
+        }
+    }
+
+    fn controller(&self) -> Result<Box<dyn Controller>> {
+        let c = &self.scenario.controller;
+        Ok(match c.kind {
+            ControllerKind::Voting => {
+                let v = VotingController::new(c.voting.clone()).map_err(|e| anyhow::anyhow!(e))?;
+                if c.trace_layer.enabled {
+                    Box::new(nav::voting::trace_layer::TracedVoting::new(v, c.priority))
+                } else {
+                    Box::new(v)
+                }
+            }
+            ControllerKind::Priority => {
+                Box::new(PriorityController::new(c.priority).map_err(|e| anyhow::anyhow!(e))?)
+            }
+        })
+    }
+
+    /// Runs once with `seed` (no trace): the line of a results file.
+    pub fn run(&self, seed: u64) -> Result<RunRecord> {
+        Ok(self.run_detailed(seed, TraceParams::default())?.record)
+    }
+
+    /// Runs once with `seed`, recording what `trace` asks for, and returns
+    /// the run's own world grid too (obstacle jitter included), for
+    /// pictures and replays.
+    pub fn run_detailed(&self, seed: u64, trace: TraceParams) -> Result<RunOutput> {
+        let s = &self.scenario;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_1ab0_0000_0001);
+        let r = s.start.jitter_m * rng.random::<f64>().sqrt();
+        let a = std::f64::consts::TAU * rng.random::<f64>();
+        let dtheta = s.start.jitter_deg * (2.0 * rng.random::<f64>() - 1.0);
+        let start = Pose::new(
+            s.start.x + r * a.cos(),
+            s.start.y + r * a.sin(),
+            (s.start.theta_deg + dtheta).to_radians(),
+        );
+        let world = self.world_for(&mut rng)?;
+        let robot = match s.robot.preset {
+            Preset::Aibot => RobotParams::aibot(),
+            Preset::Jinny => RobotParams::jinny(),
+        };
+        let run = RunParams {
+            control_period_s: s.control_period_s,
+            time_limit_s: s.time_limit_s,
+            goal_tolerance_m: s.goal_tolerance_m,
+            collision_fatal: s.collision_fatal,
+            trace,
+            ..RunParams::default()
+        };
+        let task = Task {
+            start,
+            goal: Some(Vec2::new(s.goal.x, s.goal.y)),
+        };
+        let mut sim = Simulation::new(&world, robot, run, task, seed)
+            .with_context(|| format!("scenario `{}`", s.name))?;
+        let mut counting = Counting {
+            inner: self.controller()?,
+            notes: Notes::enabled(),
+            ticks: BTreeMap::new(),
+            deadlocks: 0,
+        };
+        let result = sim.run(&mut counting);
+        let outcome = result
+            .outcome
+            .map(|o| {
+                serde_json::to_value(o)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_else(|| format!("{o:?}"))
+            })
+            .unwrap_or_else(|| "running".into());
+        let record = RunRecord {
+            success: result.outcome.is_some_and(|o| o.is_success()),
+            outcome,
+            time_s: result.time_s,
+            path_length_m: result.path_length_m,
+            collisions: result.collisions,
+            min_clearance_m: result.min_clearance_m,
+            odometry_error_m: result.odometry_error_m,
+            goal_distance_m: result.goal_distance_m.unwrap_or(f64::NAN),
+            ticks: result.ticks,
+            behaviour_ticks: counting
+                .ticks
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+            deadlocks: counting.deadlocks,
+            start: [start.x_m, start.y_m, start.theta_rad],
+        };
+        let grid = if trace.enabled {
+            Some(world.grid().clone())
+        } else {
+            None
+        };
+        Ok(RunOutput {
+            record,
+            trace: sim.take_trace(),
+            grid,
+        })
+    }
+}
+
+/// Everything [`Prepared::run_detailed`] produced.
+pub struct RunOutput {
+    /// The run's record.
+    pub record: RunRecord,
+    /// The trace, when one was asked for.
+    pub trace: Option<Trace>,
+    /// The run's world grid (with this run's obstacle jitter), when a trace
+    /// was asked for.
+    pub grid: Option<OccupancyGrid>,
+}
+
+/// Counts the behaviour in control each tick (and dead-lock events), and
+/// passes the notes on when the simulator records them.
+struct Counting {
+    inner: Box<dyn Controller>,
+    notes: Notes,
+    ticks: BTreeMap<&'static str, u64>,
+    deadlocks: u32,
+}
+
+impl Controller for Counting {
+    fn step(&mut self, perception: &Perception, notes: &mut Notes) -> Step {
+        self.notes.clear();
+        let step = self.inner.step(perception, &mut self.notes);
+        if let Some(b) = self.notes.behaviour {
+            *self.ticks.entry(b).or_insert(0) += 1;
+        }
+        self.deadlocks += self
+            .notes
+            .events
+            .iter()
+            .filter(|e| e.starts_with("deadlock"))
+            .count() as u32;
+        if notes.is_enabled() {
+            if let Some(b) = self.notes.behaviour {
+                notes.behaviour(b);
+            }
+            for &(k, v) in &self.notes.values {
+                notes.value(k, v);
+            }
+            for e in &self.notes.events {
+                notes.event(e.clone());
+            }
+        }
+        step
+    }
+}
