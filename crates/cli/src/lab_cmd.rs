@@ -18,8 +18,11 @@ pub enum LabCommand {
     /// Every run is reproducible from (scenario, run index, seed); results
     /// are appended one JSON line per run, so an interrupted batch continues
     /// with --resume. Examples:
+    ///
     ///   petrinav lab run voting --runs 10
+    ///
     ///   petrinav lab run my_scenario.toml --out out/mine
+    ///
     ///   petrinav lab run voting --shard 3/8 --out out/part3
     Run(RunArgs),
     /// Re-simulates one run of a batch: its picture (the run's own world,
@@ -27,7 +30,9 @@ pub enum LabCommand {
     /// optionally, its full per-tick trace (perceptions, votes, weights).
     ///
     /// RUN is the `key` of a results line, e.g. `e3/field03#1`. Examples:
+    ///
     ///   petrinav lab replay out/voting 'e4/field12#0' -o run.png
+    ///
     ///   petrinav lab replay out/voting 'e1/field03#7' --trace run.jsonl
     Replay(ReplayArgs),
     /// Recomputes the report of a results folder (tables, pictures, index.html).
@@ -51,7 +56,7 @@ pub struct RunArgs {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, short = 'j')]
     jobs: Option<usize>,
-    /// Output folder (default: out/<suite name>).
+    /// Output folder (default: `out/<suite name>`).
     #[arg(long, short = 'o')]
     out: Option<PathBuf>,
     /// Continue an interrupted batch in the output folder.
