@@ -12,7 +12,7 @@ use crate::outln;
 
 #[derive(Subcommand, Debug)]
 pub enum LabCommand {
-    /// Runs a suite (`voting`) or scenario files as a batch, then writes the
+    /// Runs a suite (`voting`, `deadlock`) or scenario files as a batch, then writes the
     /// report (tables, pictures, index.html) next to the results.
     ///
     /// Every run is reproducible from (scenario, run index, seed); results
@@ -47,7 +47,7 @@ pub enum LabCommand {
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// `voting`, or scenario files (.toml).
+    /// `voting`, `deadlock`, or scenario files (.toml).
     #[arg(required = true)]
     what: Vec<String>,
     /// Runs per scenario (default: the suite's or the file's, 50).
@@ -100,8 +100,13 @@ fn load_suite(what: &[String], runs: Option<u32>) -> Result<(Suite, BTreeMap<Str
     if what.len() == 1 && what[0] == "voting" {
         return Ok((Suite::voting(runs)?, BTreeMap::new()));
     }
+    if what.len() == 1 && what[0] == "deadlock" {
+        return Ok((Suite::deadlock(runs)?, BTreeMap::new()));
+    }
     if let Some(bad) = what.iter().find(|w| !w.ends_with(".toml")) {
-        bail!("unknown suite `{bad}`: the suites are `voting`; or give scenario files (.toml)");
+        bail!(
+            "unknown suite `{bad}`: the suites are `voting` and `deadlock`; or give scenario files (.toml)"
+        );
     }
     let paths: Vec<&Path> = what.iter().map(Path::new).collect();
     let suite = Suite::files(&paths, runs)?;
@@ -172,6 +177,7 @@ fn suite_of(dir: &Path) -> Result<(Suite, SuiteInfo)> {
     .with_context(|| format!("{} is not a suite description", info_path.display()))?;
     let suite = match info.kind {
         SuiteKind::Voting => Suite::voting(Some(info.runs))?,
+        SuiteKind::Deadlock => Suite::deadlock(Some(info.runs))?,
         SuiteKind::Custom => {
             let files: Vec<String> =
                 info.scenarios
@@ -217,8 +223,7 @@ fn replay(a: &ReplayArgs) -> Result<()> {
             suite.runs
         );
     }
-    let seed = lab::runner::derive_seed(suite.seed, name, index);
-    let out = prep.run_detailed(seed, sim::TraceParams::full())?;
+    let out = prep.run_detailed(suite.seeds(name, index), sim::TraceParams::full())?;
     let trace = out.trace.context("the run kept no trace")?;
     if let Some(path) = &a.trace {
         let f = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;

@@ -56,7 +56,7 @@ fn one_thread_and_two_threads_write_the_same_results_file() {
     );
     let ra = std::fs::read(a.join("results.jsonl")).unwrap();
     let rb = std::fs::read(b.join("results.jsonl")).unwrap();
-    assert_eq!(lines(&a.join("results.jsonl")), 4 * 14 * 2);
+    assert_eq!(lines(&a.join("results.jsonl")), 5 * 14 * 2);
     assert!(ra == rb, "results differ between --jobs 1 and --jobs 2");
     // The printed tables and the report's tables are the same too.
     let tables_only = |o: &std::process::Output| {
@@ -81,7 +81,7 @@ fn a_killed_batch_resumes_to_the_uninterrupted_results() {
     let out = run_voting(&whole, "3", "1", &[]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let total = lines(&whole.join("results.jsonl"));
-    assert_eq!(total, 4 * 14 * 3);
+    assert_eq!(total, 5 * 14 * 3);
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_petrinav"))
         .args([

@@ -20,6 +20,7 @@ use sim::{
 };
 
 use crate::scenario::{ControllerKind, Preset, Scenario};
+use crate::traps::DrawnTrap;
 
 /// What one run produced (one line of a results file).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -48,6 +49,9 @@ pub struct RunRecord {
     pub deadlocks: u32,
     /// The start pose actually used (after jitter).
     pub start: [f64; 3],
+    /// The trap drawn for this run, if the scenario has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trap: Option<DrawnTrap>,
 }
 
 /// A scenario ready to run many times: the world is built once when it does
@@ -101,7 +105,9 @@ impl Prepared {
                     .with_context(|| format!("scenario `{}`", scenario.name))?
                     .grid,
             ),
-            (Some(w), None) if scenario.jitter.obstacles_m == 0.0 => Some(w.rasterise()?),
+            (Some(w), None) if scenario.jitter.obstacles_m == 0.0 && scenario.trap.is_none() => {
+                Some(w.rasterise()?)
+            }
             _ => None,
         };
         let fixed_world = match &base_grid {
@@ -132,18 +138,28 @@ impl Prepared {
         })?)
     }
 
-    /// The world of a run (built for this run if obstacles vary).
-    fn world_for(&self, rng: &mut ChaCha8Rng) -> Result<std::borrow::Cow<'_, World>> {
+    /// The world of a run (built for this run if obstacles vary or a trap
+    /// is drawn), and the trap drawn.
+    fn world_for(
+        &self,
+        start: Pose,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(std::borrow::Cow<'_, World>, Option<DrawnTrap>)> {
         if let Some(w) = &self.fixed_world {
-            return Ok(std::borrow::Cow::Borrowed(w));
+            return Ok((std::borrow::Cow::Borrowed(w), None));
         }
-        let spec = self.scenario.world.as_ref().context("no world")?;
-        let varied = jitter_world(spec, self.scenario.jitter.obstacles_m, rng);
+        let s = &self.scenario;
+        let spec = s.world.as_ref().context("no world")?;
+        let mut varied = jitter_world(spec, s.jitter.obstacles_m, rng);
+        let trap = s
+            .trap
+            .as_ref()
+            .map(|t| t.draw(start.position(), Vec2::new(s.goal.x, s.goal.y), &mut varied, rng));
         let grid = varied.rasterise()?;
-        Ok(std::borrow::Cow::Owned(Prepared::populate(
-            &self.scenario,
-            World::new(grid),
-        )?))
+        Ok((
+            std::borrow::Cow::Owned(Prepared::populate(s, World::new(grid))?),
+            trap,
+        ))
     }
 
     /// The grid without per-run variation (for pictures).
@@ -171,17 +187,18 @@ impl Prepared {
         })
     }
 
-    /// Runs once with `seed` (no trace): the line of a results file.
-    pub fn run(&self, seed: u64) -> Result<RunRecord> {
-        Ok(self.run_detailed(seed, TraceParams::default())?.record)
+    /// Runs once (no trace): the line of a results file.
+    pub fn run(&self, seeds: RunSeeds) -> Result<RunRecord> {
+        Ok(self.run_detailed(seeds, TraceParams::default())?.record)
     }
 
     /// Runs once with `seed`, recording what `trace` asks for, and returns
     /// the run's own world grid too (obstacle jitter included), for
     /// pictures and replays.
-    pub fn run_detailed(&self, seed: u64, trace: TraceParams) -> Result<RunOutput> {
+    pub fn run_detailed(&self, seeds: RunSeeds, trace: TraceParams) -> Result<RunOutput> {
+        let seed = seeds.sim;
         let s = &self.scenario;
-        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_1ab0_0000_0001);
+        let mut rng = ChaCha8Rng::seed_from_u64(seeds.variation ^ 0x5eed_1ab0_0000_0001);
         let r = s.start.jitter_m * rng.random::<f64>().sqrt();
         let a = std::f64::consts::TAU * rng.random::<f64>();
         let dtheta = s.start.jitter_deg * (2.0 * rng.random::<f64>() - 1.0);
@@ -190,7 +207,7 @@ impl Prepared {
             s.start.y + r * a.sin(),
             (s.start.theta_deg + dtheta).to_radians(),
         );
-        let world = self.world_for(&mut rng)?;
+        let (world, trap) = self.world_for(start, &mut rng)?;
         let robot = match s.robot.preset {
             Preset::Aibot => RobotParams::aibot(),
             Preset::Jinny => RobotParams::jinny(),
@@ -242,6 +259,7 @@ impl Prepared {
                 .collect(),
             deadlocks: counting.deadlocks,
             start: [start.x_m, start.y_m, start.theta_rad],
+            trap,
         };
         let grid = if trace.enabled {
             Some(world.grid().clone())
@@ -254,6 +272,22 @@ impl Prepared {
             grid,
         })
     }
+}
+
+/// The seeds of one run.
+///
+/// The per-run variation of the scenario (start pose, obstacle jitter, the
+/// drawn trap) comes from `variation`, which a suite derives from the run
+/// index alone: run `k` of every scenario in a suite meets the same
+/// variation, so controllers are compared on the same draws (common random
+/// numbers). The simulator's noise comes from `sim`, derived from the
+/// scenario too.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunSeeds {
+    /// Seed of the simulator's noise streams.
+    pub sim: u64,
+    /// Seed of the scenario's per-run variation.
+    pub variation: u64,
 }
 
 /// Everything [`Prepared::run_detailed`] produced.

@@ -6,10 +6,12 @@
 //! pictures and an offline HTML page.
 #![warn(missing_docs)]
 
+pub mod deadlock_report;
 pub mod experiment;
 pub mod report;
 pub mod runner;
 pub mod scenario;
 pub mod stats;
 pub mod suite;
+pub mod traps;
 pub mod voting_report;

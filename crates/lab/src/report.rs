@@ -17,7 +17,7 @@ use sim::render::{MarkerKind, Picture};
 use sim::{Cell, CellIndex, OccupancyGrid, Trace, TraceParams};
 
 use crate::experiment::{Prepared, RunRecord};
-use crate::runner::{self, derive_seed};
+use crate::runner;
 use crate::stats::{Mean, Proportion};
 use crate::suite::{Suite, SuiteInfo, SuiteKind};
 
@@ -291,8 +291,7 @@ pub fn picture(suite: &Suite, scenario: &str, runs: u32, path: &Path) -> Result<
     };
     let mut outputs = Vec::new();
     for run in 0..runs.min(suite.runs) {
-        let seed = derive_seed(suite.seed, scenario, run);
-        outputs.push(prep.run_detailed(seed, trace_params)?);
+        outputs.push(prep.run_detailed(suite.seeds(scenario, run), trace_params)?);
     }
     let grid = composite_grid(prep.base_grid()?, outputs.iter().filter_map(|o| o.grid.as_ref()));
     let mut pic = Picture::new(&grid);
@@ -448,10 +447,11 @@ pub fn write(dir: &Path, suite: &Suite, info: &SuiteInfo, pictures: bool) -> Res
     let (gtxt, gmd) = generic_table(&summaries);
     let (text, main_md) = match info.kind {
         SuiteKind::Voting => voting_tables(&summaries),
-        SuiteKind::Custom => (gtxt.clone(), gmd.clone()),
+        SuiteKind::Custom | SuiteKind::Deadlock => (gtxt.clone(), gmd.clone()),
     };
     let explanation = match info.kind {
         SuiteKind::Voting => crate::voting_report::explanation(&summaries),
+        SuiteKind::Deadlock => crate::deadlock_report::explanation(&summaries),
         SuiteKind::Custom => String::new(),
     };
     let mut md = format!(

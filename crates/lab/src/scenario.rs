@@ -30,6 +30,7 @@
 //! | `[goal] x, y` | goal | required |
 //! | `[jitter] obstacles_m` | each shape moved by up to this per run (uniform in a disc) | 0 |
 //! | `[people] count, density` | people walking about (count, or per 100 m² of free space) | none |
+//! | `[trap]` | a dead-end trap drawn per run on the course ([`crate::traps::TrapSpec`]) | none |
 //! | `[controller] kind` | `voting` or `priority` | `voting` |
 //! | `[controller.voting]` | [`nav::voting::VotingParams`] | defaults |
 //! | `[controller.priority]` | [`nav::activity::PriorityParams`] | defaults |
@@ -218,6 +219,9 @@ pub struct Scenario {
     /// People.
     #[serde(default)]
     pub people: PeopleSpec,
+    /// A dead-end trap drawn per run on the course (shape worlds only).
+    #[serde(default)]
+    pub trap: Option<crate::traps::TrapSpec>,
     /// The controller.
     #[serde(default)]
     pub controller: ControllerSpec,
@@ -258,6 +262,12 @@ impl Scenario {
         }
         if let Some(w) = &self.world {
             w.validate()?;
+        }
+        if let Some(t) = &self.trap {
+            if self.world.is_none() {
+                bail!("[trap] needs a [world] of shapes");
+            }
+            t.validate().map_err(anyhow::Error::msg)?;
         }
         if self.runs == 0 {
             bail!("`runs` must be at least 1");

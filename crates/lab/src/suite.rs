@@ -2,7 +2,8 @@
 //!
 //! | suite | scenarios |
 //! |---|---|
-//! | `voting` | the fourteen fields of `scenarios/voting/` × the four behaviour combinations of the source (`e1`…`e4`) |
+//! | `voting` | the fourteen fields of `scenarios/voting/` × the four behaviour combinations of the source (`e1`…`e4`) and `e4` with the activity-trace layer (`e5`) |
+//! | `deadlock` | `scenarios/deadlock/`: a dead-end trap drawn per run; priority and voting controllers, each with and without dead-lock detection + recovery |
 //! | a scenario file | that scenario alone |
 //!
 //! The shipped scenarios are compiled into the binary, so a suite runs from
@@ -15,7 +16,7 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use nav::voting::Teams;
 
-use crate::experiment::Prepared;
+use crate::experiment::{Prepared, RunSeeds};
 use crate::runner::{self, BatchParams, BatchSummary, Job, Shard};
 use crate::scenario::{ControllerKind, Scenario};
 
@@ -37,12 +38,36 @@ pub const VOTING_FIELDS: [(&str, &str); 14] = [
     ("field14", include_str!("../../../scenarios/voting/field14.toml")),
 ];
 
+/// The dead-lock suite's scenarios, as shipped.
+pub const DEADLOCK_SCENARIOS: [(&str, &str); 4] = [
+    (
+        "priority",
+        include_str!("../../../scenarios/deadlock/priority.toml"),
+    ),
+    (
+        "priority_recovery",
+        include_str!("../../../scenarios/deadlock/priority_recovery.toml"),
+    ),
+    ("voting", include_str!("../../../scenarios/deadlock/voting.toml")),
+    (
+        "voting_trace",
+        include_str!("../../../scenarios/deadlock/voting_trace.toml"),
+    ),
+];
+
+/// The experiments of the voting suite: `e1`…`e4` are the source's four
+/// behaviour combinations; `e5` is `e4` with the activity-trace layer
+/// (dead-lock detection and recovery, activity-trace.md).
+pub const VOTING_EXPERIMENTS: u32 = 5;
+
 /// What kind of suite, for the report.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SuiteKind {
     /// The voting suite: fields × combinations.
     Voting,
+    /// The dead-lock suite: traps, with and without detection + recovery.
+    Deadlock,
     /// Scenarios from files.
     Custom,
 }
@@ -84,7 +109,10 @@ pub struct SuiteInfo {
 /// "IR+sonar / odo+plan".
 pub fn experiment_label(name: &str) -> Option<String> {
     let k: u32 = name.strip_prefix('e')?.parse().ok()?;
-    Teams::experiment(k).map(|t| t.label())
+    match k {
+        5 => Teams::experiment(4).map(|t| format!("{} + trace", t.label())),
+        _ => Teams::experiment(k).map(|t| t.label()),
+    }
 }
 
 impl Suite {
@@ -93,8 +121,8 @@ impl Suite {
         let mut scenarios = Vec::new();
         let mut runs_default = 50;
         let mut seed = 1;
-        for k in 1..=4 {
-            let teams = Teams::experiment(k).context("experiment")?;
+        for k in 1..=VOTING_EXPERIMENTS {
+            let teams = Teams::experiment(k.min(4)).context("experiment")?;
             for (name, text) in VOTING_FIELDS {
                 let mut s = Scenario::parse(text, &format!("scenarios/voting/{name}.toml"), None)?;
                 runs_default = s.runs;
@@ -102,12 +130,34 @@ impl Suite {
                 s.name = format!("e{k}/{name}");
                 s.controller.kind = ControllerKind::Voting;
                 s.controller.voting.teams = teams;
+                s.controller.trace_layer.enabled = k == 5;
+                s.controller.priority.recovery = true;
                 scenarios.push(Prepared::new(s)?);
             }
         }
         Ok(Suite {
             name: "voting".into(),
             kind: SuiteKind::Voting,
+            runs: runs.unwrap_or(runs_default),
+            seed,
+            scenarios,
+        })
+    }
+
+    /// The dead-lock suite with `runs` runs per scenario (default 200).
+    pub fn deadlock(runs: Option<u32>) -> Result<Suite> {
+        let mut scenarios = Vec::new();
+        let mut runs_default = 200;
+        let mut seed = 1;
+        for (name, text) in DEADLOCK_SCENARIOS {
+            let s = Scenario::parse(text, &format!("scenarios/deadlock/{name}.toml"), None)?;
+            runs_default = s.runs;
+            seed = s.seed;
+            scenarios.push(Prepared::new(s)?);
+        }
+        Ok(Suite {
+            name: "deadlock".into(),
+            kind: SuiteKind::Deadlock,
             runs: runs.unwrap_or(runs_default),
             seed,
             scenarios,
@@ -159,6 +209,14 @@ impl Suite {
         }
     }
 
+    /// The seeds of run `run` of scenario `name` ([`RunSeeds`]).
+    pub fn seeds(&self, name: &str, run: u32) -> RunSeeds {
+        RunSeeds {
+            sim: runner::derive_seed(self.seed, name, run),
+            variation: runner::derive_seed(self.seed, "", run),
+        }
+    }
+
     /// The prepared scenario called `name`.
     pub fn scenario(&self, name: &str) -> Option<&Prepared> {
         self.scenarios.iter().find(|p| p.scenario().name == name)
@@ -174,7 +232,10 @@ impl Suite {
             let prep = self
                 .scenario(&job.scenario)
                 .with_context(|| format!("unknown scenario `{}`", job.scenario))?;
-            let record = prep.run(job.seed)?;
+            let record = prep.run(RunSeeds {
+                sim: job.seed,
+                variation: runner::derive_seed(self.seed, "", job.run),
+            })?;
             Ok(serde_json::to_value(record)?)
         })
     }
