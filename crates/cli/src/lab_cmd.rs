@@ -97,11 +97,10 @@ pub fn run(cmd: LabCommand) -> Result<()> {
 }
 
 fn load_suite(what: &[String], runs: Option<u32>) -> Result<(Suite, BTreeMap<String, String>)> {
-    if what.len() == 1 && what[0] == "voting" {
-        return Ok((Suite::voting(runs)?, BTreeMap::new()));
-    }
-    if what.len() == 1 && what[0] == "deadlock" {
-        return Ok((Suite::deadlock(runs)?, BTreeMap::new()));
+    if let [name] = what
+        && let Some(suite) = Suite::shipped(name, runs)
+    {
+        return Ok((suite?, BTreeMap::new()));
     }
     if let Some(bad) = what.iter().find(|w| !w.ends_with(".toml")) {
         bail!(
@@ -176,8 +175,8 @@ fn suite_of(dir: &Path) -> Result<(Suite, SuiteInfo)> {
     )
     .with_context(|| format!("{} is not a suite description", info_path.display()))?;
     let suite = match info.kind {
-        SuiteKind::Voting => Suite::voting(Some(info.runs))?,
-        SuiteKind::Deadlock => Suite::deadlock(Some(info.runs))?,
+        SuiteKind::Voting | SuiteKind::Deadlock => Suite::shipped(&info.name, Some(info.runs))
+            .with_context(|| format!("no shipped suite `{}`", info.name))??,
         SuiteKind::Custom => {
             let files: Vec<String> =
                 info.scenarios

@@ -14,12 +14,9 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use robot::{Controller, Notes, Perception, Pose, Step, Vec2};
 use sim::shapes::WorldSpec;
-use sim::{
-    CrowdParams, CrowdSize, OccupancyGrid, RobotParams, RunParams, Simulation, Task, Trace, TraceParams,
-    World,
-};
+use sim::{CrowdParams, CrowdSize, OccupancyGrid, RunParams, Simulation, Task, Trace, TraceParams, World};
 
-use crate::scenario::{ControllerKind, Preset, Scenario};
+use crate::scenario::{ControllerKind, Scenario};
 use crate::traps::DrawnTrap;
 
 /// What one run produced (one line of a results file).
@@ -208,10 +205,7 @@ impl Prepared {
             (s.start.theta_deg + dtheta).to_radians(),
         );
         let (world, trap) = self.world_for(start, &mut rng)?;
-        let robot = match s.robot.preset {
-            Preset::Aibot => RobotParams::aibot(),
-            Preset::Jinny => RobotParams::jinny(),
-        };
+        let robot = s.robot.preset.robot_params();
         let run = RunParams {
             control_period_s: s.control_period_s,
             time_limit_s: s.time_limit_s,

@@ -176,13 +176,15 @@ pub fn voting_tables(summaries: &[Summary]) -> (String, String) {
     (txt, md)
 }
 
+/// Column widths of the text table after the scenario's (24).
+const WIDTHS: [usize; 10] = [5, 6, 15, 8, 6, 8, 10, 8, 5, 9];
+
 /// One row per scenario, for any suite: (text, markdown).
 pub fn generic_table(summaries: &[Summary]) -> (String, String) {
     let mut md = String::from(
         "| scenario | runs | I_R | 95% CI | I_T (s) | ± | path (m) | collisions | timeouts | lost | dead-locks/run |\n|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n",
     );
-    let mut txt = format!(
-        "{:<24} {:>5} {:>6} {:>15} {:>8} {:>6} {:>8} {:>10} {:>8} {:>5} {:>9}\n",
+    const HEADS: [&str; 11] = [
         "scenario",
         "runs",
         "I_R",
@@ -193,8 +195,13 @@ pub fn generic_table(summaries: &[Summary]) -> (String, String) {
         "collisions",
         "timeouts",
         "lost",
-        "deadlocks"
-    );
+        "deadlocks",
+    ];
+    let mut txt = format!("{:<24}", HEADS[0]);
+    for (h, w) in HEADS[1..].iter().zip(WIDTHS) {
+        let _ = write!(txt, " {h:>w$}");
+    }
+    txt.push('\n');
     for s in summaries {
         let ci = format!("{:.2}–{:.2}", s.reliability.low, s.reliability.high);
         let hw = if s.time.half_width.is_finite() {
@@ -207,36 +214,25 @@ pub fn generic_table(summaries: &[Summary]) -> (String, String) {
         } else {
             "-".into()
         };
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} |",
-            s.scenario,
-            s.runs,
+        let cells = [
+            s.scenario.clone(),
+            s.runs.to_string(),
             fmt_ir(s),
             ci,
             fmt_it(s),
             hw,
             path,
-            s.collisions,
-            s.timeouts,
-            s.lost,
-            s.deadlocks_per_run
-        );
-        let _ = writeln!(
-            txt,
-            "{:<24} {:>5} {:>6} {:>15} {:>8} {:>6} {:>8} {:>10} {:>8} {:>5} {:>9.2}",
-            s.scenario,
-            s.runs,
-            fmt_ir(s),
-            ci,
-            fmt_it(s),
-            hw,
-            path,
-            s.collisions,
-            s.timeouts,
-            s.lost,
-            s.deadlocks_per_run
-        );
+            s.collisions.to_string(),
+            s.timeouts.to_string(),
+            s.lost.to_string(),
+            format!("{:.2}", s.deadlocks_per_run),
+        ];
+        let _ = writeln!(md, "| {} |", cells.join(" | "));
+        let _ = write!(txt, "{:<24}", cells[0]);
+        for (c, w) in cells[1..].iter().zip(WIDTHS) {
+            let _ = write!(txt, " {c:>w$}");
+        }
+        txt.push('\n');
     }
     (txt, md)
 }
@@ -298,22 +294,9 @@ pub fn picture(suite: &Suite, scenario: &str, runs: u32, path: &Path) -> Result<
     pic.marker(Vec2::new(s.goal.x, s.goal.y), MarkerKind::Goal);
     for out in &outputs {
         let Some(trace) = &out.trace else { continue };
-        let poses: Vec<robot::Pose> = trace.ticks.iter().map(|t| t.true_pose).collect();
-        let labels: Vec<&str> = trace
-            .ticks
-            .iter()
-            .map(|t| t.behaviour.unwrap_or("none"))
-            .collect();
-        pic.trajectory(&poses, Some(&labels));
-        pic.marker(
-            Vec2::new(out.record.start[0], out.record.start[1]),
-            MarkerKind::Start,
-        );
-        for t in &trace.ticks {
-            if t.events.iter().any(|e| e.starts_with("deadlock")) {
-                pic.marker(t.true_pose.position(), MarkerKind::Point);
-            }
-        }
+        let poses = draw_run(&mut pic, &out.record, trace, |t| {
+            t.events.iter().any(|e| e.starts_with("deadlock"))
+        });
         if out.record.outcome == "collision"
             && let Some(last) = poses.last()
         {
@@ -336,35 +319,42 @@ pub fn run_picture(
     path: &Path,
 ) -> Result<()> {
     let s = prep.scenario();
-    let radius = match s.robot.preset {
-        crate::scenario::Preset::Aibot => sim::RobotParams::aibot().drive.radius_m,
-        crate::scenario::Preset::Jinny => sim::RobotParams::jinny().drive.radius_m,
-    };
+    let radius = s.robot.preset.robot_params().drive.radius_m;
     let mut pic = Picture::new(grid);
     pic.marker(Vec2::new(s.goal.x, s.goal.y), MarkerKind::Goal);
+    let every = (2.0 / s.control_period_s).round().max(1.0) as usize;
+    for (k, t) in trace.ticks.iter().enumerate() {
+        if k % every == 0 || k + 1 == trace.ticks.len() {
+            pic.robot(t.true_pose, radius);
+        }
+    }
+    draw_run(&mut pic, record, trace, |t| !t.events.is_empty());
+    pic.save(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// Draws a run's trajectory coloured by the behaviour in control, its
+/// start, and a small square at every tick `mark` selects; returns the
+/// poses.
+fn draw_run(
+    pic: &mut Picture<'_>,
+    record: &RunRecord,
+    trace: &Trace,
+    mark: impl Fn(&sim::TraceTick) -> bool,
+) -> Vec<robot::Pose> {
     let poses: Vec<robot::Pose> = trace.ticks.iter().map(|t| t.true_pose).collect();
     let labels: Vec<&str> = trace
         .ticks
         .iter()
         .map(|t| t.behaviour.unwrap_or("none"))
         .collect();
-    let every = (2.0 / s.control_period_s).round().max(1.0) as usize;
-    for p in poses.iter().step_by(every) {
-        pic.robot(*p, radius);
-    }
-    if let Some(last) = poses.last() {
-        pic.robot(*last, radius);
-    }
     pic.trajectory(&poses, Some(&labels));
     pic.marker(Vec2::new(record.start[0], record.start[1]), MarkerKind::Start);
-    for t in &trace.ticks {
-        if !t.events.is_empty() {
-            pic.marker(t.true_pose.position(), MarkerKind::Point);
-        }
+    for t in trace.ticks.iter().filter(|t| mark(t)) {
+        pic.marker(t.true_pose.position(), MarkerKind::Point);
     }
-    pic.save(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    poses
 }
 
 /// Cells blocked in every grid stay occupied; cells blocked in some only

@@ -106,6 +106,16 @@ pub enum Preset {
     Jinny,
 }
 
+impl Preset {
+    /// The simulated robot of this preset.
+    pub fn robot_params(self) -> sim::RobotParams {
+        match self {
+            Preset::Aibot => sim::RobotParams::aibot(),
+            Preset::Jinny => sim::RobotParams::jinny(),
+        }
+    }
+}
+
 /// The robot.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -164,6 +164,15 @@ impl Suite {
         })
     }
 
+    /// A shipped suite by name (`voting`, `deadlock`), if there is one.
+    pub fn shipped(name: &str, runs: Option<u32>) -> Option<Result<Suite>> {
+        match name {
+            "voting" => Some(Suite::voting(runs)),
+            "deadlock" => Some(Suite::deadlock(runs)),
+            _ => None,
+        }
+    }
+
     /// A suite of scenario files.
     pub fn files(paths: &[&Path], runs: Option<u32>) -> Result<Suite> {
         let mut scenarios = Vec::new();
@@ -232,10 +241,7 @@ impl Suite {
             let prep = self
                 .scenario(&job.scenario)
                 .with_context(|| format!("unknown scenario `{}`", job.scenario))?;
-            let record = prep.run(RunSeeds {
-                sim: job.seed,
-                variation: runner::derive_seed(self.seed, "", job.run),
-            })?;
+            let record = prep.run(self.seeds(&job.scenario, job.run))?;
             Ok(serde_json::to_value(record)?)
         })
     }
