@@ -31,6 +31,8 @@ enum Preset {
     Aibot,
     /// 181-beam laser, odometry; radius 0.35 m.
     Jinny,
+    /// 16 sonars all round, odometry; radius 0.15 m.
+    Ring,
 }
 
 #[derive(Args, Debug)]
@@ -145,6 +147,7 @@ fn drive(a: &DriveArgs) -> Result<()> {
     let robot = match a.robot {
         Preset::Aibot => RobotParams::aibot(),
         Preset::Jinny => RobotParams::jinny(),
+        Preset::Ring => RobotParams::sonar_ring(),
     };
     let radius = robot.drive.radius_m;
     let mut controller = ScriptedController::new(script)?;

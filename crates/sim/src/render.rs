@@ -85,6 +85,11 @@ pub enum MarkerKind {
     Goal,
     /// Any other point: small blue square.
     Point,
+    /// A small square of this colour (RGB).
+    Square([u8; 3]),
+    /// A ring of this colour (RGB) with a dot at its centre, the size of a
+    /// goal marker: a point to notice (a detected dead-lock, say).
+    Ring([u8; 3]),
 }
 
 #[derive(Debug, Clone)]
@@ -429,6 +434,24 @@ impl<'a> Picture<'a> {
                             f(y - r * 0.5),
                             w = f(r)
                         ),
+                        MarkerKind::Square(rgb) => writeln!(
+                            s,
+                            "<rect x=\"{}\" y=\"{}\" width=\"{w}\" height=\"{w}\" fill=\"{}\"/>",
+                            f(x - r * 0.5),
+                            f(y - r * 0.5),
+                            hex(*rgb),
+                            w = f(r)
+                        ),
+                        MarkerKind::Ring(rgb) => writeln!(
+                            s,
+                            "<g stroke=\"{c}\" stroke-width=\"2\" fill=\"none\"><circle cx=\"{x}\" cy=\"{y}\" \
+                             r=\"{r}\"/><circle cx=\"{x}\" cy=\"{y}\" r=\"{d}\" fill=\"{c}\"/></g>",
+                            c = hex(*rgb),
+                            x = f(x),
+                            y = f(y),
+                            r = f(r),
+                            d = f(r * 0.25)
+                        ),
                     };
                 }
                 Item::Text { at, text } => {
@@ -550,6 +573,13 @@ impl<'a> Picture<'a> {
                                 (x + r * 0.5, y + r * 0.5),
                                 [31, 119, 180],
                             );
+                        }
+                        MarkerKind::Square(rgb) => {
+                            c.rect((x - r * 0.5, y - r * 0.5), (x + r * 0.5, y + r * 0.5), *rgb);
+                        }
+                        MarkerKind::Ring(rgb) => {
+                            c.ring((x, y), r, 2.0, *rgb);
+                            c.disc((x, y), r * 0.25, *rgb, 1.0);
                         }
                     }
                 }

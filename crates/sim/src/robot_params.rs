@@ -4,7 +4,10 @@ use robot::Pose;
 
 use crate::error::Result;
 use crate::kinematics::DriveParams;
-use crate::sensors::{BumperParams, IrParams, LaserParams, OdometryParams, SonarParams};
+use crate::sensors::{BumperParams, IrParams, LaserParams, OdometryParams, SonarParams, rim_mounts};
+
+/// Transducers on the ring of [`RobotParams::sonar_ring`].
+pub const SONAR_RING_COUNT: usize = 16;
 
 /// Everything that describes the simulated robot. The default is the
 /// AIBOT-like robot ([`RobotParams::aibot`]).
@@ -42,6 +45,32 @@ impl RobotParams {
             lasers: Vec::new(),
             sonar: SonarParams::default(),
             ir: IrParams::default(),
+            odometry: OdometryParams::default(),
+            bumper: BumperParams::default(),
+        }
+    }
+
+    /// An AIBOT-sized base (radius 0.15 m) with a ring of 16 sonar
+    /// transducers 22.5° apart all round (first straight ahead, cones 25°:
+    /// the ring leaves no blind bearing), odometry and a bumper; no IR, no
+    /// laser. This is the robot of the dead-lock experiments
+    /// (activity-trace.md): the priority controller's behaviours react to
+    /// obstacles ahead, on either side and *behind* (speed up), which needs
+    /// ranges all round, as on the sonar rings of Pioneer- or Khepera-class
+    /// robots such experiments use. AIBOT's binary IR says only "something
+    /// within 0.8 m" and it has nothing facing back.
+    pub fn sonar_ring() -> RobotParams {
+        let angles: Vec<f64> = (0..SONAR_RING_COUNT)
+            .map(|k| robot::wrap_angle(std::f64::consts::TAU * k as f64 / SONAR_RING_COUNT as f64))
+            .collect();
+        RobotParams {
+            drive: DriveParams::aibot(),
+            lasers: Vec::new(),
+            sonar: SonarParams {
+                mounts: rim_mounts(&angles, 0.15),
+                ..SonarParams::default()
+            },
+            ir: IrParams::none(),
             odometry: OdometryParams::default(),
             bumper: BumperParams::default(),
         }

@@ -161,3 +161,41 @@ fn a_crowd_walks_and_never_overlaps_the_robot() {
     assert!(moved > start.len() / 3, "{moved} of {} moved", start.len());
     assert!(r.min_clearance_m >= 0.0);
 }
+
+#[test]
+fn the_sonar_ring_sees_a_wall_behind_that_aibot_cannot() {
+    // A wall 0.5 m behind the robot's centre.
+    let mut g = OccupancyGrid::new(100, 100, 0.05, Pose::default());
+    for j in 0..100 {
+        let c = g.cell_of(Vec2::new(1.5, j as f64 * 0.05 + 0.025));
+        g.set(c, Cell::Occupied);
+    }
+    let world = World::new(g);
+    let start = Pose::new(2.05, 2.5, 0.0);
+    let read = |robot: RobotParams| {
+        let task = Task { start, goal: None };
+        let mut sim = Simulation::new(&world, robot, RunParams::default(), task, 5).unwrap();
+        sim.tick(&mut stand_still());
+        sim.perception().clone()
+    };
+    let ring = read(RobotParams::sonar_ring());
+    assert_eq!(ring.sonar.len(), 16);
+    // Mounts 22.5° apart all round, the first straight ahead.
+    for (k, s) in ring.sonar.iter().enumerate() {
+        let expected = robot::wrap_angle(std::f64::consts::TAU * k as f64 / 16.0);
+        assert!((s.mount.theta_rad - expected).abs() < 1e-12, "mount {k}");
+    }
+    let behind = &ring.sonar[8];
+    assert!(
+        (behind.range_m - 0.35).abs() < 0.1,
+        "rear sonar: {}",
+        behind.range_m
+    );
+    assert!(
+        ring.sonar[0].range_m > 2.0,
+        "front sonar: {}",
+        ring.sonar[0].range_m
+    );
+    let aibot = read(RobotParams::aibot());
+    assert!(aibot.sonar.iter().all(|s| s.range_m > 2.0) && aibot.ir.iter().all(|d| !d.triggered));
+}
