@@ -44,7 +44,7 @@ impl TracedVoting {
         TracedVoting {
             voting,
             p,
-            trace: ActivityTrace::new(p.r_t_m),
+            trace: ActivityTrace::new(p.r_t_m).with_progress_test(p.progress_m),
             started: false,
             goal_dominated: false,
             blocked: false,
@@ -72,7 +72,8 @@ impl Controller for TracedVoting {
         let here = perception.odometry.position();
         if !self.started {
             self.started = true;
-            self.trace.record(Event::Start, here, perception.time_s);
+            self.trace
+                .record(Event::Start, here, perception.goal, perception.time_s);
             notes.event("CP1");
         }
         if self.recovering {
@@ -111,7 +112,7 @@ impl Controller for TracedVoting {
         self.blocked = blocked;
         if let Some(e) = event {
             notes.event(format!("CP{}", e.number()));
-            if let Some(d) = self.trace.record(e, here, perception.time_s) {
+            if let Some(d) = self.trace.record(e, here, perception.goal, perception.time_s) {
                 notes.event(format!("deadlock at ({:.2}, {:.2})", d.x, d.y));
                 if self.p.recovery {
                     self.recovering = true;
