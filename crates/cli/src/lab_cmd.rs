@@ -26,7 +26,7 @@ pub enum LabCommand {
     ///   petrinav lab run voting --shard 3/8 --out out/part3
     Run(RunArgs),
     /// Re-simulates one run of a batch: its picture (the run's own world,
-    /// trajectory coloured by behaviour, footprints, dead-locks) and,
+    /// trajectory coloured by behaviour, footprints, activity-trace events and dead-locks) and,
     /// optionally, its full per-tick trace (perceptions, votes, weights).
     ///
     /// RUN is the `key` of a results line, e.g. `e3/field03#1`. Examples:

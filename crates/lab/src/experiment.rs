@@ -205,7 +205,7 @@ impl Prepared {
             (s.start.theta_deg + dtheta).to_radians(),
         );
         let (world, trap) = self.world_for(start, &mut rng)?;
-        let robot = s.robot.preset.robot_params();
+        let robot = s.robot.robot_params();
         let run = RunParams {
             control_period_s: s.control_period_s,
             time_limit_s: s.time_limit_s,

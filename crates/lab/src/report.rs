@@ -48,6 +48,8 @@ pub struct Summary {
     pub lost: usize,
     /// Mean dead-locks detected per run.
     pub deadlocks_per_run: f64,
+    /// Failed runs in which no dead-lock was detected.
+    pub failures_without_deadlock: usize,
     /// Share of control time of each behaviour/action over all runs.
     pub behaviour_share: BTreeMap<String, f64>,
 }
@@ -98,6 +100,7 @@ pub fn summarise(info: &SuiteInfo, records: &[Value]) -> Result<Vec<Summary>> {
                 } else {
                     rs.iter().map(|r| f64::from(r.deadlocks)).sum::<f64>() / rs.len() as f64
                 },
+                failures_without_deadlock: rs.iter().filter(|r| !r.success && r.deadlocks == 0).count(),
                 behaviour_share: share,
             }
         })
@@ -294,9 +297,7 @@ pub fn picture(suite: &Suite, scenario: &str, runs: u32, path: &Path) -> Result<
     pic.marker(Vec2::new(s.goal.x, s.goal.y), MarkerKind::Goal);
     for out in &outputs {
         let Some(trace) = &out.trace else { continue };
-        let poses = draw_run(&mut pic, &out.record, trace, |t| {
-            t.events.iter().any(|e| e.starts_with("deadlock"))
-        });
+        let poses = draw_run(&mut pic, &out.record, trace, false);
         if out.record.outcome == "collision"
             && let Some(last) = poses.last()
         {
@@ -309,8 +310,10 @@ pub fn picture(suite: &Suite, scenario: &str, runs: u32, path: &Path) -> Result<
 }
 
 /// The picture of one run in its own world: trajectory coloured by the
-/// behaviour in control, the footprint every 2 s and at the end, trace
-/// events (dead-locks) as small squares; PNG or SVG by extension.
+/// behaviour in control, the footprint every 2 s and at the end, the
+/// activity trace (`CP2` orange and `CP3` purple squares where they
+/// happened) and detected dead-locks (magenta rings); PNG or SVG by
+/// extension.
 pub fn run_picture(
     prep: &Prepared,
     grid: &OccupancyGrid,
@@ -319,7 +322,7 @@ pub fn run_picture(
     path: &Path,
 ) -> Result<()> {
     let s = prep.scenario();
-    let radius = s.robot.preset.robot_params().drive.radius_m;
+    let radius = s.robot.robot_params().drive.radius_m;
     let mut pic = Picture::new(grid);
     pic.marker(Vec2::new(s.goal.x, s.goal.y), MarkerKind::Goal);
     let every = (2.0 / s.control_period_s).round().max(1.0) as usize;
@@ -328,21 +331,33 @@ pub fn run_picture(
             pic.robot(t.true_pose, radius);
         }
     }
-    draw_run(&mut pic, record, trace, |t| !t.events.is_empty());
+    draw_run(&mut pic, record, trace, true);
     pic.save(path)
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 
+/// Colour of `CP2` markers (goal tracking takes control).
+pub const CP2_RGB: [u8; 3] = [255, 127, 14];
+/// Colour of `CP3` markers (blocked with the goal ahead).
+pub const CP3_RGB: [u8; 3] = [148, 103, 189];
+/// Colour of detected dead-locks.
+pub const DEADLOCK_RGB: [u8; 3] = [227, 0, 140];
+
+/// Where a controller's `deadlock at (x, y)` event put the dead-lock (the
+/// centroid of its `CP2, CP3, CP2` chunk, in the controller's odometry
+/// frame).
+pub fn deadlock_point(event: &str) -> Option<Vec2> {
+    let inner = event.strip_prefix("deadlock at (")?.strip_suffix(')')?;
+    let (x, y) = inner.split_once(',')?;
+    Some(Vec2::new(x.trim().parse().ok()?, y.trim().parse().ok()?))
+}
+
 /// Draws a run's trajectory coloured by the behaviour in control, its
-/// start, and a small square at every tick `mark` selects; returns the
-/// poses.
-fn draw_run(
-    pic: &mut Picture<'_>,
-    record: &RunRecord,
-    trace: &Trace,
-    mark: impl Fn(&sim::TraceTick) -> bool,
-) -> Vec<robot::Pose> {
+/// start, the dead-locks it detected (rings at the chunks' centroids) and,
+/// with `events`, its activity trace: a small square where each `CP2`
+/// (orange) and `CP3` (purple) happened. Returns the poses.
+fn draw_run(pic: &mut Picture<'_>, record: &RunRecord, trace: &Trace, events: bool) -> Vec<robot::Pose> {
     let poses: Vec<robot::Pose> = trace.ticks.iter().map(|t| t.true_pose).collect();
     let labels: Vec<&str> = trace
         .ticks
@@ -351,8 +366,30 @@ fn draw_run(
         .collect();
     pic.trajectory(&poses, Some(&labels));
     pic.marker(Vec2::new(record.start[0], record.start[1]), MarkerKind::Start);
-    for t in trace.ticks.iter().filter(|t| mark(t)) {
-        pic.marker(t.true_pose.position(), MarkerKind::Point);
+    // CP2 first, then CP3 over them, then dead-locks on top: the rarer the
+    // event, the later it is drawn.
+    let mut cp2 = Vec::new();
+    let mut cp3 = Vec::new();
+    let mut deadlocks = Vec::new();
+    for t in &trace.ticks {
+        for e in &t.events {
+            match e.as_str() {
+                "CP2" => cp2.push(t.true_pose.position()),
+                "CP3" => cp3.push(t.true_pose.position()),
+                _ => deadlocks.extend(deadlock_point(e)),
+            }
+        }
+    }
+    if events {
+        for &at in &cp2 {
+            pic.marker(at, MarkerKind::Square(CP2_RGB));
+        }
+        for &at in &cp3 {
+            pic.marker(at, MarkerKind::Square(CP3_RGB));
+        }
+    }
+    for &at in &deadlocks {
+        pic.marker(at, MarkerKind::Ring(DEADLOCK_RGB));
     }
     poses
 }
@@ -494,7 +531,7 @@ pub fn write(dir: &Path, suite: &Suite, info: &SuiteInfo, pictures: bool) -> Res
     if !images.is_empty() {
         let _ = writeln!(
             html,
-            "<h2>Trajectories</h2>\n<p>The first {RUNS_PER_PICTURE} runs of each scenario, re-simulated from their seeds, coloured by the action or behaviour in control (legend in each picture); start green, goal red, detected dead-locks blue.</p>\n<div class=\"pics\">"
+            "<h2>Trajectories</h2>\n<p>The first {RUNS_PER_PICTURE} runs of each scenario, re-simulated from their seeds, coloured by the action or behaviour in control (legend in each picture); start green, goal red, detected dead-locks as magenta rings at the centroid of their `CP2, CP3, CP2` chunk. `petrinav lab replay` draws a single run with its whole activity trace: `CP2` orange squares, `CP3` purple.</p>\n<div class=\"pics\">"
         );
         for (name, src) in &images {
             let _ = writeln!(
@@ -508,4 +545,18 @@ pub fn write(dir: &Path, suite: &Suite, info: &SuiteInfo, pictures: bool) -> Res
     html.push_str("</body></html>\n");
     save(&mut files, "index.html", &html)?;
     Ok(Written { text, files })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deadlock_events_give_their_centroid() {
+        // The format both controllers write (nav::activity, trace_layer).
+        let e = format!("deadlock at ({:.2}, {:.2})", 2.191, -1.4349);
+        assert_eq!(deadlock_point(&e), Some(Vec2::new(2.19, -1.43)));
+        assert_eq!(deadlock_point("CP2"), None);
+        assert_eq!(deadlock_point("deadlock at (x, 1)"), None);
+    }
 }

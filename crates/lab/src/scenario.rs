@@ -25,7 +25,8 @@
 //! | `goal_tolerance_m` | goal reached within | 0.3 |
 //! | `collision_fatal` | a collision ends the run (a failure) | true |
 //! | `[world]` or `map` | shapes, or a map_server YAML | required |
-//! | `[robot] preset` | `aibot` (7 IR, 3 sonar) or `jinny` (laser) | `aibot` |
+//! | `[robot.odometry]` | odometry error model in place of the preset's ([`sim::sensors::OdometryParams`]) | the preset's |
+//! | `[robot] preset` | `aibot` (7 IR, 3 sonar), `jinny` (laser) or `ring` (16 sonars all round) | `aibot` |
 //! | `[start] x, y, theta_deg, jitter_m, jitter_deg` | start pose and its per-run spread (uniform in a disc / an interval) | θ 0, no spread |
 //! | `[goal] x, y` | goal | required |
 //! | `[jitter] obstacles_m` | each shape moved by up to this per run (uniform in a disc) | 0 |
@@ -104,6 +105,9 @@ pub enum Preset {
     Aibot,
     /// The Jinny-like tour-guide robot with a laser.
     Jinny,
+    /// An AIBOT-sized base with a ring of 16 sonars (the dead-lock suite's
+    /// robot, [`sim::RobotParams::sonar_ring`]).
+    Ring,
 }
 
 impl Preset {
@@ -112,6 +116,7 @@ impl Preset {
         match self {
             Preset::Aibot => sim::RobotParams::aibot(),
             Preset::Jinny => sim::RobotParams::jinny(),
+            Preset::Ring => sim::RobotParams::sonar_ring(),
         }
     }
 }
@@ -123,6 +128,22 @@ pub struct RobotSpec {
     /// Which robot. Default `aibot`.
     #[serde(default)]
     pub preset: Preset,
+    /// The odometry error model, in place of the preset's
+    /// ([`sim::sensors::OdometryParams`]; keys left out keep their defaults).
+    #[serde(default)]
+    pub odometry: Option<sim::sensors::OdometryParams>,
+}
+
+impl RobotSpec {
+    /// The simulated robot: the preset, with the odometry model replaced
+    /// when the scenario gives one.
+    pub fn robot_params(&self) -> sim::RobotParams {
+        let mut r = self.preset.robot_params();
+        if let Some(o) = self.odometry {
+            r.odometry = o;
+        }
+        r
+    }
 }
 
 /// Which controller drives the robot.
@@ -279,6 +300,9 @@ impl Scenario {
             }
             t.validate().map_err(anyhow::Error::msg)?;
         }
+        if let Some(o) = &self.robot.odometry {
+            o.validate().context("[robot.odometry]")?;
+        }
         if self.runs == 0 {
             bail!("`runs` must be at least 1");
         }
@@ -383,5 +407,23 @@ y = 1.0
         let text = "runs = 0\n".to_string() + SMALL;
         let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
         assert!(err.contains("runs"), "{err}");
+    }
+
+    #[test]
+    fn robot_preset_and_odometry_model_are_read_and_checked() {
+        let text =
+            SMALL.to_string() + "[robot]\npreset = \"ring\"\nodometry = { large_slip_probability = 0.0 }\n";
+        let s = Scenario::parse(&text, "s.toml", None).unwrap();
+        let r = s.robot.robot_params();
+        assert_eq!(r.sonar.mounts.len(), sim::robot_params::SONAR_RING_COUNT);
+        assert_eq!(r.odometry.large_slip_probability, 0.0);
+        // Keys left out keep the model's defaults.
+        assert_eq!(r.odometry.slip_sigma, sim::OdometryParams::default().slip_sigma);
+        let text = SMALL.to_string() + "[robot]\nodometry = { large_slip_probability = 2.0 }\n";
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("large_slip_probability"), "{err}");
+        let text = SMALL.to_string() + "[robot]\nodometry = { slip = 0.1 }\n";
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("slip"), "{err}");
     }
 }

@@ -39,7 +39,7 @@ pub const VOTING_FIELDS: [(&str, &str); 14] = [
 ];
 
 /// The dead-lock suite's scenarios, as shipped.
-pub const DEADLOCK_SCENARIOS: [(&str, &str); 4] = [
+pub const DEADLOCK_SCENARIOS: [(&str, &str); 7] = [
     (
         "priority",
         include_str!("../../../scenarios/deadlock/priority.toml"),
@@ -47,6 +47,18 @@ pub const DEADLOCK_SCENARIOS: [(&str, &str); 4] = [
     (
         "priority_recovery",
         include_str!("../../../scenarios/deadlock/priority_recovery.toml"),
+    ),
+    (
+        "priority_recovery_slips",
+        include_str!("../../../scenarios/deadlock/priority_recovery_slips.toml"),
+    ),
+    (
+        "priority_v",
+        include_str!("../../../scenarios/deadlock/priority_v.toml"),
+    ),
+    (
+        "priority_v_recovery",
+        include_str!("../../../scenarios/deadlock/priority_v_recovery.toml"),
     ),
     ("voting", include_str!("../../../scenarios/deadlock/voting.toml")),
     (
@@ -200,10 +212,15 @@ impl Suite {
         })
     }
 
-    /// The jobs of the suite.
+    /// The jobs of the suite; a job's `seed` (written to its results line)
+    /// is the simulator's seed of the run ([`Suite::seeds`]).
     pub fn jobs(&self) -> Vec<Job> {
         let names: Vec<String> = self.scenarios.iter().map(|p| p.scenario().name.clone()).collect();
-        runner::jobs(&names, self.runs, self.seed)
+        let mut jobs = runner::jobs(&names, self.runs, self.seed);
+        for j in &mut jobs {
+            j.seed = self.seeds(&j.scenario, j.run).sim;
+        }
+        jobs
     }
 
     /// The suite's description for `suite.json`.
@@ -219,9 +236,25 @@ impl Suite {
     }
 
     /// The seeds of run `run` of scenario `name` ([`RunSeeds`]).
+    ///
+    /// Common random numbers: the per-run variation (start, jitter, trap)
+    /// depends on the run index alone. The simulator's noise is shared too
+    /// wherever scenarios differ only in the controller: by every
+    /// experiment on one field of the voting suite (`e1/field04` …
+    /// `e5/field04`), and by every scenario of the dead-lock suite (one
+    /// trap, several controllers). So run k of two such scenarios meets the
+    /// same sensor and odometry noise, and the two runs are identical until
+    /// the controllers act differently: with the activity-trace layer, a
+    /// run in which no dead-lock is detected is the run without it, tick
+    /// for tick. Scenarios from files keep a noise stream of their own.
     pub fn seeds(&self, name: &str, run: u32) -> RunSeeds {
+        let noise = match self.kind {
+            SuiteKind::Voting => name.rsplit('/').next().unwrap_or(name),
+            SuiteKind::Deadlock => "",
+            SuiteKind::Custom => name,
+        };
         RunSeeds {
-            sim: runner::derive_seed(self.seed, name, run),
+            sim: runner::derive_seed(self.seed, noise, run),
             variation: runner::derive_seed(self.seed, "", run),
         }
     }

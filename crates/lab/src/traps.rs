@@ -7,9 +7,9 @@
 //!
 //! ```toml
 //! [trap]
-//! kinds = ["u", "v"]          # U: three walls; V: two walls meeting at the back
+//! kinds = ["u", "v"]          # U: three walls; V: two walls meeting at the back; C: a U with inward lips
 //! depth_m = [0.8, 1.6]        # uniform in the interval
-//! width_m = [1.0, 2.0]        # opening width
+//! width_m = [1.0, 2.0]        # opening width (C: inside width; the mouth is half of it)
 //! angle_deg = [-30, 30]       # turn of the opening away from the start
 //! position = [0.4, 0.6]       # where the back wall sits, as a fraction of the course
 //! thickness_m = 0.2
@@ -18,6 +18,18 @@
 //! The walls are thick enough for the IR beams to see their ends (thin
 //! edges between beams are another experiment). Each drawn trap is kept
 //! clear of the start and the goal (at least 0.6 m).
+//!
+//! **What makes a trap** (measured with the priority controller on the
+//! 16-sonar robot, 200 runs each, no recovery; `petrinav lab run FILE.toml`
+//! on copies of `scenarios/deadlock/priority.toml`): a U is a local minimum
+//! for a goal seeker when the goal lies behind its back wall as seen from the
+//! opening. The shipped suite's U (depth 1.0–1.8 m, opening 1.2–2.0 m, turned
+//! ≤ 20°) holds the plain controller in about 4 runs of 5. The defaults above
+//! (depth from 0.8 m, turned up to 30°) let it out in about half the U runs:
+//! one arm's outer face becomes a ramp towards the goal. A V lets it out in
+//! more than 9 runs of 10 whatever its size (a funnel: the robot slides along
+//! an arm and out past its end), and so does a C with a mouth of 0.7–1.1 m
+//! (the robot does not go in). The suite reports U and V separately.
 
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -52,7 +64,14 @@ pub enum TrapKind {
     U,
     /// Two walls meeting at the back.
     V,
+    /// A U whose side walls end in lips turned inwards: a cup whose mouth is
+    /// narrower than its inside (half the width, [`C_LIP_FRACTION`]).
+    C,
 }
+
+/// Each lip of a C trap covers this fraction of its half-width, so the mouth
+/// is `1 − C_LIP_FRACTION` of the inside width.
+pub const C_LIP_FRACTION: f64 = 0.5;
 
 impl Default for TrapSpec {
     fn default() -> TrapSpec {
@@ -151,6 +170,14 @@ impl TrapSpec {
                 wall(back, open + side.scale(half));
                 wall(back, open - side.scale(half));
             }
+            TrapKind::C => {
+                let lip = half * C_LIP_FRACTION;
+                wall(back + side.scale(half), back - side.scale(half));
+                wall(back + side.scale(half), open + side.scale(half));
+                wall(back - side.scale(half), open - side.scale(half));
+                wall(open + side.scale(half), open + side.scale(half - lip));
+                wall(open - side.scale(half), open - side.scale(half - lip));
+            }
         }
         DrawnTrap {
             kind,
@@ -169,15 +196,24 @@ mod tests {
 
     #[test]
     fn traps_face_the_start_and_stay_within_their_ranges() {
-        let spec = TrapSpec::default();
+        let spec = TrapSpec {
+            kinds: vec![TrapKind::U, TrapKind::V, TrapKind::C],
+            ..TrapSpec::default()
+        };
         let (start, goal) = (Vec2::new(1.0, 3.0), Vec2::new(7.0, 3.0));
+        let mut seen = std::collections::BTreeSet::new();
         for seed in 0..50 {
             let mut w = WorldSpec::new(8.0, 6.0, 0.05);
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let d = spec.draw(start, goal, &mut w, &mut rng);
             assert!((0.8..=1.6).contains(&d.depth_m) && (1.0..=2.0).contains(&d.width_m));
             assert!(d.angle_deg.abs() <= 30.0);
-            assert_eq!(w.segments.len(), if d.kind == TrapKind::U { 3 } else { 2 });
+            let walls = match d.kind {
+                TrapKind::U => 3,
+                TrapKind::V => 2,
+                TrapKind::C => 5,
+            };
+            assert_eq!(w.segments.len(), walls);
             // Every wall end lies between start and goal, nearer the start
             // than the back (the opening faces the start).
             for s in &w.segments {
@@ -187,7 +223,9 @@ mod tests {
             }
             let grid = w.rasterise().unwrap();
             assert!(!grid.disc_blocked(start, 0.3) && !grid.disc_blocked(goal, 0.3));
+            seen.insert(format!("{:?}", d.kind));
         }
+        assert_eq!(seen.len(), 3, "every kind is drawn: {seen:?}");
         assert!(
             TrapSpec {
                 kinds: vec![],

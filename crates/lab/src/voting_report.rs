@@ -131,16 +131,30 @@ pub fn explanation(summaries: &[Summary]) -> String {
                 (b < a - 0.1).then(|| format!("field {f} ({a:.2} → {b:.2})"))
             })
             .collect();
+        let dl = |from: u32, to: u32| {
+            let v: Vec<f64> = (from..=to)
+                .filter_map(|f| {
+                    let name = format!("e5/field{f:02}");
+                    summaries
+                        .iter()
+                        .find(|s| s.scenario == name && s.runs > 0)
+                        .map(|s| s.deadlocks_per_run)
+                })
+                .collect();
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        };
         let _ = writeln!(
             out,
-            "With the activity-trace layer (e5 = e4 + dead-lock detection and potential-field recovery, activity-trace.md) the traps' mean I_R is {t5:.2} against {t4:.2} with planning alone — rises above planning alone: {}. On fields 1–11 the mean is {r5:.2} against {r4:.2} — no worse: {}.{}\n",
+            "With the activity-trace layer (e5 = e4 + dead-lock detection and potential-field recovery, activity-trace.md) the traps' mean I_R is {t5:.2} against {t4:.2} with planning alone — rises above planning alone: {}. On fields 1–11 the mean is {r5:.2} against {r4:.2} — no worse: {}. e4 and e5 meet the same start, jitter and sensor noise in run k, so a run in which the layer detects no dead-lock is the e4 run tick for tick; the layer detects {:.2} dead-locks per run on fields 1–11 and {:.2} on the traps. Its detector has a progress test beyond the source's (a `CP2, CP3, CP2` chunk whose last CP2 is nearer the goal than its first by more than `progress_m`, 0.25 m, is progress, not a dead-lock): without it, a robot sliding along the wall towards the 0.55 m gap of field 10 reads as a dead-lock, and the repulsion then keeps it away from the only way through (field 10 fell from 0.94 to 0.50 when that test was missing).{}\n",
             verdict(t5 > t4),
             verdict(r5 >= r4 - 0.02),
+            dl(1, 11),
+            dl(12, 14),
             if worse.is_empty() {
                 String::new()
             } else {
                 format!(
-                    " Worse by more than 0.1: {}. Probable cause (not yet verified run by run): in a narrow passage the voting outcome alternates between the goal team and the obstacle team within a small circle, which the detector reads as a dead-lock; the recovery then pushes the robot away from the passage it should take.",
+                    " Worse by more than 0.1: {} — replay those runs (`petrinav lab replay DIR 'e5/fieldNN#K'`) to see where a dead-lock was detected.",
                     worse.join(", ")
                 )
             }

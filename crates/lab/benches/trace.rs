@@ -1,0 +1,208 @@
+//! What the behaviour activity trace costs (activity-trace.md): control
+//! ticks per second with and without it, for both controllers, on a
+//! dead-lock-suite world (8 m × 6 m floor at 0.05 m, one U trap across the
+//! course, drawn once from a fixed seed).
+//!
+//! - `loop_*`: whole control ticks (sensing, controller, integration,
+//!   collisions) of the simulator; a run that ends (goal, collision) is
+//!   replaced by a fresh one with the next seed, so every sample is
+//!   `TICKS` ticks of real trap runs.
+//! - `step_*`: the controller alone, fed 1,000 perceptions recorded from
+//!   such a run (open loop), so the trace's own cost is not hidden behind
+//!   the sensors'.
+//!
+//! `plain` is the controller without the trace (priority: `detect = false`;
+//! voting: the bare `VotingController`), `trace` with detection and
+//! recovery. Figures: `crates/lab/BENCHMARKS.md`. Run with
+//! `cargo bench -p lab --bench trace`.
+
+use std::cell::Cell as SeedCell;
+
+use divan::Bencher;
+use divan::counter::ItemsCount;
+use lab::traps::{TrapKind, TrapSpec};
+use nav::activity::{PriorityController, PriorityParams};
+use nav::voting::trace_layer::TracedVoting;
+use nav::voting::{VotingController, VotingParams};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use robot::{Controller, Notes, Perception, Pose, Vec2};
+use sim::shapes::WorldSpec;
+use sim::{RobotParams, RunParams, Simulation, Task, World};
+
+fn main() {
+    divan::main();
+}
+
+/// Ticks per sample.
+const TICKS: usize = 1000;
+
+const START: Pose = Pose {
+    x_m: 1.0,
+    y_m: 3.0,
+    theta_rad: 0.0,
+};
+const GOAL: Vec2 = Vec2 { x: 7.0, y: 3.0 };
+
+fn trap_world() -> World {
+    let mut spec = WorldSpec::new(8.0, 6.0, 0.05);
+    spec.walls = true;
+    let trap = TrapSpec {
+        kinds: vec![TrapKind::U],
+        depth_m: [1.4, 1.4],
+        width_m: [1.6, 1.6],
+        angle_deg: [0.0, 0.0],
+        position: [0.5, 0.5],
+        ..TrapSpec::default()
+    };
+    trap.draw(
+        START.position(),
+        GOAL,
+        &mut spec,
+        &mut ChaCha8Rng::seed_from_u64(1),
+    );
+    World::new(spec.rasterise().expect("the bench world rasterises"))
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    PriorityPlain,
+    PriorityTrace,
+    VotingPlain,
+    VotingTrace,
+}
+
+impl Kind {
+    fn robot(self) -> RobotParams {
+        match self {
+            Kind::PriorityPlain | Kind::PriorityTrace => RobotParams::sonar_ring(),
+            Kind::VotingPlain | Kind::VotingTrace => RobotParams::aibot(),
+        }
+    }
+
+    fn controller(self) -> Box<dyn Controller> {
+        let priority = |detect| PriorityParams {
+            detect,
+            recovery: detect,
+            ..PriorityParams::default()
+        };
+        let voting = || VotingController::new(VotingParams::default()).expect("default voting parameters");
+        match self {
+            Kind::PriorityPlain => Box::new(PriorityController::new(priority(false)).expect("valid")),
+            Kind::PriorityTrace => Box::new(PriorityController::new(priority(true)).expect("valid")),
+            Kind::VotingPlain => Box::new(voting()),
+            Kind::VotingTrace => Box::new(TracedVoting::new(voting(), PriorityParams::default())),
+        }
+    }
+}
+
+fn simulation(world: &World, kind: Kind, seed: u64) -> Simulation {
+    let run = RunParams {
+        time_limit_s: 1e9,
+        collision_fatal: false,
+        ..RunParams::default()
+    };
+    let task = Task {
+        start: START,
+        goal: Some(GOAL),
+    };
+    Simulation::new(world, kind.robot(), run, task, seed).expect("the bench run starts")
+}
+
+fn loop_ticks(bencher: Bencher, kind: Kind) {
+    let world = trap_world();
+    let seed = SeedCell::new(0u64);
+    bencher
+        .counter(ItemsCount::new(TICKS))
+        .with_inputs(|| {
+            seed.set(seed.get() + 1);
+            seed.get()
+        })
+        .bench_local_values(|first_seed| {
+            let mut s = first_seed;
+            let mut sim = simulation(&world, kind, s);
+            let mut c = kind.controller();
+            for _ in 0..TICKS {
+                if sim.tick(c.as_mut()).is_some() {
+                    s += 1_000_000;
+                    sim = simulation(&world, kind, s);
+                    c = kind.controller();
+                }
+            }
+            sim.time_s()
+        });
+}
+
+/// 1,000 perceptions of a run of `kind` in the trap world (restarting when
+/// a run ends).
+fn recorded(kind: Kind) -> Vec<Perception> {
+    let world = trap_world();
+    let mut s = 7;
+    let mut sim = simulation(&world, kind, s);
+    let mut c = kind.controller();
+    let mut out = Vec::with_capacity(TICKS);
+    while out.len() < TICKS {
+        if sim.tick(c.as_mut()).is_some() {
+            s += 1;
+            sim = simulation(&world, kind, s);
+            c = kind.controller();
+            continue;
+        }
+        out.push(sim.perception().clone());
+    }
+    out
+}
+
+fn controller_steps(bencher: Bencher, kind: Kind) {
+    let perceptions = recorded(kind);
+    bencher
+        .counter(ItemsCount::new(perceptions.len()))
+        .with_inputs(|| kind.controller())
+        .bench_local_values(|mut c| {
+            let mut notes = Notes::disabled();
+            for p in &perceptions {
+                divan::black_box(c.step(p, &mut notes));
+            }
+            c
+        });
+}
+
+#[divan::bench(sample_count = 40)]
+fn loop_priority_plain(b: Bencher) {
+    loop_ticks(b, Kind::PriorityPlain);
+}
+
+#[divan::bench(sample_count = 40)]
+fn loop_priority_trace(b: Bencher) {
+    loop_ticks(b, Kind::PriorityTrace);
+}
+
+#[divan::bench(sample_count = 40)]
+fn loop_voting_plain(b: Bencher) {
+    loop_ticks(b, Kind::VotingPlain);
+}
+
+#[divan::bench(sample_count = 40)]
+fn loop_voting_trace(b: Bencher) {
+    loop_ticks(b, Kind::VotingTrace);
+}
+
+#[divan::bench(sample_count = 200)]
+fn step_priority_plain(b: Bencher) {
+    controller_steps(b, Kind::PriorityPlain);
+}
+
+#[divan::bench(sample_count = 200)]
+fn step_priority_trace(b: Bencher) {
+    controller_steps(b, Kind::PriorityTrace);
+}
+
+#[divan::bench(sample_count = 200)]
+fn step_voting_plain(b: Bencher) {
+    controller_steps(b, Kind::VotingPlain);
+}
+
+#[divan::bench(sample_count = 200)]
+fn step_voting_trace(b: Bencher) {
+    controller_steps(b, Kind::VotingTrace);
+}
