@@ -222,7 +222,7 @@ fn replay(a: &ReplayArgs) -> Result<()> {
             suite.runs
         );
     }
-    let out = prep.run_detailed(suite.seeds(name, index), sim::TraceParams::full())?;
+    let out = prep.run_detailed(suite.seeds(index), sim::TraceParams::full())?;
     let trace = out.trace.context("the run kept no trace")?;
     if let Some(path) = &a.trace {
         let f = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;

@@ -8,8 +8,8 @@
 //!   replaced by a fresh one with the next seed, so every sample is
 //!   `TICKS` ticks of real trap runs.
 //! - `step_*`: the controller alone, fed 1,000 perceptions recorded from
-//!   such a run (open loop), so the trace's own cost is not hidden behind
-//!   the sensors'.
+//!   the plain controller's runs (open loop; plain and traced get the same
+//!   inputs), so the trace's own cost is not hidden behind the sensors'.
 //!
 //! `plain` is the controller without the trace (priority: `detect = false`;
 //! voting: the bare `VotingController`), `trace` with detection and
@@ -133,9 +133,14 @@ fn loop_ticks(bencher: Bencher, kind: Kind) {
         });
 }
 
-/// 1,000 perceptions of a run of `kind` in the trap world (restarting when
-/// a run ends).
+/// 1,000 perceptions of the plain controller's runs on `kind`'s robot in
+/// the trap world (restarting when a run ends): plain and traced variants
+/// are fed the same inputs.
 fn recorded(kind: Kind) -> Vec<Perception> {
+    let kind = match kind {
+        Kind::PriorityPlain | Kind::PriorityTrace => Kind::PriorityPlain,
+        Kind::VotingPlain | Kind::VotingTrace => Kind::VotingPlain,
+    };
     let world = trap_world();
     let mut s = 7;
     let mut sim = simulation(&world, kind, s);

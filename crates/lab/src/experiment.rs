@@ -271,11 +271,11 @@ impl Prepared {
 /// The seeds of one run.
 ///
 /// The per-run variation of the scenario (start pose, obstacle jitter, the
-/// drawn trap) comes from `variation`, which a suite derives from the run
-/// index alone: run `k` of every scenario in a suite meets the same
-/// variation, so controllers are compared on the same draws (common random
-/// numbers). The simulator's noise comes from `sim`, derived from the
-/// scenario too.
+/// drawn trap) comes from `variation`, the simulator's noise from `sim`. A
+/// suite derives both from the run index alone ([`crate::suite::Suite::seeds`]):
+/// run `k` of every scenario in a suite meets the same variation and the
+/// same noise, so controllers are compared on the same draws (common random
+/// numbers).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RunSeeds {
     /// Seed of the simulator's noise streams.

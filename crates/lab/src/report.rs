@@ -54,6 +54,56 @@ pub struct Summary {
     pub behaviour_share: BTreeMap<String, f64>,
 }
 
+/// Run-by-run comparison of two scenarios of a batch (common random
+/// numbers: run k of both met the same draws).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct Paired {
+    /// Run indices found in both.
+    pub runs: usize,
+    /// Runs that succeeded in the second scenario and failed in the first.
+    pub wins: usize,
+    /// Runs that failed in the second and succeeded in the first.
+    pub losses: usize,
+    /// Runs whose records are identical in both.
+    pub identical: usize,
+}
+
+/// Compares scenario `b` with scenario `a` run by run.
+pub fn paired(records: &[Value], a: &str, b: &str) -> Paired {
+    let of = |name: &str| -> BTreeMap<u64, &Value> {
+        records
+            .iter()
+            .filter(|r| r.get("scenario").and_then(Value::as_str) == Some(name))
+            .filter_map(|r| Some((r.get("run")?.as_u64()?, r)))
+            .collect()
+    };
+    let (ra, rb) = (of(a), of(b));
+    let success = |r: &Value| r.get("success").and_then(Value::as_bool).unwrap_or(false);
+    let body = |r: &Value| {
+        let mut r = r.clone();
+        if let Some(m) = r.as_object_mut() {
+            for k in ["scenario", "key"] {
+                m.remove(k);
+            }
+        }
+        r
+    };
+    let mut p = Paired::default();
+    for (run, x) in &ra {
+        let Some(y) = rb.get(run) else { continue };
+        p.runs += 1;
+        match (success(x), success(y)) {
+            (false, true) => p.wins += 1,
+            (true, false) => p.losses += 1,
+            _ => {}
+        }
+        if body(x) == body(y) {
+            p.identical += 1;
+        }
+    }
+    p
+}
+
 /// Summarises the records of each scenario, in the suite's order.
 pub fn summarise(info: &SuiteInfo, records: &[Value]) -> Result<Vec<Summary>> {
     let mut by: BTreeMap<&str, Vec<RunRecord>> = BTreeMap::new();
@@ -290,7 +340,7 @@ pub fn picture(suite: &Suite, scenario: &str, runs: u32, path: &Path) -> Result<
     };
     let mut outputs = Vec::new();
     for run in 0..runs.min(suite.runs) {
-        outputs.push(prep.run_detailed(suite.seeds(scenario, run), trace_params)?);
+        outputs.push(prep.run_detailed(suite.seeds(run), trace_params)?);
     }
     let grid = composite_grid(prep.base_grid()?, outputs.iter().filter_map(|o| o.grid.as_ref()));
     let mut pic = Picture::new(&grid);
@@ -477,8 +527,8 @@ pub fn write(dir: &Path, suite: &Suite, info: &SuiteInfo, pictures: bool) -> Res
         SuiteKind::Custom | SuiteKind::Deadlock => (gtxt.clone(), gmd.clone()),
     };
     let explanation = match info.kind {
-        SuiteKind::Voting => crate::voting_report::explanation(&summaries),
-        SuiteKind::Deadlock => crate::deadlock_report::explanation(&summaries),
+        SuiteKind::Voting => crate::voting_report::explanation(&summaries, &records),
+        SuiteKind::Deadlock => crate::deadlock_report::explanation(&summaries, &records),
         SuiteKind::Custom => String::new(),
     };
     let mut md = format!(
@@ -558,5 +608,29 @@ mod tests {
         assert_eq!(deadlock_point(&e), Some(Vec2::new(2.19, -1.43)));
         assert_eq!(deadlock_point("CP2"), None);
         assert_eq!(deadlock_point("deadlock at (x, 1)"), None);
+    }
+
+    #[test]
+    fn paired_counts_wins_losses_and_identical_runs() {
+        let rec = |scenario: &str, run: u32, success: bool, t: f64| serde_json::json!({"scenario": scenario, "key": format!("{scenario}#{run}"), "run": run, "success": success, "time_s": t});
+        let records = vec![
+            rec("a", 0, true, 10.0),
+            rec("b", 0, true, 10.0),
+            rec("a", 1, false, 120.0),
+            rec("b", 1, true, 50.0),
+            rec("a", 2, true, 20.0),
+            rec("b", 2, false, 120.0),
+            rec("a", 3, true, 20.0),
+        ];
+        let p = paired(&records, "a", "b");
+        assert_eq!(
+            p,
+            Paired {
+                runs: 3,
+                wins: 1,
+                losses: 1,
+                identical: 1
+            }
+        );
     }
 }

@@ -72,6 +72,10 @@ pub const DEADLOCK_SCENARIOS: [(&str, &str); 7] = [
 /// (dead-lock detection and recovery, activity-trace.md).
 pub const VOTING_EXPERIMENTS: u32 = 5;
 
+/// The name from which every run's simulator seed is derived
+/// ([`Suite::seeds`]).
+const NOISE_STREAM: &str = "simulator noise";
+
 /// What kind of suite, for the report.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -218,7 +222,7 @@ impl Suite {
         let names: Vec<String> = self.scenarios.iter().map(|p| p.scenario().name.clone()).collect();
         let mut jobs = runner::jobs(&names, self.runs, self.seed);
         for j in &mut jobs {
-            j.seed = self.seeds(&j.scenario, j.run).sim;
+            j.seed = self.seeds(j.run).sim;
         }
         jobs
     }
@@ -237,24 +241,20 @@ impl Suite {
 
     /// The seeds of run `run` of scenario `name` ([`RunSeeds`]).
     ///
-    /// Common random numbers: the per-run variation (start, jitter, trap)
-    /// depends on the run index alone. The simulator's noise is shared too
-    /// wherever scenarios differ only in the controller: by every
-    /// experiment on one field of the voting suite (`e1/field04` …
-    /// `e5/field04`), and by every scenario of the dead-lock suite (one
-    /// trap, several controllers). So run k of two such scenarios meets the
-    /// same sensor and odometry noise, and the two runs are identical until
-    /// the controllers act differently: with the activity-trace layer, a
-    /// run in which no dead-lock is detected is the run without it, tick
-    /// for tick. Scenarios from files keep a noise stream of their own.
-    pub fn seeds(&self, name: &str, run: u32) -> RunSeeds {
-        let noise = match self.kind {
-            SuiteKind::Voting => name.rsplit('/').next().unwrap_or(name),
-            SuiteKind::Deadlock => "",
-            SuiteKind::Custom => name,
-        };
+    /// Common random numbers: run k of every scenario in a batch meets the
+    /// same per-run variation (start, jitter, trap) and the same simulator
+    /// noise streams (sensors, odometry, people); neither depends on the
+    /// scenario's name. Two scenarios that differ only in the controller —
+    /// the five experiments on one field of the voting suite, the
+    /// controllers of the dead-lock suite, two parameter sets in your own
+    /// files — therefore run identically until the controllers act
+    /// differently: with the activity-trace layer, a run in which no
+    /// dead-lock is detected is the run without it, tick for tick. Their
+    /// difference is measured on the same draws, free of sampling noise
+    /// between them.
+    pub fn seeds(&self, run: u32) -> RunSeeds {
         RunSeeds {
-            sim: runner::derive_seed(self.seed, noise, run),
+            sim: runner::derive_seed(self.seed, NOISE_STREAM, run),
             variation: runner::derive_seed(self.seed, "", run),
         }
     }
@@ -274,7 +274,7 @@ impl Suite {
             let prep = self
                 .scenario(&job.scenario)
                 .with_context(|| format!("unknown scenario `{}`", job.scenario))?;
-            let record = prep.run(self.seeds(&job.scenario, job.run))?;
+            let record = prep.run(self.seeds(job.run))?;
             Ok(serde_json::to_value(record)?)
         })
     }

@@ -12,8 +12,8 @@ fn trace_layer_without_detections_is_the_bare_voting_run() {
         let bare = suite.scenario(&format!("e4/{field}")).unwrap();
         let traced = suite.scenario(&format!("e5/{field}")).unwrap();
         for run in 0..8 {
-            let a = bare.run(suite.seeds(&format!("e4/{field}"), run)).unwrap();
-            let b = traced.run(suite.seeds(&format!("e5/{field}"), run)).unwrap();
+            let a = bare.run(suite.seeds(run)).unwrap();
+            let b = traced.run(suite.seeds(run)).unwrap();
             assert_eq!(a.start, b.start, "{field}#{run}: same start");
             if b.deadlocks == 0 {
                 assert_eq!(
@@ -28,11 +28,19 @@ fn trace_layer_without_detections_is_the_bare_voting_run() {
 }
 
 #[test]
-fn deadlock_suite_scenarios_share_the_trap_and_the_noise() {
+fn runs_differ_by_index_and_not_by_scenario() {
     let suite = Suite::deadlock(Some(4)).unwrap();
-    let a = suite.seeds("priority", 3);
-    assert_eq!(a, suite.seeds("voting_trace", 3));
-    assert_ne!(a, suite.seeds("priority", 2));
+    let jobs = suite.jobs();
+    let seed_of = |name: &str, run: u32| {
+        jobs.iter()
+            .find(|j| j.scenario == name && j.run == run)
+            .unwrap()
+            .seed
+    };
+    assert_eq!(seed_of("priority", 3), seed_of("voting_trace", 3));
+    assert_eq!(seed_of("priority", 3), suite.seeds(3).sim);
+    assert_ne!(suite.seeds(3), suite.seeds(2));
+    assert_ne!(suite.seeds(3).sim, suite.seeds(3).variation);
 }
 
 #[test]
@@ -41,7 +49,7 @@ fn priority_recovery_escapes_the_traps_that_hold_the_plain_controller() {
     let successes = |name: &str| {
         let prep = suite.scenario(name).unwrap();
         (0..24)
-            .map(|run| prep.run(suite.seeds(name, run)).unwrap())
+            .map(|run| prep.run(suite.seeds(run)).unwrap())
             .map(|r| {
                 assert_eq!(r.collisions, 0, "{name}: the ring robot touches nothing");
                 assert!(r.trap.is_some());

@@ -11,7 +11,32 @@
 //! ([`field`]) instead of the direct bearing to the goal.
 //!
 //! Sensing uses [`crate::sectors`]: the nearest obstacle ahead, left, right
-//! and behind, from any range sensor the robot has.
+//! and behind, from any range sensor the robot has. The behaviours need
+//! ranges all round (speed up reacts to what is behind, avoid left/right to
+//! the sides): the dead-lock suite gives the controller a ring of 16 sonars
+//! (`sim::RobotParams::sonar_ring`). On AIBOT (binary IR over the front
+//! half, which reads only "something within 0.8 m", three sonars ahead)
+//! avoid left/right never activate and the robot scrapes walls it passes:
+//! on the dead-lock suite's U traps (200 runs) the plain controller ends
+//! 105 runs in a collision on AIBOT and none on the ring; with recovery
+//! 13 against none (reaching the goal in 0.91 against 0.97).
+//!
+//! The task execution watcher ([`TaskState`]) starts a task on the first
+//! perception with a goal, completes it within `arrive_m` of the goal by
+//! odometry, and stops with an exception on a bumper contact.
+//!
+//! ```
+//! use nav::activity::{PriorityController, PriorityParams};
+//! use robot::{Controller, Notes, Perception, Step, Vec2};
+//!
+//! let mut c = PriorityController::new(PriorityParams::default()).unwrap();
+//! let p = Perception { goal: Some(Vec2::new(0.0, 3.0)), ..Perception::default() };
+//! let mut notes = Notes::enabled();
+//! // Nothing in sight, goal to the left: goal tracking turns towards it (CP2).
+//! assert!(matches!(c.step(&p, &mut notes), Step::Run(_)));
+//! assert_eq!(notes.behaviour, Some("goal tracking"));
+//! assert_eq!(c.trace().points().len(), 2); // CP1 (start), CP2
+//! ```
 
 pub mod field;
 pub mod trace;
@@ -365,7 +390,7 @@ impl Controller for PriorityController {
                 _ => None,
             };
             if let Some(e) = event {
-                notes.event(format!("CP{}", e.number()));
+                notes.event(e.label());
                 if let Some(d) = self.trace.record(e, here, Some(goal), perception.time_s) {
                     notes.event(format!("deadlock at ({:.2}, {:.2})", d.x, d.y));
                     if p.recovery {

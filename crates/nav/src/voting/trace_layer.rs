@@ -111,7 +111,7 @@ impl Controller for TracedVoting {
         self.goal_dominated = dominated;
         self.blocked = blocked;
         if let Some(e) = event {
-            notes.event(format!("CP{}", e.number()));
+            notes.event(e.label());
             if let Some(d) = self.trace.record(e, here, perception.goal, perception.time_s) {
                 notes.event(format!("deadlock at ({:.2}, {:.2})", d.x, d.y));
                 if self.p.recovery {
