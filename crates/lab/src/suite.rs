@@ -3,7 +3,7 @@
 //! | suite | scenarios |
 //! |---|---|
 //! | `voting` | the fourteen fields of `scenarios/voting/` × the four behaviour combinations of the source (`e1`…`e4`) and `e4` with the activity-trace layer (`e5`) |
-//! | `deadlock` | `scenarios/deadlock/`: a dead-end trap drawn per run; priority and voting controllers, each with and without dead-lock detection + recovery |
+//! | `deadlock` | `scenarios/deadlock/`: a dead-end trap drawn per run (U, and V in two rows); priority arbitration on the 16-sonar ring robot with and without dead-lock detection + recovery (and with drifting odometry), voting on AIBOT with and without the trace layer |
 //! | a scenario file | that scenario alone |
 //!
 //! The shipped scenarios are compiled into the binary, so a suite runs from
