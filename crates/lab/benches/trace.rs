@@ -3,11 +3,11 @@
 //! dead-lock-suite world (8 m × 6 m floor at 0.05 m, one U trap across the
 //! course, drawn once from a fixed seed).
 //!
-//! - `loop_*`: whole control ticks (sensing, controller, integration,
+//! - `loops/*`: whole control ticks (sensing, controller, integration,
 //!   collisions) of the simulator; a run that ends (goal, collision) is
 //!   replaced by a fresh one with the next seed, so every sample is
 //!   `TICKS` ticks of real trap runs.
-//! - `step_*`: the controller alone, fed 1,000 perceptions recorded from
+//! - `steps/*`: the controller alone, fed 1,000 perceptions recorded from
 //!   the plain controller's runs (open loop; plain and traced get the same
 //!   inputs), so the trace's own cost is not hidden behind the sensors'.
 //!
@@ -172,42 +172,30 @@ fn controller_steps(bencher: Bencher, kind: Kind) {
         });
 }
 
-#[divan::bench(sample_count = 40)]
-fn loop_priority_plain(b: Bencher) {
-    loop_ticks(b, Kind::PriorityPlain);
+const KINDS: [Kind; 4] = [
+    Kind::PriorityPlain,
+    Kind::PriorityTrace,
+    Kind::VotingPlain,
+    Kind::VotingTrace,
+];
+
+impl std::fmt::Display for Kind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Kind::PriorityPlain => "priority_plain",
+            Kind::PriorityTrace => "priority_trace",
+            Kind::VotingPlain => "voting_plain",
+            Kind::VotingTrace => "voting_trace",
+        })
+    }
 }
 
-#[divan::bench(sample_count = 40)]
-fn loop_priority_trace(b: Bencher) {
-    loop_ticks(b, Kind::PriorityTrace);
+#[divan::bench(args = KINDS, sample_count = 40)]
+fn loops(b: Bencher, kind: Kind) {
+    loop_ticks(b, kind);
 }
 
-#[divan::bench(sample_count = 40)]
-fn loop_voting_plain(b: Bencher) {
-    loop_ticks(b, Kind::VotingPlain);
-}
-
-#[divan::bench(sample_count = 40)]
-fn loop_voting_trace(b: Bencher) {
-    loop_ticks(b, Kind::VotingTrace);
-}
-
-#[divan::bench(sample_count = 200)]
-fn step_priority_plain(b: Bencher) {
-    controller_steps(b, Kind::PriorityPlain);
-}
-
-#[divan::bench(sample_count = 200)]
-fn step_priority_trace(b: Bencher) {
-    controller_steps(b, Kind::PriorityTrace);
-}
-
-#[divan::bench(sample_count = 200)]
-fn step_voting_plain(b: Bencher) {
-    controller_steps(b, Kind::VotingPlain);
-}
-
-#[divan::bench(sample_count = 200)]
-fn step_voting_trace(b: Bencher) {
-    controller_steps(b, Kind::VotingTrace);
+#[divan::bench(args = KINDS, sample_count = 200)]
+fn steps(b: Bencher, kind: Kind) {
+    controller_steps(b, kind);
 }

@@ -4,9 +4,7 @@
 
 use std::fmt::Write as _;
 
-use serde_json::Value;
-
-use crate::report::{Summary, paired};
+use crate::report::{Runs, Summary, paired};
 
 fn find<'a>(summaries: &'a [Summary], name: &str) -> Option<&'a Summary> {
     summaries.iter().find(|s| s.scenario == name && s.runs > 0)
@@ -21,14 +19,14 @@ fn verdict(ok: bool) -> &'static str {
 }
 
 /// Markdown paragraphs for the report.
-pub fn explanation(summaries: &[Summary], records: &[Value]) -> String {
+pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let mut out = String::from("\n## What the table shows, and why\n\n");
     out.push_str(
         "Every scenario meets, in run k, the same trap, start and sensor noise (common random numbers), so the rows differ only by the controller. The priority controller drives the `ring` robot (16 sonars all round: its behaviours react to every side); the voting controller drives AIBOT (7 IR + 3 sonars), the robot its behaviours are built for. Unless a row says otherwise the odometry is calibrated (1 % Gaussian wheel slip, no large slips), so the rows measure escaping the trap, not dead reckoning.\n\n",
     );
     let pair = |a: &str, b: &str| (find(summaries, a), find(summaries, b));
     if let (Some(off), Some(on)) = pair("priority", "priority_recovery") {
-        let pu = paired(records, "priority", "priority_recovery");
+        let pu = paired(runs, "priority", "priority_recovery");
         let _ = writeln!(
             out,
             "**U-shaped dead ends, priority arbitration.** Without recovery the robot reaches the goal in {} of {} traps ({} time limits, {} collisions): goal tracking steers into the U, avoid front turns it away at the back wall, goal tracking takes over as soon as the wall is out of sight and leads it back in, and the trace shows the same chunk `CP2, CP3, CP2` again and again ({:.1} dead-locks detected per run; the detector runs, nothing acts on it). Few successes without recovery — {}. With detection and potential-field recovery it reaches the goal in {} (95 % interval {}–{}), {:.1} dead-locks per run: each is a point the robot is repelled from, so the goal-tracking heading bends around the trap instead of into it; the detour costs time ({:.1} s against {:.1} s for the few that got out alone) and path ({:.1} m against {:.1} m). At least 95 % with recovery — {}. Run by run, recovery got out of {} traps that held the plain controller and failed in {} it got out of alone.\n",
@@ -74,7 +72,7 @@ pub fn explanation(summaries: &[Summary], records: &[Value]) -> String {
         );
     }
     if let (Some(off), Some(on)) = pair("voting", "voting_trace") {
-        let pv = paired(records, "voting", "voting_trace");
+        let pv = paired(runs, "voting", "voting_trace");
         let failed = on.runs - on.reliability.successes;
         let _ = writeln!(
             out,

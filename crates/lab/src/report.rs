@@ -68,36 +68,51 @@ pub struct Paired {
     pub identical: usize,
 }
 
+/// The records of a results file by scenario: `(run index, record)` in
+/// the file's order.
+pub type Runs = BTreeMap<String, Vec<(u32, RunRecord)>>;
+
+/// Parses the lines of a results file ([`runner::read_results`]) once, for
+/// the summaries and the run-by-run comparisons.
+pub fn group(records: &[Value]) -> Result<Runs> {
+    let mut by = Runs::new();
+    for r in records {
+        let name = r
+            .get("scenario")
+            .and_then(Value::as_str)
+            .context("record without scenario")?;
+        let run = r
+            .get("run")
+            .and_then(Value::as_u64)
+            .and_then(|k| u32::try_from(k).ok())
+            .with_context(|| format!("record of {name} without a run index"))?;
+        let rec: RunRecord =
+            serde_json::from_value(r.clone()).with_context(|| format!("record of {name}"))?;
+        by.entry(name.to_string()).or_default().push((run, rec));
+    }
+    Ok(by)
+}
+
 /// Compares scenario `b` with scenario `a` run by run.
-pub fn paired(records: &[Value], a: &str, b: &str) -> Paired {
-    let of = |name: &str| -> BTreeMap<u64, &Value> {
-        records
-            .iter()
-            .filter(|r| r.get("scenario").and_then(Value::as_str) == Some(name))
-            .filter_map(|r| Some((r.get("run")?.as_u64()?, r)))
-            .collect()
-    };
-    let (ra, rb) = (of(a), of(b));
-    let success = |r: &Value| r.get("success").and_then(Value::as_bool).unwrap_or(false);
-    let body = |r: &Value| {
-        let mut r = r.clone();
-        if let Some(m) = r.as_object_mut() {
-            for k in ["scenario", "key"] {
-                m.remove(k);
-            }
-        }
-        r
-    };
+pub fn paired(runs: &Runs, a: &str, b: &str) -> Paired {
+    let empty = Vec::new();
+    let ra = runs.get(a).unwrap_or(&empty);
+    let rb: BTreeMap<u32, &RunRecord> = runs
+        .get(b)
+        .unwrap_or(&empty)
+        .iter()
+        .map(|(k, r)| (*k, r))
+        .collect();
     let mut p = Paired::default();
-    for (run, x) in &ra {
+    for (run, x) in ra {
         let Some(y) = rb.get(run) else { continue };
         p.runs += 1;
-        match (success(x), success(y)) {
+        match (x.success, y.success) {
             (false, true) => p.wins += 1,
             (true, false) => p.losses += 1,
             _ => {}
         }
-        if body(x) == body(y) {
+        if x == *y {
             p.identical += 1;
         }
     }
@@ -105,28 +120,19 @@ pub fn paired(records: &[Value], a: &str, b: &str) -> Paired {
 }
 
 /// Summarises the records of each scenario, in the suite's order.
-pub fn summarise(info: &SuiteInfo, records: &[Value]) -> Result<Vec<Summary>> {
-    let mut by: BTreeMap<&str, Vec<RunRecord>> = BTreeMap::new();
-    for r in records {
-        let name = r
-            .get("scenario")
-            .and_then(Value::as_str)
-            .context("record without scenario")?;
-        let rec: RunRecord =
-            serde_json::from_value(r.clone()).with_context(|| format!("record of {name}"))?;
-        by.entry(name).or_default().push(rec);
-    }
-    Ok(info
-        .scenarios
+pub fn summarise(info: &SuiteInfo, runs: &Runs) -> Vec<Summary> {
+    info.scenarios
         .iter()
         .map(|name| {
-            let rs = by.get(name.as_str()).map_or(&[][..], |v| v.as_slice());
-            let ok: Vec<&RunRecord> = rs.iter().filter(|r| r.success).collect();
+            let rs: Vec<&RunRecord> = runs
+                .get(name)
+                .map_or(Vec::new(), |v| v.iter().map(|(_, r)| r).collect());
+            let ok: Vec<&RunRecord> = rs.iter().copied().filter(|r| r.success).collect();
             let times: Vec<f64> = ok.iter().map(|r| r.time_s).collect();
             let lengths: Vec<f64> = ok.iter().map(|r| r.path_length_m).collect();
             let mut share: BTreeMap<String, f64> = BTreeMap::new();
             let total: u64 = rs.iter().flat_map(|r| r.behaviour_ticks.values()).sum();
-            for r in rs {
+            for r in &rs {
                 for (k, &v) in &r.behaviour_ticks {
                     *share.entry(k.clone()).or_insert(0.0) += v as f64;
                 }
@@ -154,7 +160,7 @@ pub fn summarise(info: &SuiteInfo, records: &[Value]) -> Result<Vec<Summary>> {
                 behaviour_share: share,
             }
         })
-        .collect())
+        .collect()
 }
 
 fn fmt_ir(s: &Summary) -> String {
@@ -424,19 +430,17 @@ fn draw_run(pic: &mut Picture<'_>, record: &RunRecord, trace: &Trace, events: bo
     for t in &trace.ticks {
         for e in &t.events {
             match e.as_str() {
-                "CP2" => cp2.push(t.true_pose.position()),
-                "CP3" => cp3.push(t.true_pose.position()),
+                "CP2" if events => cp2.push(t.true_pose.position()),
+                "CP3" if events => cp3.push(t.true_pose.position()),
                 _ => deadlocks.extend(deadlock_point(e)),
             }
         }
     }
-    if events {
-        for &at in &cp2 {
-            pic.marker(at, MarkerKind::Square(CP2_RGB));
-        }
-        for &at in &cp3 {
-            pic.marker(at, MarkerKind::Square(CP3_RGB));
-        }
+    for &at in &cp2 {
+        pic.marker(at, MarkerKind::Square(CP2_RGB));
+    }
+    for &at in &cp3 {
+        pic.marker(at, MarkerKind::Square(CP3_RGB));
     }
     for &at in &deadlocks {
         pic.marker(at, MarkerKind::Ring(DEADLOCK_RGB));
@@ -507,7 +511,8 @@ pub struct Written {
 /// `tables.md`, pictures in `pictures/`, and `index.html`.
 pub fn write(dir: &Path, suite: &Suite, info: &SuiteInfo, pictures: bool) -> Result<Written> {
     let (records, _) = runner::read_results(&dir.join("results.jsonl"))?;
-    let summaries = summarise(info, &records)?;
+    let runs = group(&records)?;
+    let summaries = summarise(info, &runs);
     let mut files = Vec::new();
     let save = |files: &mut Vec<PathBuf>, name: &str, text: &str| -> Result<()> {
         let p = dir.join(name);
@@ -527,8 +532,8 @@ pub fn write(dir: &Path, suite: &Suite, info: &SuiteInfo, pictures: bool) -> Res
         SuiteKind::Custom | SuiteKind::Deadlock => (gtxt.clone(), gmd.clone()),
     };
     let explanation = match info.kind {
-        SuiteKind::Voting => crate::voting_report::explanation(&summaries, &records),
-        SuiteKind::Deadlock => crate::deadlock_report::explanation(&summaries, &records),
+        SuiteKind::Voting => crate::voting_report::explanation(&summaries, &runs),
+        SuiteKind::Deadlock => crate::deadlock_report::explanation(&summaries, &runs),
         SuiteKind::Custom => String::new(),
     };
     let mut md = format!(
@@ -612,7 +617,28 @@ mod tests {
 
     #[test]
     fn paired_counts_wins_losses_and_identical_runs() {
-        let rec = |scenario: &str, run: u32, success: bool, t: f64| serde_json::json!({"scenario": scenario, "key": format!("{scenario}#{run}"), "run": run, "success": success, "time_s": t});
+        let rec = |scenario: &str, run: u32, success: bool, t: f64| {
+            let r = RunRecord {
+                success,
+                outcome: if success { "goal" } else { "time_limit" }.into(),
+                time_s: t,
+                path_length_m: 1.0,
+                collisions: 0,
+                min_clearance_m: 0.5,
+                odometry_error_m: 0.0,
+                goal_distance_m: 0.1,
+                ticks: 10,
+                behaviour_ticks: BTreeMap::new(),
+                deadlocks: 0,
+                start: [0.0; 3],
+                trap: None,
+            };
+            let mut v = serde_json::to_value(r).unwrap();
+            v["scenario"] = scenario.into();
+            v["key"] = format!("{scenario}#{run}").into();
+            v["run"] = run.into();
+            v
+        };
         let records = vec![
             rec("a", 0, true, 10.0),
             rec("b", 0, true, 10.0),
@@ -622,7 +648,7 @@ mod tests {
             rec("b", 2, false, 120.0),
             rec("a", 3, true, 20.0),
         ];
-        let p = paired(&records, "a", "b");
+        let p = paired(&group(&records).unwrap(), "a", "b");
         assert_eq!(
             p,
             Paired {

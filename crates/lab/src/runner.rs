@@ -70,16 +70,17 @@ pub fn derive_seed(base: u64, scenario: &str, run: u32) -> u64 {
     mix(base ^ mix(fnv1a(scenario.as_bytes())) ^ mix(u64::from(run).wrapping_add(0x9e37_79b9_7f4a_7c15)))
 }
 
-/// The jobs of `runs` runs of each scenario, in scenario order.
-pub fn jobs(scenarios: &[String], runs: u32, base_seed: u64) -> Vec<Job> {
+/// The jobs of `runs` runs of each scenario, in scenario order; run `run`
+/// of scenario `s` gets the seed `seed_of(s, run)` (for instance
+/// [`derive_seed`] with the batch's base seed).
+pub fn jobs(scenarios: &[String], runs: u32, seed_of: impl Fn(&str, u32) -> u64) -> Vec<Job> {
     scenarios
         .iter()
-        .flat_map(|s| {
-            (0..runs).map(move |run| Job {
-                scenario: s.clone(),
-                run,
-                seed: derive_seed(base_seed, s, run),
-            })
+        .flat_map(|s| (0..runs).map(move |run| (s, run)))
+        .map(|(s, run)| Job {
+            scenario: s.clone(),
+            run,
+            seed: seed_of(s, run),
         })
         .collect()
 }
@@ -345,7 +346,7 @@ mod tests {
     #[test]
     fn seeds_are_stable_and_distinct() {
         assert_eq!(derive_seed(1, "a", 0), derive_seed(1, "a", 0));
-        let js = jobs(&scenarios(), 20, 7);
+        let js = jobs(&scenarios(), 20, |s, r| derive_seed(7, s, r));
         let set: HashSet<u64> = js.iter().map(|j| j.seed).collect();
         assert_eq!(set.len(), js.len());
         // A fixed value: seeds must not change between releases.
@@ -354,7 +355,7 @@ mod tests {
 
     #[test]
     fn same_file_for_one_or_several_threads() {
-        let js = jobs(&scenarios(), 30, 3);
+        let js = jobs(&scenarios(), 30, |s, r| derive_seed(3, s, r));
         let a = temp("one");
         let b = temp("two");
         let p = |path: &Path, n| BatchParams {
@@ -371,7 +372,7 @@ mod tests {
 
     #[test]
     fn interrupted_batch_resumes_to_the_same_file() {
-        let js = jobs(&scenarios(), 20, 11);
+        let js = jobs(&scenarios(), 20, |s, r| derive_seed(11, s, r));
         let full = temp("full");
         let part = temp("part");
         let p = |path: &Path, resume| BatchParams {
@@ -397,7 +398,7 @@ mod tests {
 
     #[test]
     fn shards_partition_the_jobs() {
-        let js = jobs(&scenarios(), 7, 1);
+        let js = jobs(&scenarios(), 7, |s, r| derive_seed(1, s, r));
         let shards: Vec<Shard> = (1..=3).map(|i| format!("{i}/3").parse().unwrap()).collect();
         let mut all: Vec<String> = shards
             .iter()
@@ -417,7 +418,7 @@ mod tests {
 
     #[test]
     fn failing_run_stops_the_batch_with_its_key_and_keeps_the_rest() {
-        let js = jobs(&scenarios(), 4, 5);
+        let js = jobs(&scenarios(), 4, |s, r| derive_seed(5, s, r));
         let path = temp("fail");
         let p = BatchParams {
             results: path.clone(),

@@ -25,8 +25,8 @@
 //! | `goal_tolerance_m` | goal reached within | 0.3 |
 //! | `collision_fatal` | a collision ends the run (a failure) | true |
 //! | `[world]` or `map` | shapes, or a map_server YAML | required |
-//! | `[robot.odometry]` | odometry error model in place of the preset's ([`sim::sensors::OdometryParams`]) | the preset's |
 //! | `[robot] preset` | `aibot` (7 IR, 3 sonar), `jinny` (laser) or `ring` (16 sonars all round) | `aibot` |
+//! | `[robot.odometry]` | odometry error model in place of the preset's ([`sim::sensors::OdometryParams`]) | the preset's |
 //! | `[start] x, y, theta_deg, jitter_m, jitter_deg` | start pose and its per-run spread (uniform in a disc / an interval) | θ 0, no spread |
 //! | `[goal] x, y` | goal | required |
 //! | `[jitter] obstacles_m` | each shape moved by up to this per run (uniform in a disc) | 0 |

@@ -220,11 +220,7 @@ impl Suite {
     /// is the simulator's seed of the run ([`Suite::seeds`]).
     pub fn jobs(&self) -> Vec<Job> {
         let names: Vec<String> = self.scenarios.iter().map(|p| p.scenario().name.clone()).collect();
-        let mut jobs = runner::jobs(&names, self.runs, self.seed);
-        for j in &mut jobs {
-            j.seed = self.seeds(j.run).sim;
-        }
-        jobs
+        runner::jobs(&names, self.runs, |_, run| self.seeds(run).sim)
     }
 
     /// The suite's description for `suite.json`.

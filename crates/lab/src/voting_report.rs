@@ -3,13 +3,11 @@
 
 use std::fmt::Write as _;
 
-use serde_json::Value;
+use crate::report::{Runs, Summary, paired};
 
-use crate::report::{Summary, paired};
-
-/// Mean `I_R` of combination `e` over fields `from..=to`, and the runs it
-/// rests on.
-fn mean_ir(summaries: &[Summary], e: u32, from: u32, to: u32) -> (f64, usize) {
+/// Mean of `value` over the fields `from..=to` of combination `e` that have
+/// runs, and the runs it rests on.
+fn mean_over(summaries: &[Summary], e: u32, from: u32, to: u32, value: fn(&Summary) -> f64) -> (f64, usize) {
     let mut sum = 0.0;
     let mut n = 0;
     let mut runs = 0;
@@ -17,13 +15,19 @@ fn mean_ir(summaries: &[Summary], e: u32, from: u32, to: u32) -> (f64, usize) {
         let name = format!("e{e}/field{f:02}");
         if let Some(s) = summaries.iter().find(|s| s.scenario == name) {
             if s.runs > 0 {
-                sum += s.reliability.value;
+                sum += value(s);
                 n += 1;
                 runs += s.runs;
             }
         }
     }
     (if n == 0 { f64::NAN } else { sum / n as f64 }, runs)
+}
+
+/// Mean `I_R` of combination `e` over fields `from..=to`, and the runs it
+/// rests on.
+fn mean_ir(summaries: &[Summary], e: u32, from: u32, to: u32) -> (f64, usize) {
+    mean_over(summaries, e, from, to, |s| s.reliability.value)
 }
 
 fn yes_no(holds: bool) -> &'static str {
@@ -65,7 +69,7 @@ fn breakdown(summaries: &[Summary], from: u32, to: u32) -> String {
 }
 
 /// Markdown paragraphs (blank-line separated) for the report.
-pub fn explanation(summaries: &[Summary], records: &[Value]) -> String {
+pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let ir = |e, a, b| mean_ir(summaries, e, a, b).0;
     let mut out = String::from("\n## What the tables show, and why\n\n");
     let lost_all: usize = (1..=4).map(|e| failures(summaries, e, 1, 14).2).sum();
@@ -137,23 +141,12 @@ pub fn explanation(summaries: &[Summary], records: &[Value]) -> String {
                 (b < a - 0.1).then(|| format!("field {f} ({a:.2} → {b:.2})"))
             })
             .collect();
-        let dl = |from: u32, to: u32| {
-            let v: Vec<f64> = (from..=to)
-                .filter_map(|f| {
-                    let name = format!("e5/field{f:02}");
-                    summaries
-                        .iter()
-                        .find(|s| s.scenario == name && s.runs > 0)
-                        .map(|s| s.deadlocks_per_run)
-                })
-                .collect();
-            v.iter().sum::<f64>() / v.len().max(1) as f64
-        };
+        let dl = |from: u32, to: u32| mean_over(summaries, 5, from, to, |s| s.deadlocks_per_run).0;
         let pairs: Vec<(u32, crate::report::Paired)> = (1..=14)
             .map(|f| {
                 (
                     f,
-                    paired(records, &format!("e4/field{f:02}"), &format!("e5/field{f:02}")),
+                    paired(runs, &format!("e4/field{f:02}"), &format!("e5/field{f:02}")),
                 )
             })
             .collect();
