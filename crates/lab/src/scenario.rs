@@ -422,6 +422,12 @@ y = 1.0
         let text = SMALL.to_string() + "[robot]\nodometry = { large_slip_probability = 2.0 }\n";
         let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
         assert!(err.contains("large_slip_probability"), "{err}");
+        let text = SMALL.to_string() + "[controller.priority]\nprogress_m = inf\n";
+        let s = Scenario::parse(&text, "s.toml", None).unwrap();
+        assert_eq!(s.controller.priority.progress_m, f64::INFINITY);
+        let text = SMALL.to_string() + "[controller.priority]\nprogress_m = -1.0\n";
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("progress_m"), "{err}");
         let text = SMALL.to_string() + "[robot]\nodometry = { slip = 0.1 }\n";
         let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
         assert!(err.contains("slip"), "{err}");

@@ -512,5 +512,21 @@ mod tests {
             })
             .is_err()
         );
+        for (progress_m, ok) in [
+            (-0.1, false),
+            (f64::NAN, false),
+            (0.0, true),
+            (f64::INFINITY, true),
+        ] {
+            let p = PriorityParams {
+                progress_m,
+                ..PriorityParams::default()
+            };
+            assert_eq!(
+                PriorityController::new(p).is_ok(),
+                ok,
+                "progress_m = {progress_m}"
+            );
+        }
     }
 }
