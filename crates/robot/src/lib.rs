@@ -35,6 +35,10 @@
 
 use std::f64::consts::PI;
 
+pub mod map;
+
+pub use map::{Cell, CellIndex, GridMap, MapError};
+
 /// Wraps an angle to (−π, π].
 pub fn wrap_angle(a: f64) -> f64 {
     let mut r = a % (2.0 * PI);

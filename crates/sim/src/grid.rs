@@ -17,27 +17,7 @@ use robot::{Pose, Vec2};
 use crate::clearance::Clearance;
 use crate::error::{Error, Result};
 
-/// State of a cell.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-#[repr(u8)]
-pub enum Cell {
-    /// Nothing there.
-    #[default]
-    Free = 0,
-    /// An obstacle.
-    Occupied = 1,
-    /// Not mapped (counts as an obstacle).
-    Unknown = 2,
-}
-
-/// Index of a cell: column `i` (x), row `j` (y), from the lower-left corner.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
-pub struct CellIndex {
-    /// Column.
-    pub i: i64,
-    /// Row.
-    pub j: i64,
-}
+pub use robot::{Cell, CellIndex};
 
 /// How many cells of each state a grid has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -263,6 +243,19 @@ impl OccupancyGrid {
     pub fn free_area_m2(&self) -> f64 {
         let free = self.cells.iter().filter(|&&c| c == Cell::Free).count();
         free as f64 * self.resolution_m * self.resolution_m
+    }
+
+    /// The grid as a controller's static map (the same cells and geometry,
+    /// without the simulator's clearance field).
+    pub fn grid_map(&self) -> robot::GridMap {
+        robot::GridMap::new(
+            self.width,
+            self.height,
+            self.resolution_m,
+            self.origin,
+            self.cells.clone(),
+        )
+        .expect("an occupancy grid's geometry is checked when it is built")
     }
 
     /// Whether a disc (e.g. the robot's footprint) overlaps a blocked cell.
