@@ -1,19 +1,18 @@
 //! `petrinav lab …`: experiment suites and reports.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use lab::runner::{BatchParams, Shard};
-use lab::suite::{Suite, SuiteInfo, SuiteKind};
+use lab::suite::{Suite, SuiteArgs, SuiteInfo};
 
 use crate::outln;
 
 #[derive(Subcommand, Debug)]
 pub enum LabCommand {
-    /// Runs a suite (`voting`, `deadlock`) or scenario files as a batch, then writes the
-    /// report (tables, pictures, index.html) next to the results.
+    /// Runs a suite (`voting`, `deadlock`; `lab list` shows them all) or scenario files as a
+    /// batch, then writes the report (tables, pictures, index.html) next to the results.
     ///
     /// Every run is reproducible from (scenario, run index, seed); results
     /// are appended one JSON line per run, so an interrupted batch continues
@@ -25,6 +24,8 @@ pub enum LabCommand {
     ///
     ///   petrinav lab run voting --shard 3/8 --out out/part3
     Run(RunArgs),
+    /// Lists the suites.
+    List,
     /// Re-simulates one run of a batch: its picture (the run's own world,
     /// trajectory coloured by behaviour, footprints, activity-trace events and dead-locks) and,
     /// optionally, its full per-tick trace (perceptions, votes, weights).
@@ -35,6 +36,24 @@ pub enum LabCommand {
     ///
     ///   petrinav lab replay out/voting 'e1/field03#7' --trace run.jsonl
     Replay(ReplayArgs),
+    /// Merges the folders of a sharded batch (`lab run … --shard i/n`) into one, in the
+    /// order of an unsharded run, and writes its report.
+    ///
+    /// The parts must come from the same batch (suite, runs, seed). A run found in two
+    /// parts must be identical in both. Runs in no part are listed; `lab run … --resume
+    /// --out OUT` completes them. Example:
+    ///
+    ///   petrinav lab merge out/voting out/part1 out/part2 out/part3
+    Merge {
+        /// The merged folder (must not hold results yet).
+        out: PathBuf,
+        /// The shards' folders.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// Skip the pictures.
+        #[arg(long)]
+        no_pictures: bool,
+    },
     /// Recomputes the report of a results folder (tables, pictures, index.html).
     Report {
         /// The folder of a batch (holds suite.json and results.jsonl).
@@ -47,7 +66,7 @@ pub enum LabCommand {
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// `voting`, `deadlock`, or scenario files (.toml).
+    /// A suite (`voting`, `deadlock`; see `lab list`), or scenario files (.toml).
     #[arg(required = true)]
     what: Vec<String>,
     /// Runs per scenario (default: the suite's or the file's, 50).
@@ -62,8 +81,8 @@ pub struct RunArgs {
     /// Continue an interrupted batch in the output folder.
     #[arg(long)]
     resume: bool,
-    /// Run only this slice of the jobs: i/n (e.g. 2/8); merge the folders'
-    /// results.jsonl afterwards and run `lab report`.
+    /// Run only this slice of the batch: i/n (e.g. 2/8); `lab merge` puts
+    /// the slices' folders back together.
     #[arg(long, value_name = "i/n")]
     shard: Option<Shard>,
     /// Skip the pictures of the report.
@@ -91,62 +110,90 @@ pub struct ReplayArgs {
 pub fn run(cmd: LabCommand) -> Result<()> {
     match cmd {
         LabCommand::Run(a) => run_suite(&a),
+        LabCommand::List => list(),
         LabCommand::Replay(a) => replay(&a),
+        LabCommand::Merge {
+            out,
+            parts,
+            no_pictures,
+        } => merge(&out, &parts, !no_pictures),
         LabCommand::Report { dir, no_pictures } => report(&dir, !no_pictures),
     }
 }
 
-fn load_suite(what: &[String], runs: Option<u32>) -> Result<(Suite, BTreeMap<String, String>)> {
+fn list() -> Result<()> {
+    for r in lab::suites::REGISTRY {
+        outln!("{:<10} {}", r.name, r.about)?;
+    }
+    Ok(())
+}
+
+/// The suite `what` names: one registered suite, or scenario files.
+fn load_suite(what: &[String], runs: Option<u32>) -> Result<Box<dyn Suite>> {
     if let [name] = what
-        && let Some(suite) = Suite::shipped(name, runs)
+        && !name.ends_with(".toml")
     {
-        return Ok((suite?, BTreeMap::new()));
+        return lab::suites::build(
+            name,
+            &SuiteArgs {
+                runs,
+                files: Vec::new(),
+            },
+        );
     }
     if let Some(bad) = what.iter().find(|w| !w.ends_with(".toml")) {
         bail!(
-            "unknown suite `{bad}`: the suites are `voting` and `deadlock`; or give scenario files (.toml)"
+            "unknown suite `{bad}`: the suites are {}; or give scenario files (.toml)",
+            lab::suites::names()
         );
     }
-    let paths: Vec<&Path> = what.iter().map(Path::new).collect();
-    let suite = Suite::files(&paths, runs)?;
-    let mut sources = BTreeMap::new();
-    for (p, s) in paths.iter().zip(&suite.scenarios) {
-        let abs = std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
-        sources.insert(s.scenario().name.clone(), abs.display().to_string());
-    }
-    Ok((suite, sources))
+    lab::suites::build(
+        lab::suites::files::REGISTRATION.name,
+        &SuiteArgs {
+            runs,
+            files: what.iter().map(PathBuf::from).collect(),
+        },
+    )
+}
+
+fn read_info(dir: &Path) -> Result<SuiteInfo> {
+    let path = dir.join("suite.json");
+    serde_json::from_str(
+        &std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?,
+    )
+    .with_context(|| format!("{} is not a suite description", path.display()))
+}
+
+fn write_info(dir: &Path, info: &SuiteInfo) -> Result<()> {
+    let path = dir.join("suite.json");
+    std::fs::write(&path, serde_json::to_string_pretty(info)?)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 fn run_suite(a: &RunArgs) -> Result<()> {
-    let (suite, sources) = load_suite(&a.what, a.runs)?;
+    let suite = load_suite(&a.what, a.runs)?;
+    let info = suite.info();
     let out = a
         .out
         .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(suite.name.replace('/', "-")));
+        .unwrap_or_else(|| PathBuf::from("out").join(info.name.replace('/', "-")));
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let info = suite.info(sources);
-    let info_path = out.join("suite.json");
-    if info_path.exists() && a.resume {
-        let old: SuiteInfo = serde_json::from_str(&std::fs::read_to_string(&info_path)?)
-            .with_context(|| format!("reading {}", info_path.display()))?;
-        if old.scenarios != info.scenarios || old.runs != info.runs || old.seed != info.seed {
-            bail!(
-                "{} belongs to another batch (scenarios, runs or seed differ): resume it with the same arguments, or choose another --out",
-                out.display()
-            );
-        }
+    if out.join("suite.json").exists() && a.resume && !read_info(&out)?.same_batch(info) {
+        bail!(
+            "{} belongs to another batch (suite, scenarios, runs or seed differ): resume it with the same arguments, or choose another --out",
+            out.display()
+        );
     }
     // Written first, so that an interrupted batch can be checked on resume.
-    std::fs::write(&info_path, serde_json::to_string_pretty(&info)?)
-        .with_context(|| format!("writing {}", info_path.display()))?;
+    write_info(&out, info)?;
     let params = BatchParams {
         results: out.join("results.jsonl"),
         resume: a.resume,
         jobs: a.jobs,
         progress: true,
     };
-    let jobs = suite.jobs().len();
-    let summary = suite.run(&params, a.shard)?;
+    let jobs: usize = suite.campaigns().iter().map(|c| c.jobs.len()).sum();
+    let summary = lab::suite::run(suite.as_ref(), &params, a.shard)?;
     eprintln!(
         "{} runs ({} already done, {} now, {} failed) -> {}",
         summary.total,
@@ -157,96 +204,98 @@ fn run_suite(a: &RunArgs) -> Result<()> {
     );
     if a.shard.is_some() {
         eprintln!(
-            "shard done ({} of {jobs} jobs); merge the shards' results.jsonl and run `petrinav lab report`",
+            "shard done ({} of {jobs} runs); put the shards together with `petrinav lab merge OUT PART…`",
             summary.total
         );
         return Ok(());
     }
-    let written = lab::report::write(&out, &suite, &info, !a.no_pictures)?;
-    outln!("{}", written.text)?;
-    outln!("report: {}", out.join("index.html").display())?;
-    Ok(())
+    print_report(&out, suite.as_ref(), !a.no_pictures)
 }
 
-fn suite_of(dir: &Path) -> Result<(Suite, SuiteInfo)> {
-    let info_path = dir.join("suite.json");
-    let info: SuiteInfo = serde_json::from_str(
-        &std::fs::read_to_string(&info_path).with_context(|| format!("reading {}", info_path.display()))?,
-    )
-    .with_context(|| format!("{} is not a suite description", info_path.display()))?;
-    let suite = match info.kind {
-        SuiteKind::Voting | SuiteKind::Deadlock => Suite::shipped(&info.name, Some(info.runs))
-            .with_context(|| format!("no shipped suite `{}`", info.name))??,
-        SuiteKind::Custom => {
-            let files: Vec<String> =
-                info.scenarios
-                    .iter()
-                    .map(|n| {
-                        info.sources.get(n).cloned().with_context(|| {
-                            format!("suite.json does not say where scenario `{n}` came from")
-                        })
-                    })
-                    .collect::<Result<_>>()?;
-            load_suite(&files, Some(info.runs))?.0
-        }
-    };
-    Ok((suite, info))
-}
-
-fn report(dir: &Path, pictures: bool) -> Result<()> {
-    let (suite, info) = suite_of(dir)?;
-    let written = lab::report::write(dir, &suite, &info, pictures)?;
+fn print_report(dir: &Path, suite: &dyn Suite, pictures: bool) -> Result<()> {
+    let written = lab::report::write(dir, suite, pictures)?;
     outln!("{}", written.text)?;
     outln!("report: {}", dir.join("index.html").display())?;
     Ok(())
 }
 
-fn replay(a: &ReplayArgs) -> Result<()> {
-    let (suite, info) = suite_of(&a.dir)?;
-    let (name, index) = a
-        .run
-        .rsplit_once('#')
-        .context("RUN is SCENARIO#INDEX, e.g. e3/field03#1")?;
-    let index: u32 = index
-        .parse()
-        .with_context(|| format!("`{index}` is not a run index"))?;
-    let prep = suite.scenario(name).with_context(|| {
-        format!(
-            "no scenario `{name}` in this batch; it has: {}",
-            info.scenarios.join(", ")
-        )
-    })?;
-    if index >= suite.runs {
-        bail!(
-            "run {index} is out of range: the batch has {} runs per scenario",
-            suite.runs
+fn suite_of(dir: &Path) -> Result<Box<dyn Suite>> {
+    lab::suites::rebuild(&read_info(dir)?)
+}
+
+fn report(dir: &Path, pictures: bool) -> Result<()> {
+    let suite = suite_of(dir)?;
+    print_report(dir, suite.as_ref(), pictures)
+}
+
+fn merge(out: &Path, parts: &[PathBuf], pictures: bool) -> Result<()> {
+    let first = parts.first().context("no folder to merge")?;
+    let info = read_info(first)?;
+    for p in &parts[1..] {
+        if !read_info(p)?.same_batch(&info) {
+            bail!(
+                "{} and {} are not parts of the same batch (suite, scenarios, runs or seed differ)",
+                first.display(),
+                p.display()
+            );
+        }
+    }
+    let suite = lab::suites::rebuild(&info)?;
+    let files: Vec<PathBuf> = parts.iter().map(|p| p.join("results.jsonl")).collect();
+    let keys = lab::runner::keys(&suite.campaigns());
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let summary = lab::runner::merge(&files, &keys, &out.join("results.jsonl"))?;
+    write_info(out, &info)?;
+    eprintln!(
+        "{} runs merged from {} folders ({} found twice, identical) -> {}",
+        summary.merged,
+        parts.len(),
+        summary.duplicates,
+        out.join("results.jsonl").display()
+    );
+    if !summary.missing.is_empty() {
+        let shown: Vec<&str> = summary.missing.iter().take(5).map(String::as_str).collect();
+        eprintln!(
+            "{} runs are in no part (e.g. {}); the report covers the others. To complete the batch, run it again with --resume --out {}",
+            summary.missing.len(),
+            shown.join(", "),
+            out.display()
         );
     }
-    let out = prep.run_detailed(suite.seeds(index), sim::TraceParams::full())?;
-    let trace = out.trace.context("the run kept no trace")?;
+    print_report(out, suite.as_ref(), pictures)
+}
+
+fn replay(a: &ReplayArgs) -> Result<()> {
+    let suite = suite_of(&a.dir)?;
+    let replay = lab::suite::replay_key(suite.as_ref(), &a.dir, &a.run, sim::TraceParams::full())?;
     if let Some(path) = &a.trace {
         let f = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
-        trace
+        replay
+            .trace
             .write_json_lines(std::io::BufWriter::new(f))
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(path) = &a.output {
-        let grid = out.grid.as_ref().context("the run kept no world")?;
-        lab::report::run_picture(prep, grid, &out.record, &trace, path)?;
+        lab::pictures::run_picture(&replay, suite.markers(), path)?;
     }
+    let r = &replay.record;
     if a.json {
-        outln!("{}", serde_json::to_string_pretty(&out.record)?)?;
+        outln!("{}", serde_json::to_string_pretty(r)?)?;
     } else {
-        let r = &out.record;
+        let metrics: Vec<String> = r.metrics.iter().map(|(k, v)| format!("{k} {v}")).collect();
         outln!(
-            "{}: {} after {:.1} s, path {:.2} m, {} collisions, min clearance {:.3} m, {} dead-locks",
+            "{}: {} after {:.1} s, path {:.2} m, {} collisions, min clearance {:.3} m{}",
             a.run,
             r.outcome.replace('_', " "),
             r.time_s,
             r.path_length_m,
             r.collisions,
             r.min_clearance_m,
-            r.deadlocks
+            if metrics.is_empty() {
+                String::new()
+            } else {
+                format!("; {}", metrics.join(", "))
+            }
         )?;
     }
     Ok(())

@@ -12,44 +12,13 @@ use nav::activity::PriorityController;
 use nav::voting::VotingController;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use robot::{Controller, Notes, Perception, Pose, Step, Vec2};
+use robot::{Controller, Event, Notes, Perception, Pose, Step, Vec2};
 use sim::shapes::WorldSpec;
 use sim::{CrowdParams, CrowdSize, OccupancyGrid, RunParams, Simulation, Task, Trace, TraceParams, World};
 
+use crate::record::RunRecord;
 use crate::scenario::{ControllerKind, Scenario};
 use crate::traps::DrawnTrap;
-
-/// What one run produced (one line of a results file).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct RunRecord {
-    /// Reached the goal.
-    pub success: bool,
-    /// `goal`, `collision`, `time_limit`, `gave_up` or `lost`.
-    pub outcome: String,
-    /// Simulated time, seconds.
-    pub time_s: f64,
-    /// Length of the true path, metres.
-    pub path_length_m: f64,
-    /// Contact episodes.
-    pub collisions: u32,
-    /// Smallest clearance to walls and people, metres.
-    pub min_clearance_m: f64,
-    /// Final distance between the true and dead-reckoned positions, metres.
-    pub odometry_error_m: f64,
-    /// Final distance to the goal, metres.
-    pub goal_distance_m: f64,
-    /// Control ticks.
-    pub ticks: u64,
-    /// Ticks during which each behaviour / action was in control.
-    pub behaviour_ticks: BTreeMap<String, u64>,
-    /// Dead-locks detected (controllers with an activity trace).
-    pub deadlocks: u32,
-    /// The start pose actually used (after jitter).
-    pub start: [f64; 3],
-    /// The trap drawn for this run, if the scenario has one.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub trap: Option<DrawnTrap>,
-}
 
 /// A scenario ready to run many times: the world is built once when it does
 /// not vary between runs.
@@ -167,7 +136,8 @@ impl Prepared {
         }
     }
 
-    fn controller(&self) -> Result<Box<dyn Controller>> {
+    /// The controller the scenario names, with its parameters.
+    pub fn controller(&self) -> Result<Box<dyn Controller>> {
         let c = &self.scenario.controller;
         Ok(match c.kind {
             ControllerKind::Voting => {
@@ -184,15 +154,24 @@ impl Prepared {
         })
     }
 
-    /// Runs once (no trace): the line of a results file.
-    pub fn run(&self, seeds: RunSeeds) -> Result<RunRecord> {
-        Ok(self.run_detailed(seeds, TraceParams::default())?.record)
+    /// Runs once with the scenario's controller, recording what `trace`
+    /// asks for ([`Prepared::run_with`]).
+    pub fn run_detailed(&self, seeds: RunSeeds, trace: TraceParams) -> Result<RunOutput> {
+        self.run_with(seeds, trace, self.controller()?)
     }
 
-    /// Runs once with `seed`, recording what `trace` asks for, and returns
-    /// the run's own world grid too (obstacle jitter included), for
-    /// pictures and replays.
-    pub fn run_detailed(&self, seeds: RunSeeds, trace: TraceParams) -> Result<RunOutput> {
+    /// Runs once with `controller` in place of the scenario's (a suite's
+    /// own controller), recording what `trace` asks for; returns the run's
+    /// common measures, every event the controller emitted, and, with a
+    /// trace, the run's own world grid (obstacle jitter included) for
+    /// pictures and replays. The record's `metrics` and `events` are left
+    /// empty: what to keep is the suite's choice.
+    pub fn run_with(
+        &self,
+        seeds: RunSeeds,
+        trace: TraceParams,
+        controller: Box<dyn Controller>,
+    ) -> Result<RunOutput> {
         let seed = seeds.sim;
         let s = &self.scenario;
         let mut rng = ChaCha8Rng::seed_from_u64(seeds.variation ^ 0x5eed_1ab0_0000_0001);
@@ -221,10 +200,10 @@ impl Prepared {
         let mut sim = Simulation::new(&world, robot, run, task, seed)
             .with_context(|| format!("scenario `{}`", s.name))?;
         let mut counting = Counting {
-            inner: self.controller()?,
+            inner: controller,
             notes: Notes::enabled(),
             ticks: BTreeMap::new(),
-            deadlocks: 0,
+            events: Vec::new(),
         };
         let result = sim.run(&mut counting);
         let outcome = result
@@ -251,7 +230,8 @@ impl Prepared {
                 .into_iter()
                 .map(|(k, v)| (k.to_string(), v))
                 .collect(),
-            deadlocks: counting.deadlocks,
+            metrics: BTreeMap::new(),
+            events: Vec::new(),
             start: [start.x_m, start.y_m, start.theta_rad],
             trap,
         };
@@ -262,6 +242,7 @@ impl Prepared {
         };
         Ok(RunOutput {
             record,
+            events: counting.events,
             trace: sim.take_trace(),
             grid,
         })
@@ -286,8 +267,10 @@ pub struct RunSeeds {
 
 /// Everything [`Prepared::run_detailed`] produced.
 pub struct RunOutput {
-    /// The run's record.
+    /// The run's record: the common measures (no metrics or events yet).
     pub record: RunRecord,
+    /// Every event the controller emitted, in order.
+    pub events: Vec<Event>,
     /// The trace, when one was asked for.
     pub trace: Option<Trace>,
     /// The run's world grid (with this run's obstacle jitter), when a trace
@@ -295,13 +278,13 @@ pub struct RunOutput {
     pub grid: Option<OccupancyGrid>,
 }
 
-/// Counts the behaviour in control each tick (and dead-lock events), and
-/// passes the notes on when the simulator records them.
+/// Counts the behaviour in control each tick, keeps the events, and passes
+/// the notes on when the simulator records them.
 struct Counting {
     inner: Box<dyn Controller>,
     notes: Notes,
     ticks: BTreeMap<&'static str, u64>,
-    deadlocks: u32,
+    events: Vec<Event>,
 }
 
 impl Controller for Counting {
@@ -311,12 +294,7 @@ impl Controller for Counting {
         if let Some(b) = self.notes.behaviour {
             *self.ticks.entry(b).or_insert(0) += 1;
         }
-        self.deadlocks += self
-            .notes
-            .events
-            .iter()
-            .filter(|e| e.starts_with("deadlock"))
-            .count() as u32;
+        self.events.extend(self.notes.events.iter().cloned());
         if notes.is_enabled() {
             if let Some(b) = self.notes.behaviour {
                 notes.behaviour(b);

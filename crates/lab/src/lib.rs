@@ -1,17 +1,27 @@
 //! Experiments: scenarios, suites, batch runs, metrics and reports.
 //!
-//! A [`scenario::Scenario`] (a TOML file) describes a world, a robot, a
-//! controller and a task; a [`suite::Suite`] is a set of them run as one
-//! batch by the [`runner`]; [`report`] turns a results folder into tables,
-//! pictures and an offline HTML page.
+//! The generic core: a [`scenario::Scenario`] (a TOML file) describes a
+//! world, a robot, a controller and a task; a [`suite::Suite`] is a set of
+//! runs — independent, or campaigns whose state carries over — that the
+//! [`runner`] executes as one resumable, shardable batch into one record
+//! per run ([`record::RunRecord`]); [`report`] turns a results folder into
+//! summaries, tables, pictures and an offline HTML page.
+//!
+//! The suites themselves live in [`suites`], one folder each, listed in
+//! [`suites::REGISTRY`]; nothing outside that module names one.
 #![warn(missing_docs)]
 
-pub mod deadlock_report;
 pub mod experiment;
+pub mod page;
+pub mod pictures;
+pub mod record;
 pub mod report;
 pub mod runner;
 pub mod scenario;
+pub mod scenario_suite;
 pub mod stats;
 pub mod suite;
+pub mod suites;
+pub mod summary;
+pub mod tables;
 pub mod traps;
-pub mod voting_report;

@@ -1,29 +1,39 @@
-//! The batch runner: many independent runs, in parallel, into one results
-//! file that survives interruption.
+//! The batch runner: many runs, in parallel, into one results file that
+//! survives interruption.
 //!
-//! * Every run is a [`Job`]: a scenario name, a run index and a seed derived
-//!   from `(base seed, scenario, index)` alone ([`derive_seed`]), so a run is
-//!   reproducible on its own and its result does not depend on which thread
-//!   ran it or when.
+//! * Every run is a [`Job`]: a scenario name, a run index and a seed, so a
+//!   run is reproducible on its own and its result does not depend on which
+//!   thread ran it or when ([`derive_seed`] derives seeds from names).
+//! * Jobs come in [`Campaign`]s: runs in sequence whose state carries over
+//!   from one to the next (a robot that learns across missions). The run
+//!   function receives the records of the campaign's earlier runs, in
+//!   order, and rebuilds its state from them; campaigns run in parallel, the
+//!   runs of one campaign one after the other. Independent runs are
+//!   campaigns of one run.
 //! * Each finished run is appended to the results file as one JSON line and
 //!   flushed at once: an interrupted batch loses only the runs in flight.
 //! * `resume` reads the file, skips the jobs already there (by key), drops a
-//!   last line cut in the middle of writing, and goes on. Without `resume`
-//!   an existing non-empty file is an error: results are never overwritten.
+//!   last line cut in the middle of writing, and goes on: a campaign
+//!   restarts at its first missing run with its earlier runs read back from
+//!   the file — the same records the uninterrupted batch handed on. Without
+//!   `resume` an existing non-empty file is an error: results are never
+//!   overwritten.
 //! * When the batch is complete, the file is rewritten in job order (via a
 //!   temporary file and an atomic rename), so the same batch gives a
 //!   bit-identical file whatever the number of threads, and an interrupted
 //!   and resumed batch gives the same file as an uninterrupted one.
-//! * `shard i/n` keeps every n-th job (the i-th of each n), so a sweep can be
-//!   spread over machines by a job-array scheduler and the files merged.
+//! * `shard i/n` keeps every n-th campaign (the i-th of each n), so a sweep
+//!   can be spread over machines by a job-array scheduler; [`merge`] puts
+//!   the shards' files back together.
 //! * A progress bar (runs, failures, ETA) is drawn on standard error only
 //!   when it is a terminal.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::fs::{File, OpenOptions};
 use std::io::{BufRead, BufReader, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
@@ -85,7 +95,33 @@ pub fn jobs(scenarios: &[String], runs: u32, seed_of: impl Fn(&str, u32) -> u64)
         .collect()
 }
 
-/// A deterministic slice of the jobs: `index` of `count` (1-based index).
+/// Runs in sequence: each run gets the records of the campaign's earlier
+/// runs (its carried state).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct Campaign {
+    /// The runs, in the order they run.
+    pub jobs: Vec<Job>,
+}
+
+impl Campaign {
+    /// A campaign of one independent run.
+    pub fn single(job: Job) -> Campaign {
+        Campaign { jobs: vec![job] }
+    }
+
+    /// Independent runs, each its own campaign.
+    pub fn independent(jobs: Vec<Job>) -> Vec<Campaign> {
+        jobs.into_iter().map(Campaign::single).collect()
+    }
+}
+
+/// The keys of all jobs of the campaigns, in order: the order of a complete
+/// results file.
+pub fn keys(campaigns: &[Campaign]) -> Vec<String> {
+    campaigns.iter().flat_map(|c| &c.jobs).map(Job::key).collect()
+}
+
+/// A deterministic slice of a batch: `index` of `count` (1-based index).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
     /// Which shard, 1..=count.
@@ -117,12 +153,14 @@ impl std::str::FromStr for Shard {
 }
 
 impl Shard {
-    /// Keeps the jobs of this shard (every `count`-th, starting at `index − 1`).
-    pub fn select(&self, jobs: Vec<Job>) -> Vec<Job> {
-        jobs.into_iter()
+    /// Keeps the campaigns of this shard (every `count`-th, starting at
+    /// `index − 1`): a campaign is never split between shards.
+    pub fn select(&self, campaigns: Vec<Campaign>) -> Vec<Campaign> {
+        campaigns
+            .into_iter()
             .enumerate()
-            .filter(|(k, _)| *k as u32 % self.count == self.index - 1)
-            .map(|(_, j)| j)
+            .filter(|(k, _)| *k as u64 % u64::from(self.count) == u64::from(self.index - 1))
+            .map(|(_, c)| c)
             .collect()
     }
 }
@@ -176,31 +214,49 @@ pub fn read_results(path: &Path) -> Result<(Vec<Value>, u64)> {
         }
         let record: Value = serde_json::from_str(line.trim_end())
             .with_context(|| format!("{}:{number}: not a JSON record", path.display()))?;
+        if !record.is_object() {
+            bail!("{}:{number}: not a JSON object", path.display());
+        }
         records.push(record);
         good += n as u64;
     }
     Ok((records, good))
 }
 
-/// Runs `run` on every job not yet in the results file, appending one JSON
-/// record per finished run (the record gets `key`, `scenario`, `run` and
-/// `seed` fields added), then rewrites the file in job order.
-pub fn run_batch<F>(jobs: &[Job], params: &BatchParams, run: F) -> Result<BatchSummary>
-where
-    F: Fn(&Job) -> Result<Value> + Sync,
-{
-    let keys: Vec<String> = jobs.iter().map(Job::key).collect();
+/// The `key` of a results line.
+fn key_of(record: &Value) -> Option<&str> {
+    record.get("key").and_then(Value::as_str)
+}
+
+/// Checks that no key appears twice.
+fn unique_keys(keys: &[String]) -> Result<()> {
     let mut unique = HashSet::new();
-    for k in &keys {
+    for k in keys {
         if !unique.insert(k.as_str()) {
             bail!("job `{k}` appears twice in the batch");
         }
     }
+    Ok(())
+}
+
+/// Runs `run` on every job not yet in the results file, appending one JSON
+/// record per finished run (the record gets `key`, `scenario`, `run` and
+/// `seed` fields added), then rewrites the file in job order.
+///
+/// `run(job, earlier)` gets the complete results lines of the campaign's
+/// earlier runs, in order — the lines as written to the file, whether they
+/// were run now or read back on resume.
+pub fn run_batch<F>(campaigns: &[Campaign], params: &BatchParams, run: F) -> Result<BatchSummary>
+where
+    F: Fn(&Job, &[Value]) -> Result<Value> + Sync,
+{
+    let keys = keys(campaigns);
+    unique_keys(&keys)?;
     if let Some(dir) = params.results.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let exists = params.results.exists() && std::fs::metadata(&params.results)?.len() > 0;
-    let mut done: HashSet<String> = HashSet::new();
+    let mut done: HashMap<String, Value> = HashMap::new();
     if exists {
         if !params.resume {
             bail!(
@@ -209,34 +265,49 @@ where
             );
         }
         let (records, good) = read_results(&params.results)?;
-        for r in &records {
-            if let Some(k) = r.get("key").and_then(Value::as_str) {
-                done.insert(k.to_string());
+        for r in records {
+            if let Some(k) = key_of(&r) {
+                done.insert(k.to_string(), r);
             }
         }
         // Drop a line cut mid-write.
         let f = OpenOptions::new().write(true).open(&params.results)?;
         f.set_len(good)?;
     }
-    let todo: Vec<&Job> = jobs.iter().filter(|j| !done.contains(&j.key())).collect();
-    let skipped = jobs.len() - todo.len();
+    // A campaign resumes at its first missing run; a run on file after a
+    // missing one was not computed from the state this batch hands on.
+    for c in campaigns {
+        let first_missing = c.jobs.iter().position(|j| !done.contains_key(&j.key()));
+        if let Some(m) = first_missing
+            && let Some(later) = c.jobs[m..].iter().find(|j| done.contains_key(&j.key()))
+        {
+            bail!(
+                "{}: run `{}` is there but the earlier run `{}` of its campaign is not; the file was edited or mixes batches",
+                params.results.display(),
+                later.key(),
+                c.jobs[m].key()
+            );
+        }
+    }
+    let todo = keys.iter().filter(|k| !done.contains_key(*k)).count();
+    let skipped = keys.len() - todo;
     let file = OpenOptions::new()
         .create(true)
         .append(true)
         .open(&params.results)
         .with_context(|| format!("opening {}", params.results.display()))?;
     let sink = Mutex::new(file);
-    let failures = std::sync::atomic::AtomicUsize::new(0);
+    let failures = AtomicUsize::new(0);
     let bar = (params.progress && std::io::stderr().is_terminal()).then(|| {
-        let b = indicatif::ProgressBar::new(todo.len() as u64);
+        let b = indicatif::ProgressBar::new(todo as u64);
         b.set_style(
             indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs  {msg}  ETA {eta}")
                 .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         b
     });
-    let work = |job: &&Job| -> Result<()> {
-        let mut record = run(job).with_context(|| format!("run {}", job.key()))?;
+    let one = |job: &Job, earlier: &[Value]| -> Result<Value> {
+        let mut record = run(job, earlier).with_context(|| format!("run {}", job.key()))?;
         if let Value::Object(map) = &mut record {
             map.insert("key".into(), Value::from(job.key()));
             map.insert("scenario".into(), Value::from(job.scenario.clone()));
@@ -246,7 +317,7 @@ where
             bail!("run {} returned a record that is not a JSON object", job.key());
         }
         if record.get("success") == Some(&Value::Bool(false)) {
-            failures.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            failures.fetch_add(1, Ordering::Relaxed);
         }
         let mut line = serde_json::to_string(&record)?;
         line.push('\n');
@@ -259,10 +330,18 @@ where
         }
         if let Some(b) = &bar {
             b.inc(1);
-            b.set_message(format!(
-                "{} failed",
-                failures.load(std::sync::atomic::Ordering::Relaxed)
-            ));
+            b.set_message(format!("{} failed", failures.load(Ordering::Relaxed)));
+        }
+        Ok(record)
+    };
+    let campaign = |c: &Campaign| -> Result<()> {
+        let mut earlier: Vec<Value> = Vec::with_capacity(c.jobs.len());
+        for job in &c.jobs {
+            let record = match done.get(&job.key()) {
+                Some(r) => r.clone(),
+                None => one(job, &earlier)?,
+            };
+            earlier.push(record);
         }
         Ok(())
     };
@@ -271,8 +350,8 @@ where
             .num_threads(n.max(1))
             .build()
             .context("starting worker threads")?
-            .install(|| todo.par_iter().try_for_each(work)),
-        None => todo.par_iter().try_for_each(work),
+            .install(|| campaigns.par_iter().try_for_each(campaign)),
+        None => campaigns.par_iter().try_for_each(campaign),
     };
     if let Some(b) = &bar {
         b.finish_and_clear();
@@ -281,28 +360,23 @@ where
     drop(sink);
     canonicalise(&params.results, &keys)?;
     Ok(BatchSummary {
-        total: jobs.len(),
+        total: keys.len(),
         skipped,
-        ran: todo.len(),
+        ran: todo,
         failures: failures.into_inner(),
     })
 }
 
-/// Rewrites the results file with its records in job order (records of
-/// other jobs — e.g. from an older batch definition — are kept at the end,
-/// in their order).
-fn canonicalise(path: &Path, keys: &[String]) -> Result<()> {
-    let (records, _) = read_results(path)?;
-    let index: std::collections::HashMap<&str, usize> =
-        keys.iter().enumerate().map(|(i, k)| (k.as_str(), i)).collect();
+/// Writes records to `path` in the order of `keys` (records of other keys —
+/// e.g. from an older batch definition — at the end, in their order), via a
+/// temporary file and an atomic rename.
+fn write_ordered(path: &Path, records: &[Value], keys: &[String]) -> Result<()> {
+    let index: HashMap<&str, usize> = keys.iter().enumerate().map(|(i, k)| (k.as_str(), i)).collect();
     let mut ordered: Vec<(usize, usize, &Value)> = records
         .iter()
         .enumerate()
         .map(|(pos, r)| {
-            let k = r
-                .get("key")
-                .and_then(Value::as_str)
-                .and_then(|k| index.get(k).copied());
+            let k = key_of(r).and_then(|k| index.get(k).copied());
             (k.unwrap_or(usize::MAX), pos, r)
         })
         .collect();
@@ -320,6 +394,81 @@ fn canonicalise(path: &Path, keys: &[String]) -> Result<()> {
     }
     std::fs::rename(&tmp, path).with_context(|| format!("replacing {}", path.display()))?;
     Ok(())
+}
+
+/// Rewrites the results file with its records in job order.
+fn canonicalise(path: &Path, keys: &[String]) -> Result<()> {
+    let (records, _) = read_results(path)?;
+    write_ordered(path, &records, keys)
+}
+
+/// What [`merge`] did.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+pub struct MergeSummary {
+    /// Runs in the merged file.
+    pub merged: usize,
+    /// Runs found in more than one part, identical in each (kept once).
+    pub duplicates: usize,
+    /// Keys of the batch found in no part, in job order.
+    pub missing: Vec<String>,
+}
+
+/// Merges the results files of the shards of one batch into `out`, in job
+/// order (`keys`, see [`keys`]): the file an unsharded batch writes.
+///
+/// A run found in two parts must be identical in both; a record whose key
+/// is not a job of the batch is an error (the parts belong to another
+/// batch); a last line cut mid-write in a part is not a finished run and is
+/// left out. Runs in no part are listed in the summary: resuming the
+/// batch in the merged folder completes it.
+pub fn merge(parts: &[PathBuf], keys: &[String], out: &Path) -> Result<MergeSummary> {
+    unique_keys(keys)?;
+    let wanted: HashSet<&str> = keys.iter().map(String::as_str).collect();
+    let mut found: HashMap<String, (Value, &Path)> = HashMap::new();
+    let mut duplicates = 0;
+    for part in parts {
+        let (records, _) = read_results(part)?;
+        for r in records {
+            let k = key_of(&r)
+                .with_context(|| format!("{}: a record without a key", part.display()))?
+                .to_string();
+            if !wanted.contains(k.as_str()) {
+                bail!(
+                    "{}: run `{k}` is not a job of this batch (the parts come from different batches?)",
+                    part.display()
+                );
+            }
+            match found.get(&k) {
+                Some((same, _)) if *same == r => duplicates += 1,
+                Some((_, first)) => bail!(
+                    "run `{k}` differs between {} and {}: they come from different batches or versions",
+                    first.display(),
+                    part.display()
+                ),
+                None => {
+                    found.insert(k, (r, part));
+                }
+            }
+        }
+    }
+    if out.exists() && std::fs::metadata(out)?.len() > 0 {
+        bail!("{} already holds results: merge into a new folder", out.display());
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let missing: Vec<String> = keys.iter().filter(|k| !found.contains_key(*k)).cloned().collect();
+    let records: Vec<Value> = keys
+        .iter()
+        .filter_map(|k| found.remove(k))
+        .map(|(r, _)| r)
+        .collect();
+    write_ordered(out, &records, keys)?;
+    Ok(MergeSummary {
+        merged: records.len(),
+        duplicates,
+        missing,
+    })
 }
 
 #[cfg(test)]
@@ -364,8 +513,8 @@ mod tests {
             jobs: Some(n),
             progress: false,
         };
-        run_batch(&js, &p(&a, 1), fake_run).unwrap();
-        let s = run_batch(&js, &p(&b, 2), fake_run).unwrap();
+        run_batch(&Campaign::independent(js.clone()), &p(&a, 1), |j, _| fake_run(j)).unwrap();
+        let s = run_batch(&Campaign::independent(js.clone()), &p(&b, 2), |j, _| fake_run(j)).unwrap();
         assert_eq!(s.ran, 150);
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     }
@@ -381,17 +530,28 @@ mod tests {
             jobs: Some(2),
             progress: false,
         };
-        run_batch(&js, &p(&full, false), fake_run).unwrap();
+        run_batch(&Campaign::independent(js.clone()), &p(&full, false), |j, _| {
+            fake_run(j)
+        })
+        .unwrap();
         // "Kill" half-way: the first half of the jobs finished, in some order,
         // and the last line was cut mid-write.
         let half: Vec<Job> = js.iter().rev().skip(50).cloned().collect();
-        run_batch(&half, &p(&part, false), fake_run).unwrap();
+        run_batch(&Campaign::independent(half), &p(&part, false), |j, _| fake_run(j)).unwrap();
         let mut f = OpenOptions::new().append(true).open(&part).unwrap();
         f.write_all(b"{\"key\":\"field5#19\",\"succ").unwrap();
         drop(f);
         // Without --resume the existing results are protected.
-        assert!(run_batch(&js, &p(&part, false), fake_run).is_err());
-        let s = run_batch(&js, &p(&part, true), fake_run).unwrap();
+        assert!(
+            run_batch(&Campaign::independent(js.clone()), &p(&part, false), |j, _| {
+                fake_run(j)
+            })
+            .is_err()
+        );
+        let s = run_batch(&Campaign::independent(js.clone()), &p(&part, true), |j, _| {
+            fake_run(j)
+        })
+        .unwrap();
         assert_eq!((s.skipped, s.ran), (50, 50));
         assert_eq!(std::fs::read(&full).unwrap(), std::fs::read(&part).unwrap());
     }
@@ -402,7 +562,8 @@ mod tests {
         let shards: Vec<Shard> = (1..=3).map(|i| format!("{i}/3").parse().unwrap()).collect();
         let mut all: Vec<String> = shards
             .iter()
-            .flat_map(|s| s.select(js.clone()))
+            .flat_map(|s| s.select(Campaign::independent(js.clone())))
+            .flat_map(|c| c.jobs)
             .map(|j| j.key())
             .collect();
         all.sort();
@@ -426,7 +587,7 @@ mod tests {
             jobs: Some(1),
             progress: false,
         };
-        let err = run_batch(&js, &p, |j| {
+        let err = run_batch(&Campaign::independent(js), &p, |j, _| {
             if j.scenario == "field3" && j.run == 1 {
                 bail!("boom")
             }
@@ -436,5 +597,131 @@ mod tests {
         assert!(format!("{err:#}").contains("field3#1"), "{err:#}");
         let (records, _) = read_results(&path).unwrap();
         assert!(!records.is_empty());
+    }
+
+    /// Three campaigns of four runs; each run's value is the previous one's
+    /// plus a draw from its own seed: state carried from run to run.
+    fn campaigns() -> Vec<Campaign> {
+        (0..3)
+            .map(|c| Campaign {
+                jobs: (0..4)
+                    .map(|run| Job {
+                        scenario: format!("campaign{c}"),
+                        run,
+                        seed: derive_seed(9, &format!("campaign{c}"), run),
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+
+    fn learning_run(job: &Job, earlier: &[Value]) -> Result<Value> {
+        assert_eq!(earlier.len(), job.run as usize, "earlier runs of {}", job.key());
+        let before = earlier.last().map_or(0.0, |r| r["value"].as_f64().unwrap());
+        Ok(serde_json::json!({ "success": true, "value": before + (job.seed % 100) as f64 }))
+    }
+
+    #[test]
+    fn campaigns_carry_state_and_resume_at_their_first_missing_run() {
+        let cs = campaigns();
+        let p = |path: &Path, resume, jobs| BatchParams {
+            results: path.to_path_buf(),
+            resume,
+            jobs: Some(jobs),
+            progress: false,
+        };
+        let full = temp("campaign-full");
+        run_batch(&cs, &p(&full, false, 2), learning_run).unwrap();
+        let (records, _) = read_results(&full).unwrap();
+        let value = |k: &str| {
+            records.iter().find(|r| r["key"] == k).unwrap()["value"]
+                .as_f64()
+                .unwrap()
+        };
+        assert_eq!(
+            value("campaign1#3") - value("campaign1#2"),
+            (derive_seed(9, "campaign1", 3) % 100) as f64
+        );
+        // Killed in the middle of campaign 1 (its run 2 failed), campaign 0
+        // finished, campaign 2 not started (one worker).
+        let cut = temp("campaign-cut");
+        let err = run_batch(&cs, &p(&cut, false, 1), |j, e| {
+            if j.key() == "campaign1#2" {
+                bail!("killed")
+            }
+            learning_run(j, e)
+        })
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("campaign1#2"));
+        let s = run_batch(&cs, &p(&cut, true, 2), learning_run).unwrap();
+        assert_eq!((s.skipped, s.ran), (6, 6));
+        assert_eq!(std::fs::read(&full).unwrap(), std::fs::read(&cut).unwrap());
+        // A file with a hole inside a campaign is refused on resume.
+        let holed = temp("campaign-hole");
+        let text = std::fs::read_to_string(&full).unwrap();
+        let kept: String = text
+            .lines()
+            .filter(|l| !l.contains("\"campaign2#1\""))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        std::fs::write(&holed, kept).unwrap();
+        let err = format!(
+            "{:#}",
+            run_batch(&cs, &p(&holed, true, 1), learning_run).unwrap_err()
+        );
+        assert!(
+            err.contains("campaign2#2") && err.contains("campaign2#1"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn merged_shards_equal_the_unsharded_batch() {
+        let cs = campaigns();
+        let p = |path: &Path| BatchParams {
+            results: path.to_path_buf(),
+            resume: false,
+            jobs: Some(2),
+            progress: false,
+        };
+        let whole = temp("merge-whole");
+        run_batch(&cs, &p(&whole), learning_run).unwrap();
+        let mut parts = Vec::new();
+        for i in 1..=3 {
+            let shard = Shard { index: i, count: 3 };
+            let part = temp(&format!("merge-part{i}"));
+            run_batch(&shard.select(cs.clone()), &p(&part), learning_run).unwrap();
+            parts.push(part);
+        }
+        let merged = temp("merge-out");
+        std::fs::remove_file(&merged).ok();
+        let s = merge(&parts, &keys(&cs), &merged).unwrap();
+        assert_eq!((s.merged, s.duplicates, s.missing.len()), (12, 0, 0));
+        assert_eq!(std::fs::read(&whole).unwrap(), std::fs::read(&merged).unwrap());
+        // Merging into a folder that holds results, or a part twice with a
+        // changed record, is refused.
+        assert!(merge(&parts, &keys(&cs), &merged).is_err());
+        let changed = temp("merge-changed");
+        let text = std::fs::read_to_string(&parts[0]).unwrap();
+        std::fs::write(
+            &changed,
+            text.replacen("\"success\":true", "\"success\":false", 1),
+        )
+        .unwrap();
+        let again = temp("merge-again");
+        std::fs::remove_file(&again).ok();
+        let err = format!(
+            "{:#}",
+            merge(&[parts[0].clone(), changed], &keys(&cs), &again).unwrap_err()
+        );
+        assert!(err.contains("differs"), "{err}");
+        // Two shards of three: the third's runs are listed as missing.
+        let partial = temp("merge-partial");
+        std::fs::remove_file(&partial).ok();
+        let s = merge(&parts[..2], &keys(&cs), &partial).unwrap();
+        assert_eq!(
+            s.missing,
+            ["campaign2#0", "campaign2#1", "campaign2#2", "campaign2#3"]
+        );
     }
 }

@@ -1,277 +1,221 @@
-//! Suites: named sets of scenarios run as one batch.
+//! What a suite is, for the generic core: the [`Suite`] trait every suite
+//! implements, the description a results folder keeps (`suite.json`), and
+//! the driver that runs a suite through the batch runner.
 //!
-//! | suite | scenarios |
-//! |---|---|
-//! | `voting` | the fourteen fields of `scenarios/voting/` × the four behaviour combinations of the source (`e1`…`e4`) and `e4` with the activity-trace layer (`e5`) |
-//! | `deadlock` | `scenarios/deadlock/`: a dead-end trap drawn per run (U, and V in two rows); priority arbitration on the 16-sonar ring robot with and without dead-lock detection + recovery (and with drifting odometry), voting on AIBOT with and without the trace layer |
-//! | a scenario file | that scenario alone |
-//!
-//! The shipped scenarios are compiled into the binary, so a suite runs from
-//! anywhere; the files in `scenarios/` are the same text, for reading and
-//! copying.
+//! The core knows no suite by name. Each suite lives in its own folder
+//! under `src/suites/` and is listed once in the registry
+//! ([`crate::suites::REGISTRY`]); a suite built from scenario files can use
+//! [`crate::scenario_suite::ScenarioSuite`] for everything but its report.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use nav::voting::Teams;
+use serde_json::Value;
+use sim::TraceParams;
 
-use crate::experiment::{Prepared, RunSeeds};
-use crate::runner::{self, BatchParams, BatchSummary, Job, Shard};
-use crate::scenario::{ControllerKind, Scenario};
-
-/// The fourteen fields of the voting experiments, as shipped.
-pub const VOTING_FIELDS: [(&str, &str); 14] = [
-    ("field01", include_str!("../../../scenarios/voting/field01.toml")),
-    ("field02", include_str!("../../../scenarios/voting/field02.toml")),
-    ("field03", include_str!("../../../scenarios/voting/field03.toml")),
-    ("field04", include_str!("../../../scenarios/voting/field04.toml")),
-    ("field05", include_str!("../../../scenarios/voting/field05.toml")),
-    ("field06", include_str!("../../../scenarios/voting/field06.toml")),
-    ("field07", include_str!("../../../scenarios/voting/field07.toml")),
-    ("field08", include_str!("../../../scenarios/voting/field08.toml")),
-    ("field09", include_str!("../../../scenarios/voting/field09.toml")),
-    ("field10", include_str!("../../../scenarios/voting/field10.toml")),
-    ("field11", include_str!("../../../scenarios/voting/field11.toml")),
-    ("field12", include_str!("../../../scenarios/voting/field12.toml")),
-    ("field13", include_str!("../../../scenarios/voting/field13.toml")),
-    ("field14", include_str!("../../../scenarios/voting/field14.toml")),
-];
-
-/// The dead-lock suite's scenarios, as shipped.
-pub const DEADLOCK_SCENARIOS: [(&str, &str); 7] = [
-    (
-        "priority",
-        include_str!("../../../scenarios/deadlock/priority.toml"),
-    ),
-    (
-        "priority_recovery",
-        include_str!("../../../scenarios/deadlock/priority_recovery.toml"),
-    ),
-    (
-        "priority_recovery_slips",
-        include_str!("../../../scenarios/deadlock/priority_recovery_slips.toml"),
-    ),
-    (
-        "priority_v",
-        include_str!("../../../scenarios/deadlock/priority_v.toml"),
-    ),
-    (
-        "priority_v_recovery",
-        include_str!("../../../scenarios/deadlock/priority_v_recovery.toml"),
-    ),
-    ("voting", include_str!("../../../scenarios/deadlock/voting.toml")),
-    (
-        "voting_trace",
-        include_str!("../../../scenarios/deadlock/voting_trace.toml"),
-    ),
-];
-
-/// The experiments of the voting suite: `e1`…`e4` are the source's four
-/// behaviour combinations; `e5` is `e4` with the activity-trace layer
-/// (dead-lock detection and recovery, activity-trace.md).
-pub const VOTING_EXPERIMENTS: u32 = 5;
-
-/// The name from which every run's simulator seed is derived
-/// ([`Suite::seeds`]).
-const NOISE_STREAM: &str = "simulator noise";
-
-/// What kind of suite, for the report.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SuiteKind {
-    /// The voting suite: fields × combinations.
-    Voting,
-    /// The dead-lock suite: traps, with and without detection + recovery.
-    Deadlock,
-    /// Scenarios from files.
-    Custom,
-}
-
-/// A suite ready to run.
-pub struct Suite {
-    /// Name.
-    pub name: String,
-    /// Kind.
-    pub kind: SuiteKind,
-    /// Runs per scenario.
-    pub runs: u32,
-    /// Base seed.
-    pub seed: u64,
-    /// Scenarios by name, in order.
-    pub scenarios: Vec<Prepared>,
-}
+use crate::page::Block;
+use crate::pictures::{EventMarker, Replay};
+use crate::record::{self, RunRecord, Runs};
+use crate::runner::{self, BatchParams, BatchSummary, Campaign, Job, Shard};
+use crate::summary::Summary;
 
 /// What a results folder says about the suite that produced it
-/// (`suite.json`), so that a report can be recomputed from the folder alone.
+/// (`suite.json`), so that a report can be recomputed, a batch resumed or
+/// shards merged from the folder alone.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SuiteInfo {
-    /// Name.
+    /// Name (the report's title, the default output folder).
     pub name: String,
-    /// Kind.
-    pub kind: SuiteKind,
+    /// The registered suite that built it ([`Registration::name`]).
+    pub suite: String,
     /// Runs per scenario.
     pub runs: u32,
     /// Base seed.
     pub seed: u64,
-    /// Scenario names, in order.
+    /// Scenario names, in order (the rows of the report).
     pub scenarios: Vec<String>,
-    /// Where custom scenarios came from (file paths), by name.
+    /// Where scenarios came from (file paths), by name, for suites built
+    /// from files.
     #[serde(default)]
     pub sources: BTreeMap<String, String>,
 }
 
-/// The label of a voting-suite experiment (`e1` … `e4`), e.g.
-/// "IR+sonar / odo+plan".
-pub fn experiment_label(name: &str) -> Option<String> {
-    let k: u32 = name.strip_prefix('e')?.parse().ok()?;
-    match k {
-        5 => Teams::experiment(4).map(|t| format!("{} + trace", t.label())),
-        _ => Teams::experiment(k).map(|t| t.label()),
+impl SuiteInfo {
+    /// Whether `other` describes the same batch (a folder can be resumed
+    /// or merged with it).
+    pub fn same_batch(&self, other: &SuiteInfo) -> bool {
+        self.suite == other.suite
+            && self.scenarios == other.scenarios
+            && self.runs == other.runs
+            && self.seed == other.seed
     }
 }
 
-impl Suite {
-    /// The voting suite with `runs` runs per scenario (default 50).
-    pub fn voting(runs: Option<u32>) -> Result<Suite> {
-        let mut scenarios = Vec::new();
-        let mut runs_default = 50;
-        let mut seed = 1;
-        for k in 1..=VOTING_EXPERIMENTS {
-            let teams = Teams::experiment(k.min(4)).context("experiment")?;
-            for (name, text) in VOTING_FIELDS {
-                let mut s = Scenario::parse(text, &format!("scenarios/voting/{name}.toml"), None)?;
-                runs_default = s.runs;
-                seed = s.seed;
-                s.name = format!("e{k}/{name}");
-                s.controller.kind = ControllerKind::Voting;
-                s.controller.voting.teams = teams;
-                s.controller.trace_layer.enabled = k == 5;
-                s.controller.priority.recovery = true;
-                scenarios.push(Prepared::new(s)?);
-            }
-        }
-        Ok(Suite {
-            name: "voting".into(),
-            kind: SuiteKind::Voting,
-            runs: runs.unwrap_or(runs_default),
-            seed,
-            scenarios,
-        })
-    }
+/// How a suite is asked for on the command line.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct SuiteArgs {
+    /// Runs per scenario (`None`: the suite's default).
+    pub runs: Option<u32>,
+    /// Scenario files, for suites built from files.
+    pub files: Vec<PathBuf>,
+}
 
-    /// The dead-lock suite with `runs` runs per scenario (default 200).
-    pub fn deadlock(runs: Option<u32>) -> Result<Suite> {
-        let mut scenarios = Vec::new();
-        let mut runs_default = 200;
-        let mut seed = 1;
-        for (name, text) in DEADLOCK_SCENARIOS {
-            let s = Scenario::parse(text, &format!("scenarios/deadlock/{name}.toml"), None)?;
-            runs_default = s.runs;
-            seed = s.seed;
-            scenarios.push(Prepared::new(s)?);
-        }
-        Ok(Suite {
-            name: "deadlock".into(),
-            kind: SuiteKind::Deadlock,
-            runs: runs.unwrap_or(runs_default),
-            seed,
-            scenarios,
-        })
-    }
-
-    /// A shipped suite by name (`voting`, `deadlock`), if there is one.
-    pub fn shipped(name: &str, runs: Option<u32>) -> Option<Result<Suite>> {
-        match name {
-            "voting" => Some(Suite::voting(runs)),
-            "deadlock" => Some(Suite::deadlock(runs)),
-            _ => None,
-        }
-    }
-
-    /// A suite of scenario files.
-    pub fn files(paths: &[&Path], runs: Option<u32>) -> Result<Suite> {
-        let mut scenarios = Vec::new();
-        let mut seen = std::collections::BTreeSet::new();
-        for p in paths {
-            let s = Scenario::load(p)?;
-            if !seen.insert(s.name.clone()) {
-                bail!("two scenarios are named `{}`", s.name);
-            }
-            scenarios.push(Prepared::new(s)?);
-        }
-        let first = scenarios.first().context("no scenario")?.scenario();
-        let (r, seed) = (first.runs, first.seed);
-        let name = if paths.len() == 1 {
-            first.name.clone()
+impl SuiteArgs {
+    /// The arguments that rebuild the suite a folder describes.
+    pub fn of(info: &SuiteInfo) -> Result<SuiteArgs> {
+        let files = if info.sources.is_empty() {
+            Vec::new()
         } else {
-            "custom".into()
+            info.scenarios
+                .iter()
+                .map(|n| {
+                    info.sources
+                        .get(n)
+                        .map(PathBuf::from)
+                        .with_context(|| format!("suite.json does not say where scenario `{n}` came from"))
+                })
+                .collect::<Result<_>>()?
         };
-        Ok(Suite {
-            name,
-            kind: SuiteKind::Custom,
-            runs: runs.unwrap_or(r),
-            seed,
-            scenarios,
+        Ok(SuiteArgs {
+            runs: Some(info.runs),
+            files,
         })
     }
+}
 
-    /// The jobs of the suite; a job's `seed` (written to its results line)
-    /// is the simulator's seed of the run ([`Suite::seeds`]).
-    pub fn jobs(&self) -> Vec<Job> {
-        let names: Vec<String> = self.scenarios.iter().map(|p| p.scenario().name.clone()).collect();
-        runner::jobs(&names, self.runs, |_, run| self.seeds(run).sim)
+/// A suite in the registry.
+#[derive(Debug, Clone, Copy)]
+pub struct Registration {
+    /// The name users type (`petrinav lab run NAME`), unique.
+    pub name: &'static str,
+    /// One line for `--help` and error messages.
+    pub about: &'static str,
+    /// Builds the suite.
+    pub build: fn(&SuiteArgs) -> Result<Box<dyn Suite>>,
+}
+
+/// What the generic report hands a suite.
+pub struct ReportContext<'a> {
+    /// The results folder.
+    pub dir: &'a Path,
+    /// The suite's description.
+    pub info: &'a SuiteInfo,
+    /// The records, by scenario.
+    pub runs: &'a Runs,
+    /// One summary per scenario, in the suite's order.
+    pub summaries: &'a [Summary],
+    /// Whether to draw pictures.
+    pub pictures: bool,
+}
+
+impl ReportContext<'_> {
+    /// Where a picture named `file` goes (`pictures/` in the results
+    /// folder, created if needed): the path to write and the link for the
+    /// page.
+    pub fn picture_path(&self, file: &str) -> Result<(PathBuf, String)> {
+        let dir = self.dir.join("pictures");
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        Ok((dir.join(file), format!("pictures/{file}")))
     }
+}
 
-    /// The suite's description for `suite.json`.
-    pub fn info(&self, sources: BTreeMap<String, String>) -> SuiteInfo {
-        SuiteInfo {
-            name: self.name.clone(),
-            kind: self.kind,
-            runs: self.runs,
-            seed: self.seed,
-            scenarios: self.scenarios.iter().map(|p| p.scenario().name.clone()).collect(),
-            sources,
+/// A suite's part of the report.
+#[derive(Debug, Clone, Default)]
+pub struct SuiteReport {
+    /// What the terminal shows after a batch (its main table).
+    pub text: String,
+    /// The page's blocks after the introduction.
+    pub blocks: Vec<Block>,
+    /// Files the suite wrote (pictures).
+    pub files: Vec<PathBuf>,
+}
+
+/// A suite: its runs, how to run and replay one, and its report.
+pub trait Suite: Sync {
+    /// The description kept in `suite.json`.
+    fn info(&self) -> &SuiteInfo;
+
+    /// The campaigns of the batch, in the order of a complete results
+    /// file. Independent runs are campaigns of one run
+    /// ([`Campaign::independent`]).
+    fn campaigns(&self) -> Vec<Campaign>;
+
+    /// Runs one job; `earlier` holds the records of its campaign's earlier
+    /// runs, in order (the state it carries).
+    fn run(&self, job: &Job, earlier: &[RunRecord]) -> Result<RunRecord>;
+
+    /// Runs one job again with a trace, for pictures and `lab replay`; the
+    /// record is the one [`Suite::run`] gives.
+    fn replay(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<Replay>;
+
+    /// How the events of the suite's controllers are drawn on pictures of
+    /// runs (`lab replay`, the report).
+    fn markers(&self) -> &[EventMarker];
+
+    /// The suite's tables, explanation and pictures.
+    fn report(&self, ctx: &ReportContext<'_>) -> Result<SuiteReport>;
+}
+
+/// Runs a suite (or one shard of it) into `params.results`.
+pub fn run(suite: &dyn Suite, params: &BatchParams, shard: Option<Shard>) -> Result<BatchSummary> {
+    let mut campaigns = suite.campaigns();
+    if let Some(s) = shard {
+        campaigns = s.select(campaigns);
+    }
+    runner::run_batch(&campaigns, params, |job, earlier: &[Value]| {
+        let earlier = earlier.iter().map(record::parse).collect::<Result<Vec<_>>>()?;
+        Ok(serde_json::to_value(suite.run(job, &earlier)?)?)
+    })
+}
+
+/// The job of `key` (`SCENARIO#INDEX`) in a suite, and the keys of its
+/// campaign's earlier runs.
+pub fn find_job(suite: &dyn Suite, key: &str) -> Result<(Job, Vec<String>)> {
+    let campaigns = suite.campaigns();
+    for c in &campaigns {
+        if let Some(k) = c.jobs.iter().position(|j| j.key() == key) {
+            return Ok((c.jobs[k].clone(), c.jobs[..k].iter().map(Job::key).collect()));
         }
     }
-
-    /// The seeds of run `run` of scenario `name` ([`RunSeeds`]).
-    ///
-    /// Common random numbers: run k of every scenario in a batch meets the
-    /// same per-run variation (start, jitter, trap) and the same simulator
-    /// noise streams (sensors, odometry, people); neither depends on the
-    /// scenario's name. Two scenarios that differ only in the controller —
-    /// the five experiments on one field of the voting suite, the
-    /// controllers of the dead-lock suite, two parameter sets in your own
-    /// files — therefore run identically until the controllers act
-    /// differently: with the activity-trace layer, a run in which no
-    /// dead-lock is detected is the run without it, tick for tick. Their
-    /// difference is measured on the same draws, free of sampling noise
-    /// between them.
-    pub fn seeds(&self, run: u32) -> RunSeeds {
-        RunSeeds {
-            sim: runner::derive_seed(self.seed, NOISE_STREAM, run),
-            variation: runner::derive_seed(self.seed, "", run),
-        }
+    let Some((name, index)) = key.rsplit_once('#') else {
+        bail!("`{key}`: a run is SCENARIO#INDEX, e.g. e3/field03#1");
+    };
+    if !suite.info().scenarios.iter().any(|s| s == name) {
+        bail!(
+            "no scenario `{name}` in this batch; it has: {}",
+            suite.info().scenarios.join(", ")
+        );
     }
+    bail!(
+        "no run `{index}` of `{name}` in this batch (it has {} runs per scenario)",
+        suite.info().runs
+    )
+}
 
-    /// The prepared scenario called `name`.
-    pub fn scenario(&self, name: &str) -> Option<&Prepared> {
-        self.scenarios.iter().find(|p| p.scenario().name == name)
-    }
-
-    /// Runs the suite (or one shard of it) into `params.results`.
-    pub fn run(&self, params: &BatchParams, shard: Option<Shard>) -> Result<BatchSummary> {
-        let mut jobs = self.jobs();
-        if let Some(s) = shard {
-            jobs = s.select(jobs);
-        }
-        runner::run_batch(&jobs, params, |job| {
-            let prep = self
-                .scenario(&job.scenario)
-                .with_context(|| format!("unknown scenario `{}`", job.scenario))?;
-            let record = prep.run(self.seeds(job.run))?;
-            Ok(serde_json::to_value(record)?)
-        })
-    }
+/// Re-simulates the run `key` of a results folder (its campaign's earlier
+/// runs read from `results.jsonl`).
+pub fn replay_key(suite: &dyn Suite, dir: &Path, key: &str, trace: TraceParams) -> Result<Replay> {
+    let (job, earlier_keys) = find_job(suite, key)?;
+    let earlier = if earlier_keys.is_empty() {
+        Vec::new()
+    } else {
+        let (lines, _) = runner::read_results(&dir.join("results.jsonl"))?;
+        let by_key: BTreeMap<&str, &Value> = lines
+            .iter()
+            .filter_map(|l| Some((l.get("key")?.as_str()?, l)))
+            .collect();
+        earlier_keys
+            .iter()
+            .map(|k| {
+                let line = by_key.get(k.as_str()).with_context(|| {
+                    format!(
+                        "run `{key}` needs the earlier run `{k}` of its campaign, which is not in the results"
+                    )
+                })?;
+                record::parse(line)
+            })
+            .collect::<Result<_>>()?
+    };
+    suite.replay(&job, &earlier, trace)
 }

@@ -2,20 +2,27 @@
 //! that differ only in the controller, and the dead-lock experiment's
 //! outcome (activity-trace.md) on its first runs.
 
-use lab::suite::Suite;
+use lab::scenario_suite::ScenarioSuite;
+use lab::suite::{Suite, SuiteArgs};
+use lab::suites::shared::DEADLOCKS;
+
+fn runs(n: u32) -> SuiteArgs {
+    SuiteArgs {
+        runs: Some(n),
+        files: Vec::new(),
+    }
+}
 
 #[test]
 fn trace_layer_without_detections_is_the_bare_voting_run() {
-    let suite = Suite::voting(Some(8)).unwrap();
+    let suite: ScenarioSuite = lab::suites::voting::suite(&runs(8)).unwrap();
     let mut compared = 0;
     for field in ["field01", "field10", "field12"] {
-        let bare = suite.scenario(&format!("e4/{field}")).unwrap();
-        let traced = suite.scenario(&format!("e5/{field}")).unwrap();
         for run in 0..8 {
-            let a = bare.run(suite.seeds(run)).unwrap();
-            let b = traced.run(suite.seeds(run)).unwrap();
+            let a = suite.run_once(&format!("e4/{field}"), run).unwrap();
+            let b = suite.run_once(&format!("e5/{field}"), run).unwrap();
             assert_eq!(a.start, b.start, "{field}#{run}: same start");
-            if b.deadlocks == 0 {
+            if b.metric(DEADLOCKS) == Some(0.0) {
                 assert_eq!(
                     a, b,
                     "{field}#{run}: no dead-lock detected, so the same run tick for tick"
@@ -29,8 +36,8 @@ fn trace_layer_without_detections_is_the_bare_voting_run() {
 
 #[test]
 fn runs_differ_by_index_and_not_by_scenario() {
-    let suite = Suite::deadlock(Some(4)).unwrap();
-    let jobs = suite.jobs();
+    let suite = lab::suites::deadlock::suite(&runs(4)).unwrap();
+    let jobs: Vec<_> = suite.campaigns().into_iter().flat_map(|c| c.jobs).collect();
     let seed_of = |name: &str, run: u32| {
         jobs.iter()
             .find(|j| j.scenario == name && j.run == run)
@@ -45,11 +52,10 @@ fn runs_differ_by_index_and_not_by_scenario() {
 
 #[test]
 fn priority_recovery_escapes_the_traps_that_hold_the_plain_controller() {
-    let suite = Suite::deadlock(Some(24)).unwrap();
+    let suite = lab::suites::deadlock::suite(&runs(24)).unwrap();
     let successes = |name: &str| {
-        let prep = suite.scenario(name).unwrap();
         (0..24)
-            .map(|run| prep.run(suite.seeds(run)).unwrap())
+            .map(|run| suite.run_once(name, run).unwrap())
             .map(|r| {
                 assert_eq!(r.collisions, 0, "{name}: the ring robot touches nothing");
                 assert!(r.trap.is_some());

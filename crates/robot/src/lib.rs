@@ -35,8 +35,10 @@
 
 use std::f64::consts::PI;
 
+pub mod event;
 pub mod map;
 
+pub use event::{Event, EventValue};
 pub use map::{Cell, CellIndex, GridMap, MapError};
 
 /// Wraps an angle to (−π, π].
@@ -265,9 +267,10 @@ pub enum Step {
     GiveUp,
 }
 
-/// Free-form annotations a controller may attach to a tick (selected
-/// behaviour, votes, events) for traces and pictures. Costs nothing when
-/// disabled: check [`Notes::enabled`] before building expensive values.
+/// Annotations a controller may attach to a tick (selected behaviour,
+/// votes, typed events) for traces, records and pictures. Costs nothing
+/// when disabled: check [`Notes::is_enabled`] before building expensive
+/// values.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Notes {
     enabled: bool,
@@ -275,8 +278,8 @@ pub struct Notes {
     pub behaviour: Option<&'static str>,
     /// Named numbers (votes, weights, activations…).
     pub values: Vec<(&'static str, f64)>,
-    /// Events this tick (e.g. "deadlock", "warning").
-    pub events: Vec<String>,
+    /// Events this tick (e.g. a dead-lock, a localizer warning).
+    pub events: Vec<Event>,
 }
 
 impl Notes {
@@ -320,9 +323,9 @@ impl Notes {
     }
 
     /// Records an event.
-    pub fn event(&mut self, what: impl Into<String>) {
+    pub fn event(&mut self, event: Event) {
         if self.enabled {
-            self.events.push(what.into());
+            self.events.push(event);
         }
     }
 }

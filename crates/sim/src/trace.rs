@@ -13,7 +13,7 @@
 
 use std::io::Write;
 
-use robot::{Command, Perception, Pose, Vec2};
+use robot::{Command, Event, Perception, Pose, Vec2};
 
 /// What a trace records.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -87,7 +87,7 @@ pub struct TraceTick {
     pub values: Vec<(&'static str, f64)>,
     /// Events (warnings, dead-locks…) from the notes.
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub events: Vec<String>,
+    pub events: Vec<Event>,
     /// The perception given to the controller, if recorded.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub perception: Option<Perception>,

@@ -24,7 +24,7 @@ impl Controller for Wander {
         notes.value("front_m", front.min(100.0));
         if front < 0.8 || p.bumper {
             notes.behaviour("turn");
-            notes.event("blocked");
+            notes.event(robot::Event::new("blocked", p.time_s));
             Step::Run(Command::Twist {
                 v_mps: 0.0,
                 omega_radps: 1.0,

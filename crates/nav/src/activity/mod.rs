@@ -343,12 +343,16 @@ impl Controller for PriorityController {
             if p.detect {
                 self.trace
                     .record(Event::Start, here, Some(goal), perception.time_s);
-                notes.event("CP1");
+                notes.event(robot::Event::new("CP1", perception.time_s).at(here));
             }
         }
         if perception.bumper {
             self.state = TaskState::Exception;
-            notes.event("exception: collision");
+            notes.event(
+                robot::Event::new("exception", perception.time_s)
+                    .at(here)
+                    .with("cause", "collision"),
+            );
             return Step::GiveUp;
         }
         if (goal - here).norm() <= p.arrive_m {
@@ -390,9 +394,12 @@ impl Controller for PriorityController {
                 _ => None,
             };
             if let Some(e) = event {
-                notes.event(e.label());
+                notes.event(robot::Event::new(e.label(), perception.time_s).at(here));
                 if let Some(d) = self.trace.record(e, here, Some(goal), perception.time_s) {
-                    notes.event(format!("deadlock at ({:.2}, {:.2})", d.x, d.y));
+                    notes.event(robot::Event::new("deadlock", perception.time_s).at(Vec2::new(
+                        (d.x * 100.0).round() / 100.0,
+                        (d.y * 100.0).round() / 100.0,
+                    )));
                     if p.recovery {
                         self.recovering = true;
                     }
@@ -462,7 +469,8 @@ mod tests {
         };
         assert_eq!(notes.behaviour, Some("goal tracking"));
         assert!(omega_radps > 0.0, "turn left towards +y");
-        assert!(notes.events.contains(&"CP1".to_string()) && notes.events.contains(&"CP2".to_string()));
+        let kinds: Vec<&str> = notes.events.iter().map(|e| e.kind.as_str()).collect();
+        assert_eq!(kinds, ["CP1", "CP2"]);
         p.odometry = Pose::new(0.0, 0.0, PI / 2.0);
         notes.clear();
         c.step(&p, &mut notes);

@@ -17,7 +17,7 @@
 //! instead of the goal's bearing. Parameters (`r_T`, `ε`, the field) are the
 //! priority controller's ([`PriorityParams`]).
 
-use robot::{Controller, Notes, Perception, Step};
+use robot::{Controller, Notes, Perception, Step, Vec2};
 
 use super::VotingController;
 use crate::activity::{ActivityTrace, Event, PriorityParams, field};
@@ -74,7 +74,7 @@ impl Controller for TracedVoting {
             self.started = true;
             self.trace
                 .record(Event::Start, here, perception.goal, perception.time_s);
-            notes.event("CP1");
+            notes.event(robot::Event::new("CP1", perception.time_s).at(here));
         }
         if self.recovering {
             if let Some(goal) = perception.goal {
@@ -111,9 +111,12 @@ impl Controller for TracedVoting {
         self.goal_dominated = dominated;
         self.blocked = blocked;
         if let Some(e) = event {
-            notes.event(e.label());
+            notes.event(robot::Event::new(e.label(), perception.time_s).at(here));
             if let Some(d) = self.trace.record(e, here, perception.goal, perception.time_s) {
-                notes.event(format!("deadlock at ({:.2}, {:.2})", d.x, d.y));
+                notes.event(robot::Event::new("deadlock", perception.time_s).at(Vec2::new(
+                    (d.x * 100.0).round() / 100.0,
+                    (d.y * 100.0).round() / 100.0,
+                )));
                 if self.p.recovery {
                     self.recovering = true;
                 }

@@ -4,7 +4,9 @@
 
 use std::fmt::Write as _;
 
-use crate::report::{Runs, Summary, paired};
+use crate::record::Runs;
+use crate::suites::shared::DEADLOCKS;
+use crate::summary::{Summary, paired};
 
 fn find<'a>(summaries: &'a [Summary], name: &str) -> Option<&'a Summary> {
     summaries.iter().find(|s| s.scenario == name && s.runs > 0)
@@ -16,6 +18,15 @@ fn pct(x: f64) -> String {
 
 fn verdict(ok: bool) -> &'static str {
     if ok { "met" } else { "NOT met" }
+}
+
+/// Failed runs of `scenario` in which no dead-lock was detected.
+fn failures_without_deadlock(runs: &Runs, scenario: &str) -> usize {
+    runs.get(scenario).map_or(0, |rs| {
+        rs.iter()
+            .filter(|(_, r)| !r.success && r.metric(DEADLOCKS) == Some(0.0))
+            .count()
+    })
 }
 
 /// Markdown paragraphs for the report.
@@ -34,12 +45,12 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             off.runs,
             off.timeouts,
             off.collisions,
-            off.deadlocks_per_run,
+            off.metric_mean(DEADLOCKS),
             verdict(off.reliability.value <= 0.3),
             pct(on.reliability.value),
             pct(on.reliability.low),
             pct(on.reliability.high),
-            on.deadlocks_per_run,
+            on.metric_mean(DEADLOCKS),
             on.time.mean,
             off.time.mean,
             on.path_length.mean,
@@ -79,11 +90,11 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             "**Dynamic weighted voting** on the U traps: {} without the trace layer, {} with it ({:.1} dead-locks detected per run). The layer reads the voting outcome as characteristic events (the goal team's favourite chosen → CP2; the obstacle team overruling it with the goal ahead → CP3) and repels goal seeking from the recorded dead-locks; run by run it wins {} and loses {} runs, and {} runs are identical (no dead-lock detected). It can only act on a dead-lock it sees: {} of the {} failed runs with the layer detected none. Replays of such runs (`petrinav lab replay DIR 'voting_trace#K'`) show why: the robot drives to the back wall and stays there, the obstacle team's escape action alternating left and right with every IR detector triggered. The goal team never wins a ballot again, so no `CP2` follows the `CP3` — a dead-lock without behaviour switches, which the trace cannot show. The other failures are collisions ({} with the layer): contacts with the trap's walls that no dead-lock memory prevents.\n",
             pct(off.reliability.value),
             pct(on.reliability.value),
-            on.deadlocks_per_run,
+            on.metric_mean(DEADLOCKS),
             pv.wins,
             pv.losses,
             pv.identical,
-            on.failures_without_deadlock,
+            failures_without_deadlock(runs, "voting_trace"),
             failed,
             on.collisions,
         );

@@ -3,7 +3,9 @@
 
 use std::fmt::Write as _;
 
-use crate::report::{Runs, Summary, paired};
+use crate::record::Runs;
+use crate::suites::shared::DEADLOCKS;
+use crate::summary::{Summary, paired};
 
 /// Mean of `value` over the fields `from..=to` of combination `e` that have
 /// runs, and the runs it rests on.
@@ -141,8 +143,8 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
                 (b < a - 0.1).then(|| format!("field {f} ({a:.2} → {b:.2})"))
             })
             .collect();
-        let dl = |from: u32, to: u32| mean_over(summaries, 5, from, to, |s| s.deadlocks_per_run).0;
-        let pairs: Vec<(u32, crate::report::Paired)> = (1..=14)
+        let dl = |from: u32, to: u32| mean_over(summaries, 5, from, to, |s| s.metric_mean(DEADLOCKS)).0;
+        let pairs: Vec<(u32, crate::summary::Paired)> = (1..=14)
             .map(|f| {
                 (
                     f,
@@ -150,7 +152,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
                 )
             })
             .collect();
-        let sum = |from: u32, to: u32, pick: fn(&crate::report::Paired) -> usize| -> usize {
+        let sum = |from: u32, to: u32, pick: fn(&crate::summary::Paired) -> usize| -> usize {
             pairs
                 .iter()
                 .filter(|(f, _)| (from..=to).contains(f))

@@ -1,0 +1,186 @@
+//! The report page as a list of blocks, written twice: as Markdown
+//! (`tables.md`) and as an HTML page that opens offline (`index.html`: no
+//! script, no network, pictures as relative links).
+
+use std::fmt::Write as _;
+
+/// A picture on the page.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Figure {
+    /// Caption under the picture.
+    pub title: String,
+    /// Path relative to the report folder (e.g. `pictures/e1-field01.png`).
+    pub src: String,
+}
+
+/// One block of the page.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Block {
+    /// A Markdown table: header row, separator row, rows.
+    Table(String),
+    /// A section heading.
+    Heading(String),
+    /// Markdown paragraphs separated by blank lines; a paragraph that starts
+    /// with `## ` is a heading.
+    Text(String),
+    /// Pictures under a heading, with an explanation (HTML page only).
+    Figures {
+        /// Section heading.
+        heading: String,
+        /// What the pictures show.
+        caption: String,
+        /// The pictures.
+        figures: Vec<Figure>,
+    },
+}
+
+/// A report page.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Page {
+    /// Title (the suite's name).
+    pub title: String,
+    /// The first paragraph (runs, seed), Markdown.
+    pub intro: String,
+    /// Links to the raw data, HTML page only (appended to the intro).
+    pub raw_data: String,
+    /// The blocks, in order.
+    pub blocks: Vec<Block>,
+}
+
+/// Escapes text for HTML.
+pub fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// A Markdown table as an HTML table (the separator row is dropped).
+pub fn table_to_html(md: &str) -> String {
+    let mut out = String::from("<table>\n");
+    for (i, line) in md.lines().enumerate() {
+        if i == 1 {
+            continue;
+        }
+        let cells: Vec<&str> = line.trim().trim_matches('|').split('|').map(str::trim).collect();
+        let tag = if i == 0 { "th" } else { "td" };
+        out.push_str("<tr>");
+        for c in cells {
+            let _ = write!(out, "<{tag}>{}</{tag}>", html_escape(c));
+        }
+        out.push_str("</tr>\n");
+    }
+    out.push_str("</table>\n");
+    out
+}
+
+const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\ntable{border-collapse:collapse;margin:1em 0;font-size:14px}\ntd,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\ntd:first-child,th:first-child{text-align:left}\nth{background:#f2f2f2}\n.pics{display:flex;flex-wrap:wrap;gap:12px}\nfigure{margin:0;width:280px}\nfigure img{width:280px;border:1px solid #ccc}\nfigcaption{font-size:13px}\n";
+
+impl Page {
+    /// The page as Markdown (tables and text; pictures are on the HTML
+    /// page only).
+    pub fn markdown(&self) -> String {
+        let mut md = format!("# {} — results\n\n{}\n\n", self.title, self.intro);
+        for b in &self.blocks {
+            match b {
+                Block::Table(t) => {
+                    md.push_str(t);
+                    md.push('\n');
+                }
+                Block::Heading(h) => {
+                    let _ = write!(md, "\n## {h}\n\n");
+                }
+                Block::Text(t) => md.push_str(t),
+                Block::Figures { .. } => {}
+            }
+        }
+        md
+    }
+
+    /// The page as a self-contained HTML document.
+    pub fn html(&self) -> String {
+        let mut html = String::new();
+        let _ = write!(
+            html,
+            "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0} — petrinav report</title>\n<style>\n{STYLE}</style></head><body>\n<h1>{0}</h1>\n<p>{1} {2}</p>\n",
+            html_escape(&self.title),
+            html_escape(&self.intro),
+            self.raw_data,
+        );
+        for b in &self.blocks {
+            match b {
+                Block::Table(t) => html.push_str(&table_to_html(t)),
+                Block::Heading(h) => {
+                    let _ = writeln!(html, "<h2>{}</h2>", html_escape(h));
+                }
+                Block::Text(t) => {
+                    for para in t.split("\n\n").filter(|p| !p.trim().is_empty()) {
+                        let p = para.trim();
+                        if let Some(h) = p.strip_prefix("## ") {
+                            let _ = writeln!(html, "<h2>{}</h2>", html_escape(h));
+                        } else {
+                            let _ = writeln!(html, "<p>{}</p>", html_escape(&p.replace('\n', " ")));
+                        }
+                    }
+                }
+                Block::Figures {
+                    heading,
+                    caption,
+                    figures,
+                } => {
+                    let _ = writeln!(
+                        html,
+                        "<h2>{}</h2>\n<p>{}</p>\n<div class=\"pics\">",
+                        html_escape(heading),
+                        html_escape(caption)
+                    );
+                    for f in figures {
+                        let _ = writeln!(
+                            html,
+                            "<figure><a href=\"{src}\"><img src=\"{src}\" alt=\"{0}\"></a><figcaption>{0}</figcaption></figure>",
+                            html_escape(&f.title),
+                            src = html_escape(&f.src),
+                        );
+                    }
+                    html.push_str("</div>\n");
+                }
+            }
+        }
+        html.push_str("</body></html>\n");
+        html
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_page_renders_to_markdown_and_html() {
+        let page = Page {
+            title: "demo <1>".into(),
+            intro: "3 runs per scenario, base seed 1.".into(),
+            raw_data: "Raw data: <a href=\"results.jsonl\">results.jsonl</a>.".into(),
+            blocks: vec![
+                Block::Table("| a | b |\n|---|---:|\n| x | 1.00 |\n".into()),
+                Block::Heading("More".into()),
+                Block::Text("\n## Why\n\nBecause a < b\nand so on.\n".into()),
+                Block::Figures {
+                    heading: "Pictures".into(),
+                    caption: "runs".into(),
+                    figures: vec![Figure {
+                        title: "x".into(),
+                        src: "pictures/x.png".into(),
+                    }],
+                },
+            ],
+        };
+        let md = page.markdown();
+        assert!(md.starts_with("# demo <1> — results\n\n3 runs"), "{md}");
+        assert!(md.contains("| x | 1.00 |\n\n\n## More\n\n\n## Why"), "{md}");
+        assert!(!md.contains("pictures/x.png"));
+        let html = page.html();
+        assert!(html.contains("<h1>demo &lt;1&gt;</h1>"));
+        assert!(html.contains("<tr><td>x</td><td>1.00</td></tr>"));
+        assert!(html.contains("<p>Because a &lt; b and so on.</p>"));
+        assert!(html.contains("<img src=\"pictures/x.png\" alt=\"x\">"));
+        assert!(html.ends_with("</body></html>\n"));
+    }
+}

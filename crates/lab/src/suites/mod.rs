@@ -1,0 +1,52 @@
+//! The registry: every suite, listed once.
+//!
+//! A suite lives in its own folder here (its scenarios, metrics, report
+//! and explanation) and registers itself with one line in [`REGISTRY`];
+//! the generic core (runner, records, summaries, tables, pictures, page)
+//! knows no suite by name. ARCHITECTURE.md lists the steps to add one.
+
+pub mod deadlock;
+pub mod files;
+pub mod shared;
+pub mod voting;
+
+use anyhow::{Result, bail};
+
+use crate::suite::{Registration, Suite, SuiteArgs, SuiteInfo};
+
+/// Every suite, by name.
+pub const REGISTRY: &[Registration] = &[voting::REGISTRATION, deadlock::REGISTRATION, files::REGISTRATION];
+
+/// The suite registered as `name`.
+pub fn find(name: &str) -> Option<&'static Registration> {
+    REGISTRY.iter().find(|r| r.name == name)
+}
+
+/// The names of the registered suites, for messages.
+pub fn names() -> String {
+    REGISTRY
+        .iter()
+        .map(|r| format!("`{}`", r.name))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Builds the suite `name` with `args`.
+pub fn build(name: &str, args: &SuiteArgs) -> Result<Box<dyn Suite>> {
+    match find(name) {
+        Some(r) => (r.build)(args),
+        None => bail!("unknown suite `{name}`: the suites are {}", names()),
+    }
+}
+
+/// Rebuilds the suite a results folder describes.
+pub fn rebuild(info: &SuiteInfo) -> Result<Box<dyn Suite>> {
+    let suite = build(&info.suite, &SuiteArgs::of(info)?)?;
+    if !suite.info().same_batch(info) {
+        bail!(
+            "the suite `{}` is no longer the one that wrote this folder (its scenarios, runs or seed changed)",
+            info.suite
+        );
+    }
+    Ok(suite)
+}

@@ -1,0 +1,216 @@
+//! The voting suite (voting.md): the fourteen fields of
+//! `scenarios/voting/` × the four behaviour combinations of the source
+//! (`e1`…`e4`), and `e4` with the activity-trace layer (`e5`).
+//!
+//! Prints the four `I_R`/`I_T` tables side by side, the table of all
+//! scenarios, and an explanation checked against the source's observations
+//! ([`explanation`]). The fields are compiled into the binary, so the suite
+//! runs from anywhere; the files in `scenarios/voting/` are the same text,
+//! for reading and copying.
+
+mod explanation;
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use anyhow::{Context, Result};
+use nav::voting::Teams;
+
+use super::shared;
+use crate::experiment::Prepared;
+use crate::page::Block;
+use crate::scenario::{ControllerKind, Scenario};
+use crate::scenario_suite::{ScenarioHooks, ScenarioSuite};
+use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteReport};
+use crate::summary::Summary;
+use crate::tables::{self, fmt_ir, fmt_it};
+
+/// The suite in the registry.
+pub const REGISTRATION: Registration = Registration {
+    name: "voting",
+    about: "dynamic weighted voting: 14 fields × 4 behaviour combinations (+ the activity-trace layer), 50 runs each",
+    build,
+};
+
+/// The fourteen fields of the voting experiments, as shipped.
+pub const FIELDS: [(&str, &str); 14] = [
+    (
+        "field01",
+        include_str!("../../../../../scenarios/voting/field01.toml"),
+    ),
+    (
+        "field02",
+        include_str!("../../../../../scenarios/voting/field02.toml"),
+    ),
+    (
+        "field03",
+        include_str!("../../../../../scenarios/voting/field03.toml"),
+    ),
+    (
+        "field04",
+        include_str!("../../../../../scenarios/voting/field04.toml"),
+    ),
+    (
+        "field05",
+        include_str!("../../../../../scenarios/voting/field05.toml"),
+    ),
+    (
+        "field06",
+        include_str!("../../../../../scenarios/voting/field06.toml"),
+    ),
+    (
+        "field07",
+        include_str!("../../../../../scenarios/voting/field07.toml"),
+    ),
+    (
+        "field08",
+        include_str!("../../../../../scenarios/voting/field08.toml"),
+    ),
+    (
+        "field09",
+        include_str!("../../../../../scenarios/voting/field09.toml"),
+    ),
+    (
+        "field10",
+        include_str!("../../../../../scenarios/voting/field10.toml"),
+    ),
+    (
+        "field11",
+        include_str!("../../../../../scenarios/voting/field11.toml"),
+    ),
+    (
+        "field12",
+        include_str!("../../../../../scenarios/voting/field12.toml"),
+    ),
+    (
+        "field13",
+        include_str!("../../../../../scenarios/voting/field13.toml"),
+    ),
+    (
+        "field14",
+        include_str!("../../../../../scenarios/voting/field14.toml"),
+    ),
+];
+
+/// The experiments: `e1`…`e4` are the source's four behaviour
+/// combinations; `e5` is `e4` with the activity-trace layer (dead-lock
+/// detection and recovery, activity-trace.md).
+pub const EXPERIMENTS: u32 = 5;
+
+/// The label of an experiment (`e1` … `e5`), e.g. "IR+sonar / odo+plan".
+pub fn experiment_label(name: &str) -> Option<String> {
+    let k: u32 = name.strip_prefix('e')?.parse().ok()?;
+    match k {
+        5 => Teams::experiment(4).map(|t| format!("{} + trace", t.label())),
+        _ => Teams::experiment(k).map(|t| t.label()),
+    }
+}
+
+/// The suite with `args.runs` runs per scenario (default 50, the fields').
+pub fn suite(args: &SuiteArgs) -> Result<ScenarioSuite> {
+    let mut scenarios = Vec::new();
+    let mut runs_default = 50;
+    let mut seed = 1;
+    for k in 1..=EXPERIMENTS {
+        let teams = Teams::experiment(k.min(4)).context("experiment")?;
+        for (name, text) in FIELDS {
+            let mut s = Scenario::parse(text, &format!("scenarios/voting/{name}.toml"), None)?;
+            runs_default = s.runs;
+            seed = s.seed;
+            s.name = format!("e{k}/{name}");
+            s.controller.kind = ControllerKind::Voting;
+            s.controller.voting.teams = teams;
+            s.controller.trace_layer.enabled = k == 5;
+            s.controller.priority.recovery = true;
+            scenarios.push(Prepared::new(s)?);
+        }
+    }
+    Ok(ScenarioSuite::new(
+        REGISTRATION.name,
+        REGISTRATION.name,
+        args.runs.unwrap_or(runs_default),
+        seed,
+        scenarios,
+        BTreeMap::new(),
+        ScenarioHooks {
+            metrics: shared::deadlock_metric,
+            keep_events: &[],
+            markers: &shared::ACTIVITY_MARKERS,
+            report,
+        },
+    ))
+}
+
+fn build(args: &SuiteArgs) -> Result<Box<dyn Suite>> {
+    Ok(Box::new(suite(args)?))
+}
+
+/// The four `I_R`/`I_T` tables side by side: one row per field, two
+/// columns per combination. Returns (text, markdown).
+pub fn tables(summaries: &[Summary]) -> (String, String) {
+    let by: BTreeMap<&str, &Summary> = summaries.iter().map(|s| (s.scenario.as_str(), s)).collect();
+    let mut fields: Vec<&str> = Vec::new();
+    let mut experiments: Vec<&str> = Vec::new();
+    for s in summaries {
+        if let Some((e, f)) = s.scenario.split_once('/') {
+            if !fields.contains(&f) {
+                fields.push(f);
+            }
+            if !experiments.contains(&e) {
+                experiments.push(e);
+            }
+        }
+    }
+    let mut md = String::from("| field |");
+    for e in &experiments {
+        let _ = write!(md, " {e} I_R | {e} I_T (s) |");
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---:|---:|".repeat(experiments.len()));
+    md.push('\n');
+    let mut txt = String::new();
+    let _ = write!(txt, "{:<8}", "");
+    for e in &experiments {
+        let label = experiment_label(e).unwrap_or_default();
+        let _ = write!(txt, "  {:<22}", format!("{e} {label}"));
+    }
+    txt.push('\n');
+    let _ = write!(txt, "{:<8}", "field");
+    for _ in &experiments {
+        let _ = write!(txt, "  {:>8} {:>13}", "I_R", "I_T (s)");
+    }
+    txt.push('\n');
+    for f in &fields {
+        let _ = write!(md, "| {f} |");
+        let _ = write!(txt, "{f:<8}");
+        for e in &experiments {
+            match by.get(format!("{e}/{f}").as_str()) {
+                Some(s) => {
+                    let _ = write!(md, " {} | {} |", fmt_ir(s), fmt_it(s));
+                    let _ = write!(txt, "  {:>8} {:>13}", fmt_ir(s), fmt_it(s));
+                }
+                None => {
+                    md.push_str(" - | - |");
+                    let _ = write!(txt, "  {:>8} {:>13}", "-", "-");
+                }
+            }
+        }
+        md.push('\n');
+        txt.push('\n');
+    }
+    (txt, md)
+}
+
+fn report(suite: &ScenarioSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport> {
+    let (text, main) = tables(ctx.summaries);
+    let (_, all) = tables::generic_table(ctx.summaries, &[shared::DEADLOCK_COLUMN]);
+    let mut blocks = vec![
+        Block::Table(main),
+        Block::Heading("All scenarios".into()),
+        Block::Table(all),
+        Block::Text(explanation::explanation(ctx.summaries, ctx.runs)),
+    ];
+    let mut files = Vec::new();
+    blocks.extend(suite.pictures(ctx, &shared::pictures_caption(), &mut files)?);
+    Ok(SuiteReport { text, blocks, files })
+}

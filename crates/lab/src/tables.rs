@@ -1,0 +1,232 @@
+//! Tables of summaries: the one-row-per-scenario table every suite can
+//! show (with the metric columns the suite chooses), CSV, and number
+//! formats shared by the suites' own tables.
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+
+use crate::summary::Summary;
+
+/// A metric shown as a column of the generic table: its mean per run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MetricColumn {
+    /// The metric's name in the records.
+    pub metric: &'static str,
+    /// Column heading in Markdown and HTML.
+    pub heading: &'static str,
+    /// Column heading in the terminal table (short).
+    pub short: &'static str,
+    /// Decimals shown.
+    pub decimals: usize,
+}
+
+/// `I_R` with two decimals, `-` without runs.
+pub fn fmt_ir(s: &Summary) -> String {
+    if s.runs == 0 {
+        "-".into()
+    } else {
+        format!("{:.2}", s.reliability.value)
+    }
+}
+
+/// `I_T` with one decimal, `-` without successful runs.
+pub fn fmt_it(s: &Summary) -> String {
+    if s.time.n == 0 {
+        "-".into()
+    } else {
+        format!("{:.1}", s.time.mean)
+    }
+}
+
+/// Width of the scenario column of the terminal table.
+const NAME_WIDTH: usize = 24;
+
+/// Column widths of the terminal table after the scenario's.
+const WIDTHS: [usize; 9] = [5, 6, 15, 8, 6, 8, 10, 8, 5];
+
+/// Smallest width of a metric column in the terminal table.
+const METRIC_WIDTH: usize = 9;
+
+/// One row per scenario, for any suite, with `metrics` as extra columns:
+/// (terminal text, Markdown).
+pub fn generic_table(summaries: &[Summary], metrics: &[MetricColumn]) -> (String, String) {
+    let mut md = String::from(
+        "| scenario | runs | I_R | 95% CI | I_T (s) | ± | path (m) | collisions | timeouts | lost |",
+    );
+    for m in metrics {
+        let _ = write!(md, " {} |", m.heading);
+    }
+    md.push_str("\n|---|---:|---:|---|---:|---:|---:|---:|---:|---:|");
+    md.push_str(&"---:|".repeat(metrics.len()));
+    md.push('\n');
+    const HEADS: [&str; 10] = [
+        "scenario",
+        "runs",
+        "I_R",
+        "95% CI",
+        "I_T (s)",
+        "±",
+        "path(m)",
+        "collisions",
+        "timeouts",
+        "lost",
+    ];
+    let widths: Vec<usize> = WIDTHS
+        .iter()
+        .copied()
+        .chain(metrics.iter().map(|m| m.short.chars().count().max(METRIC_WIDTH)))
+        .collect();
+    let mut txt = format!("{:<NAME_WIDTH$}", HEADS[0]);
+    let heads = HEADS[1..].iter().copied().chain(metrics.iter().map(|m| m.short));
+    for (h, w) in heads.zip(&widths) {
+        let _ = write!(txt, " {h:>w$}");
+    }
+    txt.push('\n');
+    for s in summaries {
+        let ci = format!("{:.2}–{:.2}", s.reliability.low, s.reliability.high);
+        let hw = if s.time.half_width.is_finite() {
+            format!("{:.1}", s.time.half_width)
+        } else {
+            "-".into()
+        };
+        let path = if s.path_length.n > 0 {
+            format!("{:.2}", s.path_length.mean)
+        } else {
+            "-".into()
+        };
+        let mut cells = vec![
+            s.scenario.clone(),
+            s.runs.to_string(),
+            fmt_ir(s),
+            ci,
+            fmt_it(s),
+            hw,
+            path,
+            s.collisions.to_string(),
+            s.timeouts.to_string(),
+            s.lost.to_string(),
+        ];
+        for m in metrics {
+            let v = s.metric_mean(m.metric);
+            cells.push(if v.is_finite() {
+                format!("{v:.prec$}", prec = m.decimals)
+            } else {
+                "-".into()
+            });
+        }
+        let _ = writeln!(md, "| {} |", cells.join(" | "));
+        let _ = write!(txt, "{:<NAME_WIDTH$}", cells[0]);
+        for (c, w) in cells[1..].iter().zip(&widths) {
+            let _ = write!(txt, " {c:>w$}");
+        }
+        txt.push('\n');
+    }
+    (txt, md)
+}
+
+/// The summaries as CSV (one row per scenario); every metric found in
+/// any summary gets a mean and a half-width column (`<name>_mean`,
+/// `<name>_half_width`), in name order.
+pub fn csv(summaries: &[Summary]) -> String {
+    let names: BTreeSet<&str> = summaries
+        .iter()
+        .flat_map(|s| s.metrics.keys().map(String::as_str))
+        .collect();
+    let mut out = String::from(
+        "scenario,runs,successes,I_R,I_R_low,I_R_high,I_T_s,I_T_half_width_s,path_length_m,collisions,timeouts,gave_up,lost",
+    );
+    for n in &names {
+        let _ = write!(out, ",{n}_mean,{n}_half_width");
+    }
+    out.push('\n');
+    for s in summaries {
+        let _ = write!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            s.scenario,
+            s.runs,
+            s.reliability.successes,
+            s.reliability.value,
+            s.reliability.low,
+            s.reliability.high,
+            s.time.mean,
+            s.time.half_width,
+            s.path_length.mean,
+            s.collisions,
+            s.timeouts,
+            s.gave_up,
+            s.lost,
+        );
+        for n in &names {
+            match s.metrics.get(*n) {
+                Some(m) => {
+                    let _ = write!(out, ",{},{}", m.mean, m.half_width);
+                }
+                None => out.push_str(",,"),
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::RunRecord;
+
+    fn summary(name: &str, deadlocks: Option<f64>) -> Summary {
+        let r = RunRecord {
+            success: true,
+            outcome: "goal".into(),
+            time_s: 10.0,
+            path_length_m: 2.0,
+            collisions: 0,
+            min_clearance_m: 0.5,
+            odometry_error_m: 0.0,
+            goal_distance_m: 0.1,
+            ticks: 100,
+            behaviour_ticks: Default::default(),
+            metrics: deadlocks
+                .map(|d| ("deadlocks".to_string(), d))
+                .into_iter()
+                .collect(),
+            events: Vec::new(),
+            start: [0.0; 3],
+            trap: None,
+        };
+        Summary::of(name, &[&r])
+    }
+
+    #[test]
+    fn metric_columns_are_the_suites_choice_and_missing_values_show_as_dashes() {
+        let col = MetricColumn {
+            metric: "deadlocks",
+            heading: "dead-locks/run",
+            short: "deadlocks",
+            decimals: 2,
+        };
+        let ss = [summary("a", Some(3.0)), summary("b", None)];
+        let (txt, md) = generic_table(&ss, &[col]);
+        assert!(
+            md.starts_with("| scenario |") && md.contains("| dead-locks/run |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| 3.00 |") && md.lines().nth(3).unwrap().ends_with("| - |"),
+            "{md}"
+        );
+        assert!(txt.lines().next().unwrap().ends_with("deadlocks"), "{txt}");
+        let (_, plain) = generic_table(&ss, &[]);
+        assert!(!plain.contains("dead-locks"));
+        let csv = csv(&ss);
+        assert!(
+            csv.lines()
+                .next()
+                .unwrap()
+                .ends_with(",lost,deadlocks_mean,deadlocks_half_width"),
+            "{csv}"
+        );
+        assert!(csv.lines().nth(2).unwrap().ends_with(",,"), "{csv}");
+    }
+}
