@@ -396,10 +396,7 @@ impl Controller for PriorityController {
             if let Some(e) = event {
                 notes.event(robot::Event::new(e.label(), perception.time_s).at(here));
                 if let Some(d) = self.trace.record(e, here, Some(goal), perception.time_s) {
-                    notes.event(robot::Event::new("deadlock", perception.time_s).at(Vec2::new(
-                        (d.x * 100.0).round() / 100.0,
-                        (d.y * 100.0).round() / 100.0,
-                    )));
+                    notes.event(robot::Event::new("deadlock", perception.time_s).at(d));
                     if p.recovery {
                         self.recovering = true;
                     }

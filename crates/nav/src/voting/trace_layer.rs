@@ -17,7 +17,7 @@
 //! instead of the goal's bearing. Parameters (`r_T`, `ε`, the field) are the
 //! priority controller's ([`PriorityParams`]).
 
-use robot::{Controller, Notes, Perception, Step, Vec2};
+use robot::{Controller, Notes, Perception, Step};
 
 use super::VotingController;
 use crate::activity::{ActivityTrace, Event, PriorityParams, field};
@@ -113,10 +113,7 @@ impl Controller for TracedVoting {
         if let Some(e) = event {
             notes.event(robot::Event::new(e.label(), perception.time_s).at(here));
             if let Some(d) = self.trace.record(e, here, perception.goal, perception.time_s) {
-                notes.event(robot::Event::new("deadlock", perception.time_s).at(Vec2::new(
-                    (d.x * 100.0).round() / 100.0,
-                    (d.y * 100.0).round() / 100.0,
-                )));
+                notes.event(robot::Event::new("deadlock", perception.time_s).at(d));
                 if self.p.recovery {
                     self.recovering = true;
                 }
