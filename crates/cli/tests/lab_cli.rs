@@ -199,3 +199,64 @@ fn a_malformed_scenario_names_the_key_and_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("runs") && err.contains("line 2"), "{err}");
 }
+
+#[test]
+fn three_merged_shards_equal_the_unsharded_batch() {
+    let whole = fresh("merge_whole");
+    let out = run_voting(&whole, "2", "2", &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut parts = Vec::new();
+    for i in 1..=3 {
+        let part = fresh(&format!("merge_part{i}"));
+        let out = run_voting(&part, "2", "1", &["--shard", &format!("{i}/3")]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(lines(&part.join("results.jsonl")) < 5 * 14 * 2);
+        parts.push(part);
+    }
+    let merged = fresh("merge_out");
+    let mut args = vec!["lab", "merge", merged.to_str().unwrap()];
+    args.extend(parts.iter().map(|p| p.to_str().unwrap()));
+    args.push("--no-pictures");
+    let out = petrinav(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        std::fs::read(merged.join("results.jsonl")).unwrap(),
+        std::fs::read(whole.join("results.jsonl")).unwrap(),
+        "merged shards differ from the unsharded batch"
+    );
+    assert_eq!(
+        std::fs::read(merged.join("tables.md")).unwrap(),
+        std::fs::read(whole.join("tables.md")).unwrap()
+    );
+    // Two shards only: the missing runs are named, and resuming in the
+    // merged folder completes the batch to the same file.
+    let partial = fresh("merge_partial");
+    let out = petrinav(&[
+        "lab",
+        "merge",
+        partial.to_str().unwrap(),
+        parts[0].to_str().unwrap(),
+        parts[2].to_str().unwrap(),
+        "--no-pictures",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("are in no part"));
+    let out = run_voting(&partial, "2", "2", &["--resume"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        std::fs::read(partial.join("results.jsonl")).unwrap(),
+        std::fs::read(whole.join("results.jsonl")).unwrap()
+    );
+    // Parts of different batches are refused.
+    let other = fresh("merge_other");
+    assert!(run_voting(&other, "1", "2", &["--shard", "2/3"]).status.success());
+    let out = petrinav(&[
+        "lab",
+        "merge",
+        fresh("merge_refused").to_str().unwrap(),
+        parts[0].to_str().unwrap(),
+        other.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not parts of the same batch"));
+}

@@ -244,8 +244,9 @@ fn unique_keys(keys: &[String]) -> Result<()> {
 /// `seed` fields added), then rewrites the file in job order.
 ///
 /// `run(job, earlier)` gets the complete results lines of the campaign's
-/// earlier runs, in order — the lines as written to the file, whether they
-/// were run now or read back on resume.
+/// earlier runs, in order — the lines as written to the file and parsed
+/// back, whether they were run now or read on resume, so a campaign's state
+/// is the same either way, to the last bit.
 pub fn run_batch<F>(campaigns: &[Campaign], params: &BatchParams, run: F) -> Result<BatchSummary>
 where
     F: Fn(&Job, &[Value]) -> Result<Value> + Sync,
@@ -320,6 +321,10 @@ where
             failures.fetch_add(1, Ordering::Relaxed);
         }
         let mut line = serde_json::to_string(&record)?;
+        // Hand on what the file holds, parsed back, so that a campaign's
+        // later runs see the same numbers whether they follow now or after
+        // a resume (serde_json's `float_roundtrip` makes the two equal).
+        let record: Value = serde_json::from_str(&line)?;
         line.push('\n');
         {
             let mut f = sink

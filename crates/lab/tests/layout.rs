@@ -1,0 +1,200 @@
+//! The lab's layout holds: the modules of `src/` form no cycle, the generic
+//! core uses nothing of `suites`, and no suite is named outside the
+//! registry's folder.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// Every `.rs` file under `dir`.
+fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let p = entry.unwrap().path();
+        if p.is_dir() {
+            sources(&p, out);
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// The node of a file: `crate` for lib.rs, a core module (`runner`), the
+/// registry (`suites`), or one suite's folder or shared file
+/// (`suites::voting`, `suites::shared`).
+fn node_of(rel: &Path) -> String {
+    let parts: Vec<String> = rel
+        .with_extension("")
+        .iter()
+        .map(|c| c.to_string_lossy().into_owned())
+        .collect();
+    match parts.as_slice() {
+        [lib] if lib == "lib" => "crate".into(),
+        [m] => m.clone(),
+        [s, m] if s == "suites" && m == "mod" => "suites".into(),
+        [s, m, ..] if s == "suites" => format!("suites::{m}"),
+        [m, ..] => m.clone(),
+        [] => unreachable!(),
+    }
+}
+
+/// The node a path after `crate::` names.
+fn node_of_path(segments: &[&str]) -> Option<String> {
+    match segments {
+        ["suites", next, ..] if next.chars().all(|c| c.is_ascii_lowercase() || c == '_') => {
+            // `crate::suites::REGISTRY` is the registry itself.
+            Some(format!("suites::{next}"))
+        }
+        [first, ..] => Some(first.to_string()),
+        [] => None,
+    }
+}
+
+/// Paths used after `crate::` in a file (`use crate::{a, b::c}` expanded).
+fn crate_paths(text: &str) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(k) = rest.find("crate::") {
+        rest = &rest[k + "crate::".len()..];
+        if let Some(inner) = rest.strip_prefix('{') {
+            let end = inner.find('}').unwrap_or(inner.len());
+            for item in inner[..end].split(',') {
+                let path: Vec<String> = item
+                    .trim()
+                    .split("::")
+                    .map(|s| s.trim().to_string())
+                    .filter(|s| !s.is_empty())
+                    .collect();
+                if !path.is_empty() {
+                    out.push(path);
+                }
+            }
+        } else {
+            let end = rest
+                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == ':'))
+                .unwrap_or(rest.len());
+            out.push(
+                rest[..end]
+                    .split("::")
+                    .filter(|s| !s.is_empty())
+                    .map(str::to_string)
+                    .collect(),
+            );
+        }
+    }
+    out
+}
+
+fn graph() -> (BTreeMap<String, BTreeSet<String>>, BTreeMap<String, String>) {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    sources(&src, &mut files);
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut texts = BTreeMap::new();
+    for f in files {
+        let rel = f.strip_prefix(&src).unwrap().to_path_buf();
+        let node = node_of(&rel);
+        let text = std::fs::read_to_string(&f).unwrap();
+        // Code only: doc links name modules without depending on them.
+        let code: String = text
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let targets = edges.entry(node.clone()).or_default();
+        for path in crate_paths(&code) {
+            let segs: Vec<&str> = path.iter().map(String::as_str).collect();
+            if let Some(t) = node_of_path(&segs) {
+                targets.insert(t);
+            }
+        }
+        // `super::x` inside a suite's folder names a sibling in `suites`.
+        if node.starts_with("suites::") && rel.iter().count() == 3 {
+            for line in code.lines().filter(|l| l.trim_start().starts_with("use super::")) {
+                let name = line.trim_start()["use super::".len()..]
+                    .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                    .next()
+                    .unwrap_or("");
+                targets.insert(format!("suites::{name}"));
+            }
+        }
+        targets.remove(&node);
+        texts.insert(rel.display().to_string(), code);
+    }
+    (edges, texts)
+}
+
+#[test]
+fn the_modules_form_no_cycle() {
+    let (edges, _) = graph();
+    assert!(edges.contains_key("runner") && edges.contains_key("suites::voting"));
+    // Depth-first search for a back edge.
+    fn visit(
+        n: &str,
+        edges: &BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<String, u8>,
+        stack: &mut Vec<String>,
+    ) {
+        state.insert(n.to_string(), 1);
+        stack.push(n.to_string());
+        for t in edges.get(n).into_iter().flatten() {
+            match state.get(t.as_str()) {
+                Some(1) => panic!("module cycle: {} → {t}", stack.join(" → ")),
+                Some(_) => {}
+                None => visit(t, edges, state, stack),
+            }
+        }
+        stack.pop();
+        state.insert(n.to_string(), 2);
+    }
+    let mut state = BTreeMap::new();
+    for n in edges.keys() {
+        if !state.contains_key(n.as_str()) {
+            visit(n, &edges, &mut state, &mut Vec::new());
+        }
+    }
+}
+
+#[test]
+fn the_core_uses_no_suite_and_names_none() {
+    let (edges, texts) = graph();
+    for (node, targets) in &edges {
+        if node.starts_with("suites") || node == "crate" {
+            continue;
+        }
+        let into_suites: Vec<&String> = targets.iter().filter(|t| t.starts_with("suites")).collect();
+        assert!(
+            into_suites.is_empty(),
+            "core module `{node}` uses {into_suites:?}"
+        );
+    }
+    let names: Vec<&str> = lab::suites::REGISTRY.iter().map(|r| r.name).collect();
+    assert!(names.contains(&"voting") && names.contains(&"deadlock"));
+    for (file, text) in &texts {
+        if file.starts_with("suites") {
+            continue;
+        }
+        for name in &names {
+            assert!(
+                !text.contains(&format!("\"{name}\"")),
+                "{file} names the suite `{name}`: suites are looked up in the registry"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_scanner_sees_grouped_and_nested_paths() {
+    let paths = crate_paths("use crate::{page::Block, tables};\nlet x = crate::suites::voting::FIELDS;");
+    assert_eq!(
+        paths,
+        vec![
+            vec!["page".to_string(), "Block".into()],
+            vec!["tables".to_string()],
+            vec!["suites".to_string(), "voting".into(), "FIELDS".into()],
+        ]
+    );
+    assert_eq!(
+        node_of(Path::new("suites/voting/explanation.rs")),
+        "suites::voting"
+    );
+    assert_eq!(node_of(Path::new("suites/mod.rs")), "suites");
+}
