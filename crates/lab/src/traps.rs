@@ -21,7 +21,7 @@
 //!
 //! **What makes a trap** (measured with the priority controller on the
 //! 16-sonar robot, 200 runs each, no recovery; `petrinav lab run FILE.toml`
-//! on copies of `scenarios/deadlock/priority.toml`): a U is a local minimum
+//! on copies of `crates/lab/src/suites/deadlock/scenarios/priority.toml`): a U is a local minimum
 //! for a goal seeker when the goal lies behind its back wall as seen from the
 //! opening. The shipped suite's U (depth 1.0–1.8 m, opening 1.2–2.0 m, turned
 //! ≤ 20°) holds the plain controller in about 4 runs of 5. The defaults above

@@ -23,7 +23,7 @@
 //!
 //! Measured on field 10 of the voting suite (a wall with a 0.55 m gap; the
 //! voting controller with the trace layer, 50 runs, `petrinav lab run` on
-//! copies of `scenarios/voting/field10.toml` with `[controller.trace_layer]
+//! copies of the voting suite's `field10.toml` with `[controller.trace_layer]
 //! enabled = true`): without the layer 0.98; with it and the source's
 //! detector (`progress_m = inf`) 0.54, 1.28 dead-locks detected per run —
 //! the robot approaching the gap along the wall makes the chunk, and the

@@ -6,7 +6,7 @@
 //!
 //! Prints one row per scenario (success, time, path, failures, dead-locks
 //! per run) and an explanation from the numbers ([`explanation`]). The
-//! scenarios of `scenarios/deadlock/` are compiled into the binary.
+//! scenarios in `scenarios/` here are compiled into the binary.
 
 mod explanation;
 
@@ -31,34 +31,22 @@ pub const REGISTRATION: Registration = Registration {
 
 /// The suite's scenarios, as shipped.
 pub const SCENARIOS: [(&str, &str); 7] = [
-    (
-        "priority",
-        include_str!("../../../../../scenarios/deadlock/priority.toml"),
-    ),
+    ("priority", include_str!("scenarios/priority.toml")),
     (
         "priority_recovery",
-        include_str!("../../../../../scenarios/deadlock/priority_recovery.toml"),
+        include_str!("scenarios/priority_recovery.toml"),
     ),
     (
         "priority_recovery_slips",
-        include_str!("../../../../../scenarios/deadlock/priority_recovery_slips.toml"),
+        include_str!("scenarios/priority_recovery_slips.toml"),
     ),
-    (
-        "priority_v",
-        include_str!("../../../../../scenarios/deadlock/priority_v.toml"),
-    ),
+    ("priority_v", include_str!("scenarios/priority_v.toml")),
     (
         "priority_v_recovery",
-        include_str!("../../../../../scenarios/deadlock/priority_v_recovery.toml"),
+        include_str!("scenarios/priority_v_recovery.toml"),
     ),
-    (
-        "voting",
-        include_str!("../../../../../scenarios/deadlock/voting.toml"),
-    ),
-    (
-        "voting_trace",
-        include_str!("../../../../../scenarios/deadlock/voting_trace.toml"),
-    ),
+    ("voting", include_str!("scenarios/voting.toml")),
+    ("voting_trace", include_str!("scenarios/voting_trace.toml")),
 ];
 
 /// The suite with `args.runs` runs per scenario (default 200, the files').
@@ -67,7 +55,11 @@ pub fn suite(args: &SuiteArgs) -> Result<ScenarioSuite> {
     let mut runs_default = 200;
     let mut seed = 1;
     for (name, text) in SCENARIOS {
-        let s = Scenario::parse(text, &format!("scenarios/deadlock/{name}.toml"), None)?;
+        let s = Scenario::parse(
+            text,
+            &format!("crates/lab/src/suites/deadlock/scenarios/{name}.toml"),
+            None,
+        )?;
         runs_default = s.runs;
         seed = s.seed;
         scenarios.push(Prepared::new(s)?);

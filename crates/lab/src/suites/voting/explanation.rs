@@ -193,7 +193,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         );
     }
     out.push_str(
-        "Where a verdict says NOT, the simulator disagrees with the publication; the fields were not tuned until they agree (their design rules are in `scenarios/voting/`: scattered obstacles leave gaps of at least 0.9 m, goals stand at least 1.4 m from the wall ahead, trap walls are thick enough for the IR to see their ends). The numbers per field above, the trajectories below, `petrinav lab replay DIR RUN` for any single run, and `results.jsonl` (one record per run, reproducible from its seed) show where and how.\n",
+        "Where a verdict says NOT, the simulator disagrees with the publication; the fields were not tuned until they agree (their design rules are in `crates/lab/src/suites/voting/scenarios/`: scattered obstacles leave gaps of at least 0.9 m, goals stand at least 1.4 m from the wall ahead, trap walls are thick enough for the IR to see their ends). The numbers per field above, the trajectories below, `petrinav lab replay DIR RUN` for any single run, and `results.jsonl` (one record per run, reproducible from its seed) show where and how.\n",
     );
     out
 }

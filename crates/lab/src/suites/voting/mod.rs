@@ -1,11 +1,11 @@
 //! The voting suite (voting.md): the fourteen fields of
-//! `scenarios/voting/` × the four behaviour combinations of the source
+//! `scenarios/` here × the four behaviour combinations of the source
 //! (`e1`…`e4`), and `e4` with the activity-trace layer (`e5`).
 //!
 //! Prints the four `I_R`/`I_T` tables side by side, the table of all
 //! scenarios, and an explanation checked against the source's observations
 //! ([`explanation`]). The fields are compiled into the binary, so the suite
-//! runs from anywhere; the files in `scenarios/voting/` are the same text,
+//! runs from anywhere; the files in `scenarios/` are the same text,
 //! for reading and copying.
 
 mod explanation;
@@ -34,62 +34,20 @@ pub const REGISTRATION: Registration = Registration {
 
 /// The fourteen fields of the voting experiments, as shipped.
 pub const FIELDS: [(&str, &str); 14] = [
-    (
-        "field01",
-        include_str!("../../../../../scenarios/voting/field01.toml"),
-    ),
-    (
-        "field02",
-        include_str!("../../../../../scenarios/voting/field02.toml"),
-    ),
-    (
-        "field03",
-        include_str!("../../../../../scenarios/voting/field03.toml"),
-    ),
-    (
-        "field04",
-        include_str!("../../../../../scenarios/voting/field04.toml"),
-    ),
-    (
-        "field05",
-        include_str!("../../../../../scenarios/voting/field05.toml"),
-    ),
-    (
-        "field06",
-        include_str!("../../../../../scenarios/voting/field06.toml"),
-    ),
-    (
-        "field07",
-        include_str!("../../../../../scenarios/voting/field07.toml"),
-    ),
-    (
-        "field08",
-        include_str!("../../../../../scenarios/voting/field08.toml"),
-    ),
-    (
-        "field09",
-        include_str!("../../../../../scenarios/voting/field09.toml"),
-    ),
-    (
-        "field10",
-        include_str!("../../../../../scenarios/voting/field10.toml"),
-    ),
-    (
-        "field11",
-        include_str!("../../../../../scenarios/voting/field11.toml"),
-    ),
-    (
-        "field12",
-        include_str!("../../../../../scenarios/voting/field12.toml"),
-    ),
-    (
-        "field13",
-        include_str!("../../../../../scenarios/voting/field13.toml"),
-    ),
-    (
-        "field14",
-        include_str!("../../../../../scenarios/voting/field14.toml"),
-    ),
+    ("field01", include_str!("scenarios/field01.toml")),
+    ("field02", include_str!("scenarios/field02.toml")),
+    ("field03", include_str!("scenarios/field03.toml")),
+    ("field04", include_str!("scenarios/field04.toml")),
+    ("field05", include_str!("scenarios/field05.toml")),
+    ("field06", include_str!("scenarios/field06.toml")),
+    ("field07", include_str!("scenarios/field07.toml")),
+    ("field08", include_str!("scenarios/field08.toml")),
+    ("field09", include_str!("scenarios/field09.toml")),
+    ("field10", include_str!("scenarios/field10.toml")),
+    ("field11", include_str!("scenarios/field11.toml")),
+    ("field12", include_str!("scenarios/field12.toml")),
+    ("field13", include_str!("scenarios/field13.toml")),
+    ("field14", include_str!("scenarios/field14.toml")),
 ];
 
 /// The experiments: `e1`…`e4` are the source's four behaviour
@@ -114,7 +72,11 @@ pub fn suite(args: &SuiteArgs) -> Result<ScenarioSuite> {
     for k in 1..=EXPERIMENTS {
         let teams = Teams::experiment(k.min(4)).context("experiment")?;
         for (name, text) in FIELDS {
-            let mut s = Scenario::parse(text, &format!("scenarios/voting/{name}.toml"), None)?;
+            let mut s = Scenario::parse(
+                text,
+                &format!("crates/lab/src/suites/voting/scenarios/{name}.toml"),
+                None,
+            )?;
             runs_default = s.runs;
             seed = s.seed;
             s.name = format!("e{k}/{name}");
