@@ -253,7 +253,7 @@ impl Prepared {
 ///
 /// The per-run variation of the scenario (start pose, obstacle jitter, the
 /// drawn trap) comes from `variation`, the simulator's noise from `sim`. A
-/// suite derives both from the run index alone ([`crate::suite::Suite::seeds`]):
+/// suite derives both from the run index alone ([`crate::scenario_suite::ScenarioSuite::seeds`]):
 /// run `k` of every scenario in a suite meets the same variation and the
 /// same noise, so controllers are compared on the same draws (common random
 /// numbers).

@@ -5,7 +5,7 @@
 //! the trace layer.
 //!
 //! Prints one row per scenario (success, time, path, failures, dead-locks
-//! per run) and an explanation from the numbers ([`explanation`]). The
+//! per run) and an explanation from the numbers (`explanation.rs`). The
 //! scenarios in `scenarios/` here are compiled into the binary.
 
 mod explanation;

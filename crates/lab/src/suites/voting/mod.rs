@@ -4,7 +4,7 @@
 //!
 //! Prints the four `I_R`/`I_T` tables side by side, the table of all
 //! scenarios, and an explanation checked against the source's observations
-//! ([`explanation`]). The fields are compiled into the binary, so the suite
+//! (`explanation.rs`). The fields are compiled into the binary, so the suite
 //! runs from anywhere; the files in `scenarios/` are the same text,
 //! for reading and copying.
 
