@@ -308,4 +308,8 @@ impl Controller for Counting {
         }
         step
     }
+
+    fn request(&self) -> Option<robot::Request> {
+        self.inner.request()
+    }
 }

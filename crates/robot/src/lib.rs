@@ -330,11 +330,31 @@ impl Notes {
     }
 }
 
+/// What a robot may ask of the people around it (on its speaker or
+/// screen), besides moving.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Request {
+    /// "Excuse me, please step aside": the people within `radius_m` of the
+    /// robot's centre are asked to move away from it.
+    StepAside {
+        /// Radius of the request around the robot, metres.
+        radius_m: f64,
+    },
+}
+
 /// A controller: perception in, command out, once per control period.
 pub trait Controller {
     /// Decides the command for this tick. `notes` is cleared by the caller
     /// before each tick.
     fn step(&mut self, perception: &Perception, notes: &mut Notes) -> Step;
+
+    /// What the controller asks of the people around the robot this tick;
+    /// the robot reads it after each [`Controller::step`] and plays it.
+    /// Controllers that wrap another pass its request on. Default: nothing.
+    fn request(&self) -> Option<Request> {
+        None
+    }
 }
 
 #[cfg(test)]

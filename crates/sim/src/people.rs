@@ -39,6 +39,15 @@
 //! corridors and exhibits, and people crossing to the next target step in
 //! front of the robot.
 //!
+//! **Asked to step aside.** When the robot asks ([`robot::Request`]), each
+//! person whose centre is within the request's radius complies with
+//! probability `step_aside_compliance`; after a reaction delay (uniform in
+//! 0.5–1.5 × `step_aside_delay_s`, drawn per person) they walk to a free
+//! point `step_aside_distance_m` outside the radius, away from where the
+//! robot was when it asked (within ±60° of the direction away from it,
+//! reachable in a straight line when possible), then carry on as after any
+//! target: linger there or walk to the next exhibit.
+//!
 //! **Cost.** A uniform spatial hash with buckets of the interaction range:
 //! `O(n)` per step for bounded density, no allocation.
 
@@ -138,6 +147,15 @@ pub struct CrowdParams {
     /// Nobody is placed within this distance of the robot's footprint at
     /// the start, metres. Default 1.0.
     pub keep_clear_m: f64,
+    /// Mean delay before a person asked to step aside moves, seconds
+    /// (each draws uniformly in 0.5–1.5 × this). Default 1.0.
+    pub step_aside_delay_s: f64,
+    /// People asked to step aside walk to this far outside the request's
+    /// radius, metres. Default 1.0.
+    pub step_aside_distance_m: f64,
+    /// Probability that a person asked to step aside does, in [0, 1].
+    /// Default 1.0.
+    pub step_aside_compliance: f64,
 }
 
 impl Default for CrowdParams {
@@ -164,6 +182,9 @@ impl Default for CrowdParams {
             wall_range_m: 0.1,
             anisotropy: 0.5,
             keep_clear_m: 1.0,
+            step_aside_delay_s: 1.0,
+            step_aside_distance_m: 1.0,
+            step_aside_compliance: 1.0,
         }
     }
 }
@@ -200,7 +221,10 @@ impl CrowdParams {
         validate::non_negative("crowd.wall_repulsion_mps2", self.wall_repulsion_mps2)?;
         validate::positive("crowd.wall_range_m", self.wall_range_m)?;
         validate::within("crowd.anisotropy", self.anisotropy, 0.0, 1.0, "in [0, 1]")?;
-        validate::non_negative("crowd.keep_clear_m", self.keep_clear_m)
+        validate::non_negative("crowd.keep_clear_m", self.keep_clear_m)?;
+        validate::non_negative("crowd.step_aside_delay_s", self.step_aside_delay_s)?;
+        validate::non_negative("crowd.step_aside_distance_m", self.step_aside_distance_m)?;
+        validate::probability("crowd.step_aside_compliance", self.step_aside_compliance)
     }
 
     /// How many people this crowd places at random on a map with
@@ -260,6 +284,19 @@ pub struct Person {
     pub activity: Activity,
     /// The exhibit the target belongs to, if any.
     pub waypoint: Option<usize>,
+    /// A request to step aside the person will act on.
+    pub asked: Option<Asked>,
+}
+
+/// A request to step aside, pending until its reaction time.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Asked {
+    /// Where the robot was when it asked, world frame.
+    pub from: Vec2,
+    /// The request's radius, metres.
+    pub radius_m: f64,
+    /// When the person moves, seconds.
+    pub react_at_s: f64,
 }
 
 /// The people of one run (module docs).
@@ -450,6 +487,7 @@ impl Crowd {
             target,
             activity,
             waypoint,
+            asked: None,
         }
     }
 
@@ -488,6 +526,54 @@ impl Crowd {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// The robot at `robot_at` asks the people within `radius_m` of it to
+    /// step aside at `time_s` (module docs). People already asked are left
+    /// as they are; a radius that is not a finite number > 0 asks nobody.
+    /// Returns how many people were asked.
+    pub fn ask_to_step_aside(&mut self, world: &World, robot_at: Vec2, radius_m: f64, time_s: f64) -> usize {
+        if !(radius_m.is_finite() && radius_m > 0.0) {
+            return 0;
+        }
+        let p = world.crowd();
+        let mut asked = 0;
+        for me in &mut self.people {
+            if me.asked.is_some() || dist(me.position, robot_at) > radius_m {
+                continue;
+            }
+            if !self.rng.chance(p.step_aside_compliance) {
+                continue;
+            }
+            let delay = p.step_aside_delay_s * self.rng.uniform_in(0.5, 1.5);
+            me.asked = Some(Asked {
+                from: robot_at,
+                radius_m,
+                react_at_s: time_s + delay,
+            });
+            asked += 1;
+        }
+        asked
+    }
+
+    /// Where a person asked to step aside goes (module docs).
+    fn aside_target(world: &World, rng: &mut RandomStream, me: &Person, asked: &Asked) -> Vec2 {
+        let p = world.crowd();
+        let away = me.position - asked.from;
+        let base = if norm(away) > 1e-9 {
+            away.y.atan2(away.x)
+        } else {
+            rng.uniform_in(0.0, std::f64::consts::TAU)
+        };
+        let reach = asked.radius_m + p.step_aside_distance_m;
+        let third = std::f64::consts::FRAC_PI_3;
+        let mut around = || {
+            let a = base + rng.uniform_in(-third, third);
+            asked.from + Vec2::new(a.cos(), a.sin()).scale(reach)
+        };
+        free_point(world, p.radius_m, Some(me.position), &mut around)
+            .or_else(|| free_point(world, p.radius_m, None, &mut around))
+            .unwrap_or(me.position)
+    }
+
     /// Moves everybody by one step of `dt_s` seconds ending at `time_s`
     /// (module docs), with the robot's footprint `(centre, radius)` as an
     /// obstacle if given.
@@ -505,6 +591,15 @@ impl Crowd {
         let wall_reach = r + 4.0 * p.wall_range_m;
         for i in 0..self.people.len() {
             let mut me = self.people[i];
+            // Asked to step aside, and time to move?
+            if let Some(asked) = me.asked
+                && time_s >= asked.react_at_s
+            {
+                me.target = Self::aside_target(world, &mut self.rng, &me, &asked);
+                me.waypoint = None;
+                me.activity = Activity::walking(me.position, time_s);
+                me.asked = None;
+            }
             // What to do.
             let mut new_target = false;
             match me.activity {
@@ -744,6 +839,63 @@ mod tests {
         }
         // Straight at it they would press against the wall for ever.
         assert!(nearest.iter().all(|&d| d < 1.0), "{nearest:?}");
+    }
+
+    #[test]
+    fn people_asked_to_step_aside_leave_the_radius_after_their_delay() {
+        // Eight people lingering for ever around a robot in the open,
+        // pushed by nothing.
+        let around: Vec<Vec2> = (0..8)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 8.0;
+                Vec2::new(3.0, 3.0) + Vec2::new(a.cos(), a.sin()).scale(0.9)
+            })
+            .collect();
+        let w = room()
+            .with_crowd(CrowdParams {
+                positions: around.clone(),
+                linger_probability: 1.0,
+                linger_mean_s: 1e9,
+                person_repulsion_mps2: 0.0,
+                robot_repulsion_mps2: 0.0,
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let robot = (Vec2::new(3.0, 3.0), 0.3);
+        let mut c = Crowd::new(&w, 7, &[robot]).unwrap();
+        // Nobody moves on their own.
+        for t in 1..=20 {
+            c.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        let near = |c: &Crowd| {
+            c.people()
+                .iter()
+                .filter(|q| q.position.dist(robot.0) < 1.5)
+                .count()
+        };
+        assert_eq!(near(&c), 8);
+        assert_eq!(c.ask_to_step_aside(&w, robot.0, 1.2, 2.0), 8);
+        assert_eq!(c.ask_to_step_aside(&w, robot.0, 1.2, 2.0), 0, "asked once");
+        // Within half the mean delay nobody has reacted yet.
+        for t in 21..=24 {
+            c.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        assert_eq!(near(&c), 8);
+        for t in 25..=120 {
+            c.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        assert!(near(&c) <= 1, "{} people still near the robot", near(&c));
+        // Bad radii ask nobody; compliance 0 ignores the robot.
+        assert_eq!(c.ask_to_step_aside(&w, robot.0, f64::NAN, 13.0), 0);
+        let w0 = room()
+            .with_crowd(CrowdParams {
+                positions: around,
+                step_aside_compliance: 0.0,
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let mut c0 = Crowd::new(&w0, 7, &[robot]).unwrap();
+        assert_eq!(c0.ask_to_step_aside(&w0, robot.0, 1.2, 0.0), 0);
     }
 
     #[test]

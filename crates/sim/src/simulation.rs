@@ -26,7 +26,7 @@
 //! The end is decided in this order: collision, then goal, then time limit.
 //! A goal already within tolerance at the start ends the run at once.
 
-use robot::{Command, Controller, Notes, Perception, Pose, Step, Vec2};
+use robot::{Command, Controller, Notes, Perception, Pose, Request, Step, Vec2};
 
 use crate::error::{Error, Result};
 use crate::grid::OccupancyGrid;
@@ -453,6 +453,11 @@ impl Simulation {
         };
         self.notes.clear();
         let step = controller.step(&self.perception, &mut self.notes);
+        let request = controller.request();
+        if let Some(Request::StepAside { radius_m }) = request {
+            self.crowd
+                .ask_to_step_aside(&self.world, self.pose.position(), radius_m, time_s);
+        }
         let declared_done = matches!(step, Step::Done(_));
         let command = match step {
             Step::Run(c) | Step::Done(c) => Some(c),
@@ -501,6 +506,7 @@ impl Simulation {
                 behaviour: self.notes.behaviour,
                 values: self.notes.values.clone(),
                 events: self.notes.events.clone(),
+                request,
                 perception: self.run.trace.perception.then(|| self.perception.clone()),
                 people: people_at_sensing,
             });

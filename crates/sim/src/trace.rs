@@ -13,7 +13,7 @@
 
 use std::io::Write;
 
-use robot::{Command, Event, Perception, Pose, Vec2};
+use robot::{Command, Event, Perception, Pose, Request, Vec2};
 
 /// What a trace records.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -88,6 +88,9 @@ pub struct TraceTick {
     /// Events (warnings, dead-locks…) from the notes.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub events: Vec<Event>,
+    /// What the controller asked of the people around the robot.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub request: Option<Request>,
     /// The perception given to the controller, if recorded.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub perception: Option<Perception>,

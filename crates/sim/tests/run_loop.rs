@@ -303,3 +303,81 @@ fn substeps_follow_the_same_arc() {
         assert!(p.position().dist(exact.position()) < 1e-9, "{p:?} vs {exact:?}");
     }
 }
+
+/// Waits, asking people to step aside, while anybody stands within 1 m
+/// ahead; then drives on.
+struct Polite {
+    asking: bool,
+}
+
+impl Controller for Polite {
+    fn step(&mut self, p: &Perception, _notes: &mut Notes) -> Step {
+        let ahead = p
+            .sonar
+            .iter()
+            .filter(|s| s.mount.theta_rad.abs() < 0.3)
+            .map(|s| s.range_m)
+            .fold(f64::INFINITY, f64::min);
+        self.asking = ahead < 1.0;
+        if self.asking {
+            Step::Run(Command::Stop)
+        } else {
+            Step::Run(Command::Twist {
+                v_mps: 0.3,
+                omega_radps: 0.0,
+            })
+        }
+    }
+
+    fn request(&self) -> Option<robot::Request> {
+        self.asking.then_some(robot::Request::StepAside { radius_m: 1.5 })
+    }
+}
+
+#[test]
+fn a_request_to_step_aside_clears_the_way() {
+    // Someone lingering for ever in the middle of the way.
+    let world = room()
+        .with_crowd(CrowdParams {
+            positions: vec![Vec2::new(2.5, 2.0)],
+            linger_probability: 1.0,
+            linger_mean_s: 1e9,
+            ..CrowdParams::default()
+        })
+        .unwrap();
+    let task = Task {
+        start: Pose::new(1.0, 2.0, 0.0),
+        goal: Some(Vec2::new(6.0, 2.0)),
+    };
+    let run = RunParams {
+        time_limit_s: 60.0,
+        trace: sim::TraceParams::poses(),
+        ..RunParams::default()
+    };
+    let mut sim = Simulation::new(&world, quiet_aibot(), run, task, 3).unwrap();
+    let r = sim.run(&mut Polite { asking: false });
+    assert_eq!(r.outcome, Some(Outcome::Goal), "{r:?}");
+    let trace = sim.take_trace().unwrap();
+    let asked = trace.ticks.iter().filter(|t| t.request.is_some()).count();
+    assert!(asked > 0, "the robot had to ask");
+    // A robot that never asks waits for ever.
+    struct Mute(Polite);
+    impl Controller for Mute {
+        fn step(&mut self, p: &Perception, n: &mut Notes) -> Step {
+            self.0.step(p, n)
+        }
+    }
+    let mut sim = Simulation::new(
+        &world,
+        quiet_aibot(),
+        RunParams {
+            time_limit_s: 60.0,
+            ..RunParams::default()
+        },
+        task,
+        3,
+    )
+    .unwrap();
+    let r = sim.run(&mut Mute(Polite { asking: false }));
+    assert_eq!(r.outcome, Some(Outcome::TimeLimit));
+}

@@ -233,6 +233,7 @@ mod tests {
             target: Vec2::new(x, y),
             activity: Activity::Lingering { until_s: 1e9 },
             waypoint: None,
+            asked: None,
         }
     }
 
