@@ -245,7 +245,7 @@ mod tests {
 
     #[test]
     fn flow_and_block_styles_keep_the_file_order_and_lines() {
-        let text = "# places\nzulu: [1.0, 2.0, 0.5]\n\"coffee corner\": [ -3, 4.25, 3.14159 ]\nalpha:\n  - 0\n  - 0\n  - -1.5708\n";
+        let text = "# places\nzulu: [1.0, 2.0, 0.5]\n\"coffee corner\": [ -3, 4.25, 3.0 ]\nalpha:\n  - 0\n  - 0\n  - -1.25\n";
         let p = Places::parse(text, "t.yaml").unwrap();
         let names: Vec<&str> = p.iter().map(|q| q.name.as_str()).collect();
         assert_eq!(names, ["zulu", "coffee corner", "alpha"]);
@@ -255,7 +255,7 @@ mod tests {
             p.get("coffee corner").unwrap().pose.position(),
             Vec2::new(-3.0, 4.25)
         );
-        assert!((p.get("alpha").unwrap().pose.theta_rad + 1.5708).abs() < 1e-12);
+        assert!((p.get("alpha").unwrap().pose.theta_rad + 1.25).abs() < 1e-12);
         assert!(Places::parse("", "e.yaml").unwrap().is_empty());
         assert!(Places::parse("# nothing\n", "e.yaml").unwrap().is_empty());
     }
