@@ -55,8 +55,8 @@ pub struct CostParams {
     /// metres; `≥ inscribed_radius_m`. Default 1.0.
     pub inflation_radius_m: f64,
     /// Intrinsic cost just outside the inscribed radius, dimensionless
-    /// (a multiplier on distance, minus one). 0 turns the inflation off.
-    /// Default 5.
+    /// (a multiplier on distance, minus one), in [0, 1000]. 0 turns the
+    /// inflation off. Default 5.
     pub max_cost: f64,
     /// Exponential decay rate of the intrinsic cost with distance, 1/m.
     /// Default 10 (the cost falls by e every 0.1 m; costmap_2d's default
@@ -75,9 +75,13 @@ impl Default for CostParams {
     }
 }
 
+/// Largest `max_cost` accepted: far beyond any useful value, and it bounds
+/// the navigation function's bucket ring (`√2 · (1 + max_cost)` buckets).
+pub const MAX_INTRINSIC_COST: f64 = 1000.0;
+
 impl CostParams {
-    /// Checks every field: finite, `≥ 0`, and `inflation_radius_m ≥
-    /// inscribed_radius_m`.
+    /// Checks every field: finite, `≥ 0`, `max_cost ≤` [`MAX_INTRINSIC_COST`]
+    /// and `inflation_radius_m ≥ inscribed_radius_m`.
     pub fn validate(&self) -> Result<(), PlanningError> {
         let non_negative = |name: &'static str, value: f64| {
             if value.is_finite() && value >= 0.0 {
@@ -93,6 +97,13 @@ impl CostParams {
         non_negative("inscribed_radius_m", self.inscribed_radius_m)?;
         non_negative("inflation_radius_m", self.inflation_radius_m)?;
         non_negative("max_cost", self.max_cost)?;
+        if self.max_cost > MAX_INTRINSIC_COST {
+            return Err(PlanningError::BadParam {
+                name: "max_cost",
+                value: self.max_cost,
+                expected: "at most 1000",
+            });
+        }
         non_negative("decay_per_m", self.decay_per_m)?;
         if self.inflation_radius_m < self.inscribed_radius_m {
             return Err(PlanningError::BadParam {
@@ -618,6 +629,10 @@ mod tests {
             },
             CostParams {
                 max_cost: f64::INFINITY,
+                ..CostParams::default()
+            },
+            CostParams {
+                max_cost: 1000.5,
                 ..CostParams::default()
             },
             CostParams {

@@ -8,11 +8,12 @@
 //! parabolas `(x − q)² + g(q)²` gives the 2-D distance. Time `O(w · h)`,
 //! scratch memory `O(w + h)` besides the output.
 //!
-//! The column distances are capped at `cap + 1` cells, which keeps every
-//! parabola finite (no special cases for obstacle-free columns) and leaves
-//! every distance `≤ cap` exact: a capped column only adds candidates at
-//! distance `> cap`. Cells farther than `cap` from any blocked cell get
-//! [`BEYOND`]. The cost map needs distances only up to the inflation radius.
+//! The column distances are capped at `cap + 1` cells and the rows' lower
+//! envelopes take only the columns with a blocked cell within the cap: the
+//! others only give distances `> cap`, so every distance `≤ cap` stays
+//! exact, open ground costs little, and a row without any such column is
+//! skipped. Cells farther than `cap` from any blocked cell get [`BEYOND`].
+//! The cost map needs distances only up to the inflation radius.
 
 /// Output value for a cell farther than the cap from every blocked cell.
 pub const BEYOND: u32 = u32::MAX;
@@ -50,23 +51,32 @@ impl DistanceTransform {
             return;
         }
         // Pass 1: per column, the distance to the nearest blocked cell of the
-        // column, capped at cap + 1 (stored unsquared for now).
-        // Downward sweep: distance to the nearest blocked cell at or below.
-        for i in 0..width {
-            let mut d = g_cap;
-            for j in 0..height {
-                let k = j * width + i;
-                d = if blocked[k] != 0 { 0 } else { (d + 1).min(g_cap) };
-                out[k] = d;
-            }
-            let mut d = g_cap;
-            for j in (0..height).rev() {
-                let k = j * width + i;
-                d = if blocked[k] != 0 { 0 } else { (d + 1).min(g_cap) };
-                out[k] = out[k].min(d);
+        // column, capped at cap + 1 (stored unsquared for now). Both sweeps
+        // go row by row, over contiguous memory.
+        // Upward: distance to the nearest blocked cell at or below.
+        for (o, &b) in out[..width].iter_mut().zip(&blocked[..width]) {
+            *o = if b != 0 { 0 } else { g_cap };
+        }
+        for j in 1..height {
+            let (below, row) = out[(j - 1) * width..(j + 1) * width].split_at_mut(width);
+            for ((o, &d), &b) in row
+                .iter_mut()
+                .zip(below.iter())
+                .zip(&blocked[j * width..(j + 1) * width])
+            {
+                *o = if b != 0 { 0 } else { (d + 1).min(g_cap) };
             }
         }
-        // Pass 2: per row, the lower envelope of the parabolas.
+        // Downward: or at or above, whichever is nearer.
+        for j in (0..height - 1).rev() {
+            let (row, above) = out[j * width..(j + 2) * width].split_at_mut(width);
+            for (o, &d) in row.iter_mut().zip(above.iter()) {
+                *o = (*o).min(d + 1);
+            }
+        }
+        // Pass 2: per row, the lower envelope of the parabolas
+        // (x − q)² + g(q)² over the columns q with a blocked cell within the
+        // cap (the others cannot give a distance ≤ cap).
         self.f.resize(width, 0);
         self.v.resize(width, 0);
         self.z.resize(width + 1, 0.0);
@@ -79,10 +89,18 @@ impl DistanceTransform {
             let f = &self.f;
             let (v, z) = (&mut self.v, &mut self.z);
             let mut k = 0usize;
-            v[0] = 0;
-            z[0] = f64::NEG_INFINITY;
-            z[1] = f64::INFINITY;
-            for q in 1..width {
+            let mut any = false;
+            for (q, &g) in row.iter().enumerate() {
+                if g > cap {
+                    continue;
+                }
+                if !any {
+                    any = true;
+                    v[0] = q;
+                    z[0] = f64::NEG_INFINITY;
+                    z[1] = f64::INFINITY;
+                    continue;
+                }
                 let fq = f[q] + (q * q) as i64;
                 let mut s;
                 loop {
@@ -99,6 +117,10 @@ impl DistanceTransform {
                 v[k] = q;
                 z[k] = s;
                 z[k + 1] = f64::INFINITY;
+            }
+            if !any {
+                row.fill(BEYOND);
+                continue;
             }
             let mut k = 0usize;
             for (q, cell) in row.iter_mut().enumerate() {

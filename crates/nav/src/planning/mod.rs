@@ -38,6 +38,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod bucket_queue;
 pub mod cost_map;
 pub mod distance_transform;
 pub mod global_route;

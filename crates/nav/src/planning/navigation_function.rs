@@ -29,16 +29,21 @@
 //! 8 % more than the straight line instead of 41 %; the gradient follower
 //! smooths the staircase.
 //!
-//! Time `O(n log n)` for `n` cells reached (a binary heap of
-//! `(value bits, cell)` pairs with lazy deletion; nonnegative `f64`s order
-//! like their bit patterns), memory `O(n)`; the buffers are kept from one
-//! computation to the next.
-
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+//! The queue is a ring of buckets as wide as the lightest edge (the
+//! resolution), in which every entry of the lowest bucket is final
+//! ([`super::bucket_queue`], Dial's algorithm for real weights): time
+//! `O(n + N_max / resolution)` for `n` cells reached, memory `O(n)`; the
+//! buffers are kept from one computation to the next. Measured with
+//! cachegrind on the 10 m windows and global routes of `building_31`:
+//! 300 instructions per cell reached, against 550 with a binary heap of
+//! `(value, cell)` pairs with lazy deletion (1.5× faster on the windows,
+//! 2–3× on `levine`'s whole map, in wall-clock time); a radix heap on the
+//! values' bit patterns executed 1.7× as many instructions as the binary
+//! heap.
 
 use robot::{CellIndex, Vec2};
 
+use super::bucket_queue::BucketQueue;
 use super::{CostMap, PlanningError, Window};
 
 /// What a computation did.
@@ -62,7 +67,13 @@ pub struct NavigationFunction {
     goal: Option<Vec2>,
     goal_cells: Vec<CellIndex>,
     info: NavigationInfo,
-    heap: BinaryHeap<Reverse<(u64, usize)>>,
+    queue: BucketQueue,
+    /// Per padded cell: processed with its current value.
+    done: Vec<bool>,
+    /// Tests only: a ring of buckets too small, so that entries land too
+    /// early and the re-opening of cells has to correct them.
+    #[cfg(test)]
+    tiny_ring: bool,
 }
 
 impl NavigationFunction {
@@ -130,10 +141,24 @@ impl NavigationFunction {
         let window = cost.window();
         let pw = window.width() + 2;
         let costs = cost.padded_costs();
+        let res = window.resolution_m();
+        let diag = res * std::f64::consts::SQRT_2;
         let values = &mut self.values;
-        let heap = &mut self.heap;
-        heap.clear();
+        let done = &mut self.done;
+        done.clear();
+        done.resize(values.len(), false);
+        let queue = &mut self.queue;
+        // The lightest edge weighs `res` (intrinsic costs are ≥ 0), the
+        // heaviest `diag · (1 + max_cost)`.
+        #[allow(unused_mut)]
+        let mut span = std::f64::consts::SQRT_2 * (1.0 + cost.params().max_cost);
+        #[cfg(test)]
+        if self.tiny_ring {
+            span = 0.0;
+        }
+        queue.reset(res, span);
         let mut pushes = 0usize;
+        let mut reached = 0usize;
         for &c in goals {
             let k = window.index_of(c).map(|k| padded(pw, window.width(), k)).ok_or(
                 PlanningError::GoalOutsideWindow {
@@ -143,35 +168,41 @@ impl NavigationFunction {
             )?;
             if values[k] != 0.0 {
                 values[k] = 0.0;
-                heap.push(Reverse((0.0f64.to_bits(), k)));
+                queue.push(0.0, k as u32);
                 pushes += 1;
+                reached += 1;
             }
         }
         self.goal_cells.extend_from_slice(goals);
 
-        let res = window.resolution_m();
-        let diag = res * std::f64::consts::SQRT_2;
-        let mut settled = 0usize;
         let mut max_value = 0.0f64;
-        while let Some(Reverse((bits, a))) = heap.pop() {
-            let na = values[a];
-            if bits != na.to_bits() {
-                continue; // stale entry: a cheaper one was settled before
+        while let Some(a) = queue.pop() {
+            let a = a as usize;
+            if done[a] {
+                continue; // a stale entry: processed with a lower value
             }
-            settled += 1;
-            max_value = na;
+            done[a] = true;
+            let na = values[a];
+            max_value = max_value.max(na);
             let ca = costs[a];
+            // A macro rather than a closure: the eight relaxations inline.
+            macro_rules! relax {
+                ($b:expr, $l:expr) => {{
+                    let b: usize = $b;
+                    let nb = na + $l * (1.0 + 0.5 * (ca + costs[b]));
+                    if nb < values[b] {
+                        reached += usize::from(values[b] == f64::INFINITY);
+                        values[b] = nb;
+                        // Re-open a cell settled too early (only ever after
+                        // a rounding slip of the buckets; see bucket_queue).
+                        done[b] = false;
+                        queue.push(nb, b as u32);
+                        pushes += 1;
+                    }
+                }};
+            }
             // Orthogonal neighbours; the padding ring (∞) stops at the edge.
             let (right, left, up, down) = (a + 1, a - 1, a + pw, a - pw);
-            let mut relax = |b: usize, l: f64| {
-                let cb = costs[b];
-                let nb = na + l * (1.0 + 0.5 * (ca + cb));
-                if nb < values[b] {
-                    values[b] = nb;
-                    heap.push(Reverse((nb.to_bits(), b)));
-                    pushes += 1;
-                }
-            };
             let (r_ok, l_ok, u_ok, d_ok) = (
                 costs[right].is_finite(),
                 costs[left].is_finite(),
@@ -179,34 +210,34 @@ impl NavigationFunction {
                 costs[down].is_finite(),
             );
             if r_ok {
-                relax(right, res);
+                relax!(right, res);
             }
             if l_ok {
-                relax(left, res);
+                relax!(left, res);
             }
             if u_ok {
-                relax(up, res);
+                relax!(up, res);
             }
             if d_ok {
-                relax(down, res);
+                relax!(down, res);
             }
             // Diagonals: both cells cut past must be passable; an infinite
             // target cost gives an infinite candidate, never stored.
             if r_ok && u_ok {
-                relax(up + 1, diag);
+                relax!(up + 1, diag);
             }
             if l_ok && u_ok {
-                relax(up - 1, diag);
+                relax!(up - 1, diag);
             }
             if r_ok && d_ok {
-                relax(down + 1, diag);
+                relax!(down + 1, diag);
             }
             if l_ok && d_ok {
-                relax(down - 1, diag);
+                relax!(down - 1, diag);
             }
         }
         self.info = NavigationInfo {
-            reached_cells: settled,
+            reached_cells: reached,
             pushes,
             max_value,
         };
@@ -305,6 +336,48 @@ mod tests {
             }
         }
         assert_eq!(nf.value(ci(-1, 0)), f64::INFINITY);
+    }
+
+    #[test]
+    fn entries_in_too_early_buckets_are_corrected() {
+        // Random walls and intrinsic costs up to 1000: with a ring of two
+        // buckets most entries are clamped early and cells are re-opened;
+        // the values must still be the exact ones.
+        let (w, h) = (40, 30);
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let cells: Vec<Cell> = (0..w * h)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                if s % 7 == 0 { Cell::Occupied } else { Cell::Free }
+            })
+            .collect();
+        let m = GridMap::new(w, h, 0.1, Pose::default(), cells).unwrap();
+        let p = CostParams {
+            inscribed_radius_m: 0.0,
+            inflation_radius_m: 0.3,
+            max_cost: 1000.0,
+            decay_per_m: 20.0,
+        };
+        let cm = CostMap::build(p, &m, Window::whole(&m).unwrap(), &[]).unwrap();
+        let goal = (0..w * h)
+            .map(|k| ci((k % w) as i64, (k / w) as i64))
+            .find(|&c| !cm.is_lethal(c))
+            .unwrap();
+        let mut exact = NavigationFunction::new();
+        let a = exact.compute_from_cells(&cm, &[goal]).unwrap();
+        let mut corrected = NavigationFunction {
+            tiny_ring: true,
+            ..NavigationFunction::new()
+        };
+        let b = corrected.compute_from_cells(&cm, &[goal]).unwrap();
+        assert!(b.pushes > a.pushes, "the small ring must cause corrections");
+        assert_eq!(a.reached_cells, b.reached_cells);
+        for k in 0..w * h {
+            let c = ci((k % w) as i64, (k / w) as i64);
+            assert_eq!(exact.value(c).to_bits(), corrected.value(c).to_bits(), "{c:?}");
+        }
     }
 
     #[test]
