@@ -14,7 +14,8 @@
 //!   `step_cells` cells (default 0.5, as navfn's `pathStep`) along its
 //!   negative, normalised.
 //!
-//! Guarantees, which navfn lacks, checked on every step:
+//! Guarantees, checked on every step (navfn too falls back to the best
+//! neighbour near obstacles and on oscillation):
 //!
 //! * a step that leaves the current cell must enter a cell with a strictly
 //!   smaller `N` (so finite: never a lethal or unreachable cell), and a
