@@ -40,9 +40,10 @@ use super::{
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RouteParams {
-    /// The cost model (the local planner's, so that both agree).
+    /// The cost model (the local planner's, so that both agree). Default
+    /// [`CostParams::default`].
     pub cost: CostParams,
-    /// The gradient descent.
+    /// The gradient descent. Default [`GradientParams::default`].
     pub gradient: GradientParams,
     /// Largest distance along the route between consecutive intermediate
     /// goals (and from the start to the first), metres, > 0. Default 4 (for

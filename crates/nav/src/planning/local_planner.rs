@@ -31,9 +31,9 @@ pub struct LocalPlannerParams {
     /// Side of the square window centred on the robot, metres (rounded to
     /// whole cells). Default 10.
     pub window_size_m: f64,
-    /// The cost model.
+    /// The cost model. Default [`CostParams::default`].
     pub cost: CostParams,
-    /// The gradient descent.
+    /// The gradient descent. Default [`GradientParams::default`].
     pub gradient: GradientParams,
 }
 

@@ -34,7 +34,7 @@
 //!
 //! The queue is a ring of buckets as wide as the lightest edge (the
 //! resolution), in which every entry of the lowest bucket is final
-//! ([`super::bucket_queue`], Dial's algorithm for real weights): time
+//! (`bucket_queue.rs`, Dial's algorithm for real weights): time
 //! `O(n + N_max / resolution)` for `n` cells reached, memory `O(n)`; the
 //! buffers are kept from one computation to the next. Measured with
 //! cachegrind on the 10 m windows and global routes of `building_31`: 300
