@@ -1,0 +1,281 @@
+//! Path-planning speed on the real `building_31` and `levine` maps.
+//!
+//! **Local cycle** (`local_*`): what AutoMove does every control cycle on
+//! `building_31` (693 × 648 cells at 0.05 m): the 10 m × 10 m window
+//! (200 × 200 cells) around the robot, a 181-beam laser scan over 180°
+//! (30 m) whose endpoints become obstacles, the cost map, the navigation
+//! function to the next intermediate goal and the gradient. The robot
+//! stands at the intermediate goals of five global routes (the pairs of
+//! `tests/real_maps.rs`), facing the next one, which is the goal; two
+//! people (discs of 0.25 m) stand 2 m ahead, 0.9 m to each side, unless
+//! they would block the way. That makes 53 cycles; one more is left out,
+//! where the scan's endpoints — some land in the free cell in front of a
+//! wall — thicken a door's jambs by a cell and close it to the 0.7 m robot
+//! (the planner reports `Unreachable`, path blocking). Each iteration is
+//! one cycle, the cycles taken in turn. Target: ≤ 2 ms for `local_cycle`.
+//! The allocation counter shows that a warm cycle allocates nothing.
+//!
+//! * `local_cycle`: scan → endpoints → cost map → `N` → descent (the
+//!   direction and the whole path to the goal) with [`LocalPlanner::plan`];
+//! * `local_cost_map`, `local_navigation_function`, `local_direction`: the
+//!   three stages alone (the direction is one gradient step).
+//!
+//! **Global route** (`global_*`, one-off): the whole-map cost map
+//! ([`GlobalPlanner::new`]), and a route between corridor points with its
+//! intermediate goals ([`GlobalPlanner::plan`]), on `building_31` and
+//! `levine` (2048 × 2048 cells).
+//!
+//! Run with `cargo bench -p nav --bench planning`. Figures (medians on the
+//! shared 2-core machine: `local_cycle` ≈ 1.0 ms, `global_route` 12 ms on
+//! `building_31` and 150 ms on `levine`) in `crates/nav/BENCHMARKS.md`.
+
+use std::f64::consts::PI;
+
+use divan::Bencher;
+use nav::planning::{
+    CostMap, GlobalPlanner, GradientParams, LocalPlanner, LocalPlannerParams, NavigationFunction,
+    RouteParams, Window, direction, laser_endpoints,
+};
+use robot::{GridMap, LaserScan, Pose, Vec2};
+use sim::{OccupancyGrid, cast_many, map_server};
+
+#[global_allocator]
+static ALLOC: divan::AllocProfiler = divan::AllocProfiler::system();
+
+fn main() {
+    divan::main();
+}
+
+const BEAMS: usize = 181;
+const RANGE_M: f64 = 30.0;
+const PERSON_RADIUS_M: f64 = 0.25;
+
+fn load(name: &str) -> (OccupancyGrid, GridMap) {
+    let path = format!(
+        "{}/../sim/tests/data/maps/{name}/{name}.yaml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let grid = map_server::load(path).expect("the test maps load").grid;
+    let map = grid.grid_map();
+    (grid, map)
+}
+
+/// Corridor start/goal pairs (the snapped pairs of `tests/real_maps.rs`).
+fn pairs(name: &str) -> Vec<(Vec2, Vec2)> {
+    let v = Vec2::new;
+    match name {
+        "building_31" => vec![
+            (v(-17.17, 14.73), v(-10.88, -2.42)),
+            (v(-17.07, -2.62), v(-11.02, 14.73)),
+            (v(-11.02, 14.73), v(2.28, 10.08)),
+            (v(-17.12, 4.28), v(3.28, -2.88)),
+            (v(4.28, 14.83), v(-17.17, -3.47)),
+        ],
+        _ => vec![
+            (v(-13.65, 11.30), v(9.75, -3.30)),
+            (v(-13.65, -6.70), v(4.30, 8.65)),
+            (v(-8.70, 8.65), v(-0.70, -0.15)),
+            (v(14.30, 0.30), v(-13.70, 3.70)),
+        ],
+    }
+}
+
+/// Distance along a unit ray from `o` in direction `d` to a disc, if hit.
+fn ray_disc(o: Vec2, d: Vec2, c: Vec2, r: f64) -> Option<f64> {
+    let oc = c - o;
+    let along = oc.dot(d);
+    let perp2 = oc.dot(oc) - along * along;
+    let h2 = r * r - perp2;
+    (h2 >= 0.0 && along - h2.sqrt() > 0.0).then(|| along - h2.sqrt())
+}
+
+/// A 181-beam scan over 180° from `pose`: the map's walls, and the people.
+fn scan(grid: &OccupancyGrid, pose: Pose, people: &[Vec2]) -> LaserScan {
+    let angles: Vec<f64> = (0..BEAMS)
+        .map(|k| pose.theta_rad - PI / 2.0 + k as f64 * PI / (BEAMS - 1) as f64)
+        .collect();
+    let mut walls = Vec::with_capacity(BEAMS);
+    cast_many(grid, pose.position(), &angles, RANGE_M, &mut walls);
+    let ranges_m = angles
+        .iter()
+        .zip(&walls)
+        .map(|(&a, &w)| {
+            let d = Vec2::new(a.cos(), a.sin());
+            people
+                .iter()
+                .filter_map(|&c| ray_disc(pose.position(), d, c, PERSON_RADIUS_M))
+                .chain(w)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    LaserScan {
+        mount: Pose::default(),
+        angle_min_rad: -PI / 2.0,
+        angle_increment_rad: PI / (BEAMS - 1) as f64,
+        range_max_m: RANGE_M,
+        ranges_m,
+    }
+}
+
+/// One control cycle's input.
+struct Cycle {
+    pose: Pose,
+    goal: Vec2,
+    scan: LaserScan,
+}
+
+/// The cycles of the local benchmarks: the robot at each intermediate goal
+/// of the routes, facing the next; people 2 m ahead, 0.9 m to each side,
+/// kept only if the plan still succeeds (they must not block the corridor).
+fn cycles(grid: &OccupancyGrid, map: &GridMap) -> Vec<Cycle> {
+    let mut global = GlobalPlanner::new(map, RouteParams::default()).expect("default parameters");
+    let mut local = LocalPlanner::new(LocalPlannerParams::default()).expect("default parameters");
+    let mut out = Vec::new();
+    let mut points = Vec::new();
+    let mut skipped = 0;
+    for (start, goal) in pairs("building_31") {
+        let route = global.plan(start, goal).expect("the routes of the tests");
+        let mut at = start;
+        for &g in &route.goals {
+            let heading = (g - at).angle();
+            let pose = Pose::new(at.x, at.y, heading);
+            let (ahead, side) = (
+                Vec2::new(heading.cos(), heading.sin()),
+                Vec2::new(-heading.sin(), heading.cos()),
+            );
+            let mut people = Vec::new();
+            for s in [0.9, -0.9] {
+                let person = at + ahead.scale(2.0) + side.scale(s);
+                let trial: Vec<Vec2> = people.iter().copied().chain([person]).collect();
+                points.clear();
+                laser_endpoints(pose, &scan(grid, pose, &trial), &mut points);
+                if local.plan(map, at, g, &points).is_ok() {
+                    people = trial;
+                }
+            }
+            let sc = scan(grid, pose, &people);
+            points.clear();
+            laser_endpoints(pose, &sc, &mut points);
+            if local.plan(map, at, g, &points).is_ok() {
+                out.push(Cycle {
+                    pose,
+                    goal: g,
+                    scan: sc,
+                });
+            } else {
+                skipped += 1;
+            }
+            at = g;
+        }
+    }
+    assert_eq!((out.len(), skipped), (53, 1), "the cycles of the module docs");
+    out
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cycle(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let mut planner = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+    let mut points = Vec::with_capacity(BEAMS);
+    let mut k = 0;
+    b.bench_local(|| {
+        let c = &cycles[k % cycles.len()];
+        k += 1;
+        points.clear();
+        laser_endpoints(c.pose, &c.scan, &mut points);
+        let plan = planner
+            .plan(&map, c.pose.position(), c.goal, &points)
+            .expect("a plan");
+        divan::black_box(plan.direction);
+    });
+}
+
+/// Cost maps of every cycle, built once.
+fn cost_maps(map: &GridMap, cycles: &[Cycle]) -> Vec<CostMap> {
+    let params = LocalPlannerParams::default();
+    let mut points = Vec::new();
+    cycles
+        .iter()
+        .map(|c| {
+            points.clear();
+            laser_endpoints(c.pose, &c.scan, &mut points);
+            let window = Window::centred(map, c.pose.position(), params.window_size_m).unwrap();
+            CostMap::build(params.cost, map, window, &points).unwrap()
+        })
+        .collect()
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cost_map(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let params = LocalPlannerParams::default();
+    let mut cost_map = cost_maps(&map, &cycles[..1]).pop().unwrap();
+    let mut points = Vec::with_capacity(BEAMS);
+    let mut k = 0;
+    b.bench_local(|| {
+        let c = &cycles[k % cycles.len()];
+        k += 1;
+        points.clear();
+        laser_endpoints(c.pose, &c.scan, &mut points);
+        let window = Window::centred(&map, c.pose.position(), params.window_size_m).unwrap();
+        divan::black_box(cost_map.rebuild(&map, window, &points).unwrap());
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_navigation_function(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let cost_maps = cost_maps(&map, &cycles);
+    let mut nf = NavigationFunction::new();
+    let mut k = 0;
+    b.bench_local(|| {
+        let i = k % cycles.len();
+        k += 1;
+        divan::black_box(nf.compute(&cost_maps[i], cycles[i].goal).unwrap());
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_direction(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let cost_maps = cost_maps(&map, &cycles);
+    let functions: Vec<NavigationFunction> = cost_maps
+        .iter()
+        .zip(&cycles)
+        .map(|(cm, c)| {
+            let mut nf = NavigationFunction::new();
+            nf.compute(cm, c.goal).unwrap();
+            nf
+        })
+        .collect();
+    let params = GradientParams::default();
+    let mut k = 0;
+    b.bench_local(|| {
+        let i = k % cycles.len();
+        k += 1;
+        divan::black_box(direction(&functions[i], cycles[i].pose.position(), &params).unwrap());
+    });
+}
+
+#[divan::bench(args = ["building_31", "levine"], sample_count = 10)]
+fn global_cost_map(b: Bencher, name: &str) {
+    let (_, map) = load(name);
+    b.bench_local(|| divan::black_box(GlobalPlanner::new(&map, RouteParams::default()).unwrap()));
+}
+
+#[divan::bench(args = ["building_31", "levine"], sample_count = 10)]
+fn global_route(b: Bencher, name: &str) {
+    let (_, map) = load(name);
+    let pairs = pairs(name);
+    let mut planner = GlobalPlanner::new(&map, RouteParams::default()).unwrap();
+    let mut k = 0;
+    b.bench_local(|| {
+        let (start, goal) = pairs[k % pairs.len()];
+        k += 1;
+        divan::black_box(planner.plan(start, goal).unwrap().goals.len());
+    });
+}

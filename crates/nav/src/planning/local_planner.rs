@@ -1,0 +1,266 @@
+//! One control cycle of AutoMove: plan in a window centred on the robot.
+//!
+//! Every cycle (Konolige's LAGR/Pioneer scheme, tour-guide spec): build the
+//! [`CostMap`] of a 10 m × 10 m window of the static map around the robot
+//! with the latest laser endpoints as extra obstacles, propagate the
+//! [`NavigationFunction`] from the current (intermediate) goal, and follow
+//! its negative gradient from the robot ([`descend`]): the first step gives
+//! the direction to drive, the whole descent the path to show. The
+//! [`LocalPlanner`] keeps every buffer between cycles, so a cycle allocates
+//! nothing once warm.
+//!
+//! The spec's exceptions map to errors: *goal occupation* is
+//! [`PlanningError::GoalBlocked`] with [`Blocked::Sensed`] (or
+//! [`Blocked::Inflated`] next to a sensed obstacle); *path blocking* is
+//! [`PlanningError::Unreachable`].
+//!
+//! [`Blocked::Sensed`]: super::Blocked::Sensed
+//! [`Blocked::Inflated`]: super::Blocked::Inflated
+
+use robot::{GridMap, Vec2};
+
+use super::gradient::{DescentInfo, GradientParams, descend};
+use super::{
+    CostMap, CostMapInfo, CostParams, NavigationFunction, NavigationInfo, PlanningError, Window, check_start,
+};
+
+/// Parameters of the local planner.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LocalPlannerParams {
+    /// Side of the square window centred on the robot, metres (rounded to
+    /// whole cells). Default 10.
+    pub window_size_m: f64,
+    /// The cost model. Default [`CostParams::default`].
+    pub cost: CostParams,
+    /// The gradient descent. Default [`GradientParams::default`].
+    pub gradient: GradientParams,
+}
+
+impl Default for LocalPlannerParams {
+    fn default() -> Self {
+        LocalPlannerParams {
+            window_size_m: 10.0,
+            cost: CostParams::default(),
+            gradient: GradientParams::default(),
+        }
+    }
+}
+
+impl LocalPlannerParams {
+    /// Checks every field (`window_size_m` a finite number > 0).
+    pub fn validate(&self) -> Result<(), PlanningError> {
+        if !(self.window_size_m.is_finite() && self.window_size_m > 0.0) {
+            return Err(PlanningError::BadParam {
+                name: "window_size_m",
+                value: self.window_size_m,
+                expected: "a finite number > 0",
+            });
+        }
+        self.cost.validate()?;
+        self.gradient.validate()
+    }
+}
+
+/// The outcome of one cycle.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LocalPlan {
+    /// Unit vector (world frame) to drive along: the first step down the
+    /// gradient; zero when the robot is on the goal point.
+    pub direction: Vec2,
+    /// The window planned over.
+    pub window: Window,
+    /// The cost map's build.
+    pub cost_map: CostMapInfo,
+    /// The navigation function's computation.
+    pub navigation: NavigationInfo,
+    /// The descent from the robot (its `start_value` is `N` at the robot).
+    pub descent: DescentInfo,
+}
+
+/// The local planner and its buffers (module docs).
+#[derive(Debug, Clone)]
+pub struct LocalPlanner {
+    params: LocalPlannerParams,
+    cost_map: Option<CostMap>,
+    nf: NavigationFunction,
+    path: Vec<Vec2>,
+}
+
+impl LocalPlanner {
+    /// A planner. Errors: invalid parameters.
+    pub fn new(params: LocalPlannerParams) -> Result<LocalPlanner, PlanningError> {
+        params.validate()?;
+        Ok(LocalPlanner {
+            params,
+            cost_map: None,
+            nf: NavigationFunction::new(),
+            path: Vec::new(),
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &LocalPlannerParams {
+        &self.params
+    }
+
+    /// One cycle: the window of `map` centred on `robot`, `obstacles`
+    /// (world points, e.g. [`super::laser_endpoints`]) added, the navigation
+    /// function towards `goal`, and the descent from `robot` (kept in
+    /// [`LocalPlanner::path`]).
+    ///
+    /// Errors: a non-finite point ([`PlanningError::BadPoint`]),
+    /// [`PlanningError::StartBlocked`] (the robot's cell is lethal — in an
+    /// obstacle or within its inscribed radius of one),
+    /// [`PlanningError::NoFreeCell`], [`PlanningError::GoalOutsideWindow`],
+    /// [`PlanningError::GoalBlocked`] (goal occupation),
+    /// [`PlanningError::Unreachable`] (path blocking). After an error,
+    /// [`LocalPlanner::path`] is empty.
+    pub fn plan(
+        &mut self,
+        map: &GridMap,
+        robot: Vec2,
+        goal: Vec2,
+        obstacles: &[Vec2],
+    ) -> Result<LocalPlan, PlanningError> {
+        self.path.clear();
+        let window = Window::centred(map, robot, self.params.window_size_m)?;
+        let cost_map = match &mut self.cost_map {
+            Some(c) => {
+                c.rebuild(map, window, obstacles)?;
+                c
+            }
+            None => self
+                .cost_map
+                .insert(CostMap::build(self.params.cost, map, window, obstacles)?),
+        };
+        if cost_map.info().free_cells == 0 {
+            return Err(PlanningError::NoFreeCell { window });
+        }
+        check_start(cost_map, robot)?;
+        let navigation = self.nf.compute(cost_map, goal)?;
+        let descent = descend(&self.nf, robot, &self.params.gradient, &mut self.path)?;
+        let direction = match self.path.as_slice() {
+            [a, b, ..] if a.dist(*b) > 0.0 => (*b - *a).scale(1.0 / a.dist(*b)),
+            _ => Vec2::default(),
+        };
+        Ok(LocalPlan {
+            direction,
+            window,
+            cost_map: cost_map.info(),
+            navigation,
+            descent,
+        })
+    }
+
+    /// The path of the last successful cycle, world frame, from the robot
+    /// to the goal (empty after an error).
+    pub fn path(&self) -> &[Vec2] {
+        &self.path
+    }
+
+    /// The cost map of the last cycle (`None` before the first).
+    pub fn cost_map(&self) -> Option<&CostMap> {
+        self.cost_map.as_ref()
+    }
+
+    /// The navigation function of the last cycle.
+    pub fn navigation_function(&self) -> &NavigationFunction {
+        &self.nf
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planning::Blocked;
+    use robot::{Cell, CellIndex, Pose};
+
+    /// A 20 m × 20 m free map at 0.05 m with a 4 m wall at x = 12 m.
+    fn map() -> GridMap {
+        let (w, h) = (400, 400);
+        let mut cells = vec![Cell::Free; w * h];
+        for j in 160..240 {
+            cells[j * w + 240] = Cell::Occupied;
+        }
+        GridMap::new(w, h, 0.05, Pose::default(), cells).unwrap()
+    }
+
+    #[test]
+    fn a_cycle_plans_round_a_wall_and_a_person() {
+        let m = map();
+        let mut lp = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        let robot = Vec2::new(9.0, 10.0);
+        let goal = Vec2::new(13.5, 10.0);
+        let plan = lp.plan(&m, robot, goal, &[]).unwrap();
+        assert_eq!((plan.window.width(), plan.window.height()), (200, 200));
+        assert_eq!(
+            plan.window.index_of(CellIndex { i: 180, j: 200 }),
+            Some(100 * 200 + 100)
+        );
+        let path = lp.path();
+        assert_eq!(path[0], robot);
+        assert_eq!(*path.last().unwrap(), goal);
+        assert!((plan.direction.norm() - 1.0).abs() < 1e-9);
+        // Round the wall's end (y = 8 m or 12 m), never through it.
+        assert!(path.iter().any(|p| p.y > 12.3 || p.y < 7.7));
+        let cm = lp.cost_map().unwrap();
+        for p in path {
+            assert!(!cm.is_lethal(m.cell_of(*p)), "{p:?}");
+        }
+        // A person standing on the goal: goal occupation.
+        let person = [goal + Vec2::new(0.02, 0.0)];
+        assert!(matches!(
+            lp.plan(&m, robot, goal, &person),
+            Err(PlanningError::GoalBlocked {
+                why: Blocked::Sensed,
+                ..
+            })
+        ));
+        assert!(lp.path().is_empty());
+        // A goal beyond the window.
+        assert!(matches!(
+            lp.plan(&m, robot, Vec2::new(16.0, 10.0), &[]),
+            Err(PlanningError::GoalOutsideWindow { .. })
+        ));
+        // The robot next to the wall.
+        assert!(matches!(
+            lp.plan(&m, Vec2::new(11.9, 10.0), Vec2::new(9.0, 10.0), &[]),
+            Err(PlanningError::StartBlocked {
+                why: Blocked::Inflated { .. },
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn a_ring_of_people_blocks_the_path() {
+        let m = map();
+        let mut lp = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        let robot = Vec2::new(5.0, 5.0);
+        let ring: Vec<Vec2> = (0..400)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 400.0;
+                robot + Vec2::new(1.5 * a.cos(), 1.5 * a.sin())
+            })
+            .collect();
+        assert!(matches!(
+            lp.plan(&m, robot, Vec2::new(8.0, 5.0), &ring),
+            Err(PlanningError::Unreachable { .. })
+        ));
+    }
+
+    #[test]
+    fn bad_window_size_is_an_error() {
+        for s in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let p = LocalPlannerParams {
+                window_size_m: s,
+                ..LocalPlannerParams::default()
+            };
+            assert!(matches!(
+                LocalPlanner::new(p),
+                Err(PlanningError::BadParam { .. })
+            ));
+        }
+    }
+}
