@@ -19,6 +19,7 @@
 #![warn(missing_docs)]
 
 pub mod activity;
+pub mod guide;
 pub mod planning;
 pub mod sectors;
 pub mod supervisor;

@@ -1,0 +1,141 @@
+//! Contour tracking in small worlds, on the simulator's Jinny-like robot
+//! (laser 0.2 m ahead of the centre, 180° field of view): the set distance
+//! is held along straight walls and around concave and convex corners.
+
+use nav::guide::{ContourParams, ContourTracker, Side};
+use robot::{Controller, Notes, Perception, Pose, Step, Vec2};
+use sim::{Cell, CellIndex, OccupancyGrid, RobotParams, RunParams, Simulation, Task, World};
+
+/// Marks the cells of the rectangle `[x0, x1] × [y0, y1]` (metres) occupied.
+fn block(g: &mut OccupancyGrid, x0: f64, y0: f64, x1: f64, y1: f64) {
+    let r = g.resolution_m();
+    for j in (y0 / r).round() as i64..(y1 / r).round() as i64 {
+        for i in (x0 / r).round() as i64..(x1 / r).round() as i64 {
+            g.set(CellIndex { i, j }, Cell::Occupied);
+        }
+    }
+}
+
+/// A room of `w × h` metres with 0.1 m walls inside its border.
+fn room(w: f64, h: f64) -> OccupancyGrid {
+    let mut g = OccupancyGrid::new(
+        (w / 0.05).round() as usize,
+        (h / 0.05).round() as usize,
+        0.05,
+        Pose::default(),
+    );
+    block(&mut g, 0.0, 0.0, w, 0.1);
+    block(&mut g, 0.0, h - 0.1, w, h);
+    block(&mut g, 0.0, 0.0, 0.1, h);
+    block(&mut g, w - 0.1, 0.0, w, h);
+    g
+}
+
+/// Follows the contour on one side for ever (the goal is never sought).
+struct Follower(ContourTracker);
+
+impl Controller for Follower {
+    fn step(&mut self, p: &Perception, _notes: &mut Notes) -> Step {
+        let s = self.0.step(
+            &p.lasers[0],
+            p.odometry,
+            p.odometry,
+            Vec2::new(1e6, 1e6),
+            p.time_s,
+        );
+        Step::Run(s.command)
+    }
+}
+
+/// Runs the follower for `seconds` from `start`; returns the true distance
+/// from the robot's centre to the nearest wall at every tick after the
+/// first `settle_s` seconds, and the path length.
+fn lap(world: &World, start: Pose, side: Side, seconds: f64, settle_s: f64) -> (Vec<(f64, Pose)>, f64) {
+    let run = RunParams {
+        time_limit_s: seconds,
+        ..RunParams::default()
+    };
+    let task = Task { start, goal: None };
+    let mut sim = Simulation::new(world, RobotParams::jinny(), run, task, 11).unwrap();
+    let mut c = Follower(ContourTracker::following(ContourParams::default(), side).unwrap());
+    let mut out = Vec::new();
+    while sim.tick(&mut c).is_none() {
+        if sim.time_s() > settle_s {
+            out.push((
+                world.distance_field().distance_m(sim.pose().position()),
+                sim.pose(),
+            ));
+        }
+    }
+    let r = sim.result();
+    eprintln!(
+        "path {:.2} m in {:.1} s, end {:?}",
+        r.path_length_m, r.time_s, r.final_pose
+    );
+    assert_eq!(r.collisions, 0, "no contact");
+    (out, r.path_length_m)
+}
+
+fn check(name: &str, distances: &[(f64, Pose)], want: f64) {
+    let (lo, hi) = distances
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &(d, _)| {
+            (a.min(d), b.max(d))
+        });
+    let worst = distances
+        .iter()
+        .max_by(|a, b| (a.0 - want).abs().total_cmp(&(b.0 - want).abs()))
+        .unwrap();
+    eprintln!(
+        "{name}: distance in [{lo:.3}, {hi:.3}] over {} ticks",
+        distances.len()
+    );
+    assert!(
+        lo >= want - 0.10 && hi <= want + 0.10,
+        "{name}: distance to the contour in [{lo:.3}, {hi:.3}] m, wanted {want} ± 0.10 (worst at {:?})",
+        worst.1
+    );
+}
+
+#[test]
+fn along_straight_walls_and_around_concave_corners() {
+    // Inside a 9 m × 6 m room, wall on the right: four concave corners.
+    let world = World::new(room(9.0, 6.0));
+    let d = ContourParams::default().distance_m;
+    let start = Pose::new(2.0, 0.1 + d, 0.0);
+    let (dist, path) = lap(&world, start, Side::Right, 75.0, 2.0);
+    // A lap of the inner rectangle at d from the walls is about 23.6 m.
+    assert!(path > 23.0, "went round the room: {path:.1} m");
+    check("room", &dist, d);
+}
+
+#[test]
+fn around_convex_corners() {
+    // A 3 m × 2 m block in a 12 m × 10 m room, kept on the left.
+    let mut g = room(12.0, 10.0);
+    block(&mut g, 4.5, 4.0, 7.5, 6.0);
+    let world = World::new(g);
+    let d = ContourParams::default().distance_m;
+    let start = Pose::new(5.0, 4.0 - d, 0.0);
+    let (dist, path) = lap(&world, start, Side::Left, 60.0, 2.0);
+    // Round the block: 2 (3 + 2) m of sides plus a circle of radius d.
+    assert!(
+        path > 2.0 * 5.0 + 2.0 * std::f64::consts::PI * d - 1.0,
+        "{path:.1} m"
+    );
+    check("block", &dist, d);
+}
+
+#[test]
+fn centred_in_a_corridor() {
+    // A 1.9 m wide corridor, 14 m long: the robot keeps to the middle.
+    let mut g = room(16.0, 6.0);
+    block(&mut g, 0.0, 0.0, 16.0, 2.0);
+    block(&mut g, 0.0, 3.9, 16.0, 6.0);
+    let world = World::new(g);
+    let start = Pose::new(1.0, 2.6, 0.0);
+    let (dist, _) = lap(&world, start, Side::Left, 30.0, 4.0);
+    let middle = 0.95;
+    let along: Vec<(f64, Pose)> = dist.into_iter().filter(|(_, p)| p.x_m < 14.5).collect();
+    check("corridor", &along, middle);
+}
