@@ -19,6 +19,7 @@
 #![warn(missing_docs)]
 
 pub mod activity;
+pub mod localization;
 pub mod sectors;
 pub mod supervisor;
 pub mod voting;
