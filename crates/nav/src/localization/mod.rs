@@ -70,24 +70,79 @@
 //!
 //! # Decisions
 //!
-//! - **Match comparison** ([`status`]): the odometry pose is the
-//!   prediction (last estimate + odometry increment); the score is the
-//!   mean of `exp(−d²/2σ²)`, σ = 0.05 m, over all valid beams; margin 0.005.
+//! - **Success / Warning** ([`status`]): the odometry pose is the
+//!   prediction (last estimate + odometry increment since the last
+//!   iteration); the score is the fraction of all valid beams whose
+//!   endpoint lies within 0.1 m of a wall; the scan matches when the
+//!   estimate's score beats the prediction's by more than 0.02, fails when
+//!   it falls short by more, and within that margin matches only if at
+//!   least 0.8 of the beams are explained. Without the level rule the
+//!   comparison is noise for a filter that tracks well, and crowds change
+//!   nothing (figures below).
 //! - **Unknown cells** are not obstacles for the distance; endpoints off
-//!   the map get the largest distance (AMCL).
+//!   the map get the largest distance (AMCL). Distances are measured to the
+//!   boundary between occupied and other cells, inside obstacles too
+//!   ([`likelihood_field`]).
 //! - **Beams** combine as AMCL's sum of cubes, `w ← w·(1 + Σ p³)`
-//!   ([`BeamCombination`]); the log-product is available.
+//!   ([`BeamCombination`]). The product (`Σ ln p`) tracks more tightly in
+//!   an empty building but loses the robot among people (figures below).
+//!   AMCL's beam skipping is available ([`BeamSkip`], off).
 //! - **Max range**: beams at or beyond the maximum range (`∞`), drop-outs
 //!   (`NaN`) and negative ranges are skipped, as AMCL's likelihood-field
 //!   model skips max-range readings.
-//! - **Recovery** (random particles) is off by default ([`recovery`]).
+//! - **Motion noise** `α1…α4 = 0.01`, calibrated on the simulated odometry
+//!   ([`OdometryMotionModel`]); AMCL's 0.2 is [`OdometryMotionModel::amcl`]
+//!   and is used while a global cloud explores.
+//! - **Recovery** (random particles, AMCL's `recovery_alpha_slow/fast`) is
+//!   off by default: with AMCL's suggested 0.001 / 0.1 it *harmed*
+//!   tracking (figures below).
 //! - **Global localization** ([`Localizer::init_global`]) starts with
-//!   `global_particles` (20 000) uniform over the free cells; each
-//!   resampling shrinks the set to the KLD bound of the bins the resampled
-//!   particles occupy, never below `particles` (500).
+//!   `global_particles` (20 000) uniform over the free cells and moves them
+//!   with the larger `global_motion` noise; each resampling shrinks the set
+//!   to the KLD bound of the bins the resampled particles occupy, never
+//!   below `particles` (500), and once it is down to `particles` the
+//!   tracking noise applies.
 //! - **Bad input** is an error, never a panic: non-finite odometry or a
 //!   scan whose angles, mount or maximum range are not usable
 //!   ([`LocalizationError`]). Single `NaN`/`∞` ranges are normal data.
+//!
+//! # Figures
+//!
+//! `cargo run --release -p nav --example mcl_drive -- <map> --seeds 5 …`:
+//! the Jinny-like robot (181 beams over 180°, 30 m, σ 0.01 m, mounted
+//! 0.2 m ahead; default odometry noise) drives a corridor route steered by
+//! its true pose, simulation seeds 1–5; position error of
+//! [`Localizer::estimate`] at every control tick (0.1 s), median of the
+//! five runs' medians and the largest error of all runs.
+//!
+//! | map, route | options | median | max | Warning (iterations) |
+//! |---|---|---|---|---|
+//! | building_31, 135.8 m | defaults | 0.044 m | 0.098 m | 0.9 % |
+//! | levine, 129.6 m | defaults | 0.025 m | 0.063 m | 0.0 % |
+//! | building_31, 20 people | `--people 20` | 0.040 m | 0.091 m | 13.8 % |
+//! | building_31, 60 people | `--people 60` | 0.036 m | 0.094 m | 46.8 % |
+//! | building_31, 0 / 20 / 60 people | `--min-explained 0` (comparison alone) | | | 0.9 / 0.3 / 0.6 % |
+//! | building_31 | `--alpha 0.2` (AMCL) | 0.091 m | 0.283 m | |
+//! | levine | `--alpha 0.2` (AMCL) | 0.067 m | 0.595 m | |
+//! | building_31 | `--log-product` | 0.018 m | 0.059 m | |
+//! | levine | `--log-product` | 0.041 m | 0.074 m | |
+//! | building_31, 60 people | `--log-product --people 60` | 0.080 m | 0.586 m | |
+//! | building_31 | `--recovery` | 0.060 m | 13.3 m | |
+//! | building_31, 60 people | `--recovery --people 60` | 5.4 m | 15.6 m | |
+//!
+//! The estimate runs 2–4 cm *ahead* of the robot on average: the
+//! likelihood field ignores occlusion, so an endpoint pushed through a
+//! thin wall lands in the free space behind it, closer to a surface than
+//! one that falls short; a laser that looks only forward is thus pulled
+//! forward (AMCL's model shares this).
+//!
+//! Global localization (`--global`, seeds 1–10, 20 000 particles shrinking
+//! to 500): the error fell below 0.3 m for good after 10.5, 11.6, 11.7,
+//! 12.3, 12.8, 12.8, 12.9, 22.5, 22.5 and 83.5 m of travel (median 12.6 m);
+//! the first ~10 m of the route run up a long, featureless corridor.
+//!
+//! One filter iteration with 500 particles and 60 of 181 beams on
+//! building_31 takes about 0.16 ms (`benches/localization.rs`).
 
 pub mod gaussian;
 pub mod kld;
@@ -183,7 +238,8 @@ pub struct MclParams {
     pub kld: KldParams,
     /// Random-particle injection (default off).
     pub recovery: RecoveryParams,
-    /// Success/Warning comparison (σ 0.05 m, margin 0.005).
+    /// Success/Warning judgement (within 0.1 m, margin 0.02, 0.8
+    /// explained).
     pub status: StatusParams,
 }
 
