@@ -1205,4 +1205,86 @@ mod tests {
         let total: f64 = l.particles().map(|p| p.weight).sum();
         assert!((total - 1.0).abs() < 1e-9);
     }
+
+    /// A noiseless 37-beam scan over 180° from `pose` by marching each ray
+    /// in 1 mm steps to the first blocked cell.
+    fn scan_from(map: &GridMap, pose: Pose) -> LaserScan {
+        let inc = std::f64::consts::PI / 36.0;
+        let ranges_m = (0..37)
+            .map(|k| {
+                let a = pose.theta_rad - std::f64::consts::FRAC_PI_2 + k as f64 * inc;
+                let mut r = 0.0;
+                while r < 10.0 {
+                    let p = Vec2::new(pose.x_m + r * a.cos(), pose.y_m + r * a.sin());
+                    if map.blocked_at(p) {
+                        return r;
+                    }
+                    r += 0.001;
+                }
+                f64::INFINITY
+            })
+            .collect();
+        LaserScan {
+            mount: Pose::default(),
+            angle_min_rad: -std::f64::consts::FRAC_PI_2,
+            angle_increment_rad: inc,
+            range_max_m: 10.0,
+            ranges_m,
+        }
+    }
+
+    #[test]
+    fn beam_skipping_leaves_out_a_beam_no_particle_explains() {
+        let map = room(40);
+        let params = MclParams {
+            field: LikelihoodFieldParams {
+                beam_skip: Some(BeamSkip::default()),
+                ..LikelihoodFieldParams::default()
+            },
+            // Every call is an iteration.
+            update_min_d_m: 0.0,
+            update_min_a_rad: 0.0,
+            ..MclParams::default()
+        };
+        let mut l = Localizer::new(&map, params, 9).unwrap();
+        let truth = Pose::new(-0.1, 0.2, 0.0);
+        l.init_pose(truth, 0.02, 0.01).unwrap();
+        let mut scan = scan_from(&map, truth);
+        let info = l.update(Pose::default(), &scan).unwrap().unwrap();
+        assert_eq!((info.beams_used, info.beams_skipped), (37, 0));
+        // Someone 0.3 m ahead, in the middle of the free space (more than
+        // 0.5 m from every wall for every particle).
+        scan.ranges_m[18] = 0.3;
+        let info = l.update(Pose::default(), &scan).unwrap().unwrap();
+        assert_eq!((info.beams_used, info.beams_skipped), (36, 1));
+    }
+
+    #[test]
+    fn recovery_injects_random_particles_when_the_likelihood_drops() {
+        let map = room(40);
+        let params = MclParams {
+            recovery: RecoveryParams {
+                alpha_slow: 0.001,
+                alpha_fast: 0.1,
+            },
+            // Every call is an iteration.
+            update_min_d_m: 0.0,
+            update_min_a_rad: 0.0,
+            ..MclParams::default()
+        };
+        let mut l = Localizer::new(&map, params, 9).unwrap();
+        let truth = Pose::new(0.4, -0.2, 0.0);
+        l.init_pose(truth, 0.02, 0.01).unwrap();
+        let good = scan_from(&map, truth);
+        for _ in 0..10 {
+            let info = l.update(Pose::default(), &good).unwrap().unwrap();
+            assert_eq!(info.injected, 0, "{info:?}");
+        }
+        // Carried away without odometry: the scans now come from elsewhere.
+        let kidnapped = scan_from(&map, Pose::new(-0.4, 0.5, 2.0));
+        let injected: usize = (0..5)
+            .map(|_| l.update(Pose::default(), &kidnapped).unwrap().unwrap().injected)
+            .sum();
+        assert!(injected > 50, "{injected}");
+    }
 }
