@@ -20,6 +20,7 @@
 
 pub mod activity;
 pub mod guide;
+pub mod localization;
 pub mod planning;
 pub mod sectors;
 pub mod supervisor;
