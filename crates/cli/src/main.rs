@@ -4,6 +4,7 @@
 mod gspn;
 mod lab_cmd;
 mod map;
+mod nav_cmd;
 mod output;
 mod sim_cmd;
 
@@ -35,6 +36,9 @@ enum Command {
     /// The simulator: drive a robot through a world.
     #[command(subcommand)]
     Sim(sim_cmd::SimCommand),
+    /// The tour-guide robot on a map: drive between named places, or a guided tour.
+    #[command(subcommand)]
+    Nav(nav_cmd::NavCommand),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +48,7 @@ fn main() -> ExitCode {
         Command::Map(cmd) => map::run(cmd),
         Command::Sim(cmd) => sim_cmd::run(cmd),
         Command::Lab(cmd) => lab_cmd::run(cmd),
+        Command::Nav(cmd) => nav_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod experiment;
+pub mod mission;
 pub mod page;
 pub mod pictures;
 pub mod record;

@@ -78,6 +78,21 @@ impl World {
         Ok(self)
     }
 
+    /// The same world with the people placed at `positions` (the crowd's
+    /// [`CrowdParams::positions`] replaced; its routes, which do not depend
+    /// on them, are shared, not rebuilt).
+    pub fn with_positions(&self, positions: Vec<Vec2>) -> Result<World> {
+        let crowd = CrowdParams {
+            positions,
+            ..self.crowd.clone()
+        };
+        crowd.validate()?;
+        Ok(World {
+            crowd,
+            ..self.clone()
+        })
+    }
+
     /// The people's routes to the crowd's waypoints.
     pub fn routes(&self) -> &Routes {
         &self.routes

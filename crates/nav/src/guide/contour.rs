@@ -25,6 +25,11 @@
 //! looks sideways; at a concave corner the wall ahead pulls the target
 //! away from it before the robot gets there.
 //!
+//! **Stalls.** A robot that follows a contour without getting `stall_m`
+//! anywhere for `stall_s` (wedged in a pocket, turning back and forth at a
+//! gap too narrow for it) turns round and follows the contour the other
+//! way, as a wall follower does at a dead end.
+//!
 //! **Centred.** When both sides have a contour (bearings 45°–135°) and
 //! `d_left + d_right ≤ corridor_m`, the robot keeps to the middle:
 //! `ψ = (tangent of both) + atan(k_d (d_left − d_right) / 2)`.
@@ -115,6 +120,11 @@ pub struct ContourParams {
     /// How long the nearest contour point is remembered once out of view,
     /// seconds. Default 4.
     pub memory_s: f64,
+    /// Following a contour without getting `stall_m` anywhere for this long
+    /// turns the robot round to follow it the other way, seconds. Default 8.
+    pub stall_s: f64,
+    /// See `stall_s`, metres. Default 0.3.
+    pub stall_m: f64,
     /// How far ahead along the contour the tracker steers, metres.
     /// Default 0.4 (longer cuts convex corners, shorter swings wide of
     /// concave ones; both measured in `tests/contour.rs`).
@@ -137,6 +147,8 @@ impl Default for ContourParams {
             corridor_m: 2.6,
             lost_m: 1.5,
             memory_s: 4.0,
+            stall_s: 8.0,
+            stall_m: 0.3,
             lookahead_m: 0.4,
         }
     }
@@ -159,6 +171,8 @@ impl ContourParams {
             ("lost_m", self.lost_m),
             ("memory_s", self.memory_s),
             ("lookahead_m", self.lookahead_m),
+            ("stall_s", self.stall_s),
+            ("stall_m", self.stall_m),
         ];
         for (name, v) in fields {
             if !(v.is_finite() && v > 0.0) {
@@ -219,6 +233,8 @@ pub struct ContourTracker {
     /// The nearest contour point of recent cycles, odometry frame, with
     /// when it was seen, oldest first.
     memory: VecDeque<(Vec2, f64)>,
+    /// Where (odometry) and when the robot last made progress.
+    checkpoint: Option<(Vec2, f64)>,
 }
 
 /// The nearest point of `points` with bearing in `[lo, hi]` (robot frame,
@@ -232,6 +248,30 @@ fn nearest_in(points: &[Vec2], lo: f64, hi: f64) -> Option<Vec2> {
             a >= lo && a <= hi
         })
         .min_by(|a, b| a.norm().total_cmp(&b.norm()))
+}
+
+/// The share of `v` that keeps the footprint (radius `radius_m`) off every
+/// point over the next second of the arc `(v, ω)`: 1 when the whole second
+/// is clear, 0 when the first tenth is not (a circular robot turning on the
+/// spot sweeps nothing, so the turn itself is never slowed).
+fn safe_fraction(points: &[Vec2], v: f64, omega: f64, radius_m: f64) -> f64 {
+    if v <= 0.0 {
+        return 1.0;
+    }
+    let r2 = radius_m * radius_m;
+    for k in 1..=10 {
+        let t = 0.1 * k as f64;
+        let (x, y) = if omega.abs() < 1e-9 {
+            (v * t, 0.0)
+        } else {
+            let rho = v / omega;
+            (rho * (omega * t).sin(), rho * (1.0 - (omega * t).cos()))
+        };
+        if points.iter().any(|q| (q.x - x).powi(2) + (q.y - y).powi(2) < r2) {
+            return 0.1 * (k - 1) as f64;
+        }
+    }
+    1.0
 }
 
 /// Whether a corridor of half-width `half_m` along bearing `bearing` is
@@ -253,6 +293,7 @@ impl ContourTracker {
             p: params,
             mode: ContourMode::Seek,
             memory: VecDeque::new(),
+            checkpoint: None,
         })
     }
 
@@ -281,6 +322,7 @@ impl ContourTracker {
     pub fn reset(&mut self) {
         self.mode = ContourMode::Seek;
         self.memory.clear();
+        self.checkpoint = None;
     }
 
     /// One control cycle: the scan, the odometry pose (for the short
@@ -301,6 +343,21 @@ impl ContourTracker {
         let goal_m = to_goal.norm();
         let goal_bearing = to_goal.angle();
         let half = p.robot_radius_m + p.margin_m;
+        // Stalled on a contour (a pocket, a gap too narrow to tell from a
+        // passage): follow it the other way.
+        let (here, since) = *self.checkpoint.get_or_insert((odometry.position(), time_s));
+        if odometry.position().dist(here) >= p.stall_m {
+            self.checkpoint = Some((odometry.position(), time_s));
+        } else if time_s - since >= p.stall_s {
+            if let ContourMode::Follow { side, hit_goal_m } = self.mode {
+                self.mode = ContourMode::Follow {
+                    side: side.other(),
+                    hit_goal_m,
+                };
+                self.memory.clear();
+            }
+            self.checkpoint = Some((odometry.position(), time_s));
+        }
         // Leave, or hit.
         match self.mode {
             ContourMode::Follow { hit_goal_m, .. } => {
@@ -325,21 +382,38 @@ impl ContourTracker {
                 }
             }
         }
-        let front = points
-            .iter()
-            .filter(|q| q.x > 0.0 && q.y.abs() < half)
-            .map(|q| q.x)
-            .fold(f64::INFINITY, f64::min);
         let (mut psi, contour_m, centred) = match self.mode {
             ContourMode::Seek => (goal_bearing, f64::INFINITY, false),
             ContourMode::Follow { side, .. } => self.follow(scan, &points, side, odometry, time_s),
         };
         psi = wrap_angle(psi);
+        // Room straight ahead, as wide as the footprint and 5 cm: full speed
+        // beyond d* + 1 m, none when the footprint would touch.
+        let body = p.robot_radius_m + 0.05;
+        let front = points
+            .iter()
+            .filter(|q| q.x > 0.0 && q.y.abs() < body)
+            .map(|q| q.x)
+            .fold(f64::INFINITY, f64::min);
+        let room = ((front - body) / (p.distance_m + 1.0 - body)).clamp(0.0, 1.0);
+        if room == 0.0 && psi.abs() < 0.3 {
+            // Blocked the way it wants to go: turn on the spot, away from
+            // the contour (or towards the freer side when seeking).
+            let side = match self.mode {
+                ContourMode::Follow { side, .. } => -side.sign(),
+                ContourMode::Seek => {
+                    let left =
+                        nearest_in(&points, 0.0, std::f64::consts::PI).map_or(f64::INFINITY, Vec2::norm);
+                    let right =
+                        nearest_in(&points, -std::f64::consts::PI, 0.0).map_or(f64::INFINITY, Vec2::norm);
+                    if left >= right { 1.0 } else { -1.0 }
+                }
+            };
+            psi = side * std::f64::consts::FRAC_PI_2;
+        }
         let omega = (p.k_heading * psi).clamp(-p.max_turn_radps, p.max_turn_radps);
-        // Slow down near obstacles ahead: full speed beyond d* + 1 m, none
-        // at the footprint plus the margin.
-        let room = ((front - half) / (p.distance_m + 1.0 - half)).clamp(0.0, 1.0);
         let v = p.cruise_mps * psi.cos().max(0.0) * room;
+        let v = v * safe_fraction(&points, v, omega, p.robot_radius_m + 0.03);
         ContourStep {
             command: Command::Twist {
                 v_mps: v,

@@ -35,6 +35,10 @@ pub struct LocalPlannerParams {
     pub cost: CostParams,
     /// The gradient descent. Default [`GradientParams::default`].
     pub gradient: GradientParams,
+    /// A robot whose own cell is lethal only by inflation (within the
+    /// inscribed radius of an obstacle, not in it) starts from the nearest
+    /// cell that is not lethal within this distance, metres. Default 0.3.
+    pub escape_radius_m: f64,
 }
 
 impl Default for LocalPlannerParams {
@@ -43,6 +47,7 @@ impl Default for LocalPlannerParams {
             window_size_m: 10.0,
             cost: CostParams::default(),
             gradient: GradientParams::default(),
+            escape_radius_m: 0.3,
         }
     }
 }
@@ -55,6 +60,13 @@ impl LocalPlannerParams {
                 name: "window_size_m",
                 value: self.window_size_m,
                 expected: "a finite number > 0",
+            });
+        }
+        if !(self.escape_radius_m.is_finite() && self.escape_radius_m >= 0.0) {
+            return Err(PlanningError::BadParam {
+                name: "escape_radius_m",
+                value: self.escape_radius_m,
+                expected: "a finite number ≥ 0",
             });
         }
         self.cost.validate()?;
@@ -137,9 +149,24 @@ impl LocalPlanner {
         if cost_map.info().free_cells == 0 {
             return Err(PlanningError::NoFreeCell { window });
         }
-        check_start(cost_map, robot)?;
+        // A robot that has come within the inscribed radius of an obstacle
+        // (a person stepped close, the estimate shifted) starts its descent
+        // from the nearest cell that is not lethal, if one is near enough.
+        let start = match check_start(cost_map, robot) {
+            Ok(_) => robot,
+            Err(
+                e @ PlanningError::StartBlocked {
+                    why: super::Blocked::Inflated { .. },
+                    ..
+                },
+            ) => nearest_free(cost_map, robot, self.params.escape_radius_m).ok_or(e)?,
+            Err(e) => return Err(e),
+        };
         let navigation = self.nf.compute(cost_map, goal)?;
-        let descent = descend(&self.nf, robot, &self.params.gradient, &mut self.path)?;
+        let descent = descend(&self.nf, start, &self.params.gradient, &mut self.path)?;
+        if start != robot {
+            self.path.insert(0, robot);
+        }
         let direction = match self.path.as_slice() {
             [a, b, ..] if a.dist(*b) > 0.0 => (*b - *a).scale(1.0 / a.dist(*b)),
             _ => Vec2::default(),
@@ -168,6 +195,33 @@ impl LocalPlanner {
     pub fn navigation_function(&self) -> &NavigationFunction {
         &self.nf
     }
+}
+
+/// The centre of the cell nearest `p` that is not lethal, within
+/// `radius_m` (ties to the first in row-major order).
+fn nearest_free(cost: &CostMap, p: Vec2, radius_m: f64) -> Option<Vec2> {
+    let window = cost.window();
+    let r = window.resolution_m();
+    let c = window.cell_of("start", p).ok()?;
+    let reach = (radius_m / r).ceil() as i64;
+    let mut best: Option<(f64, Vec2)> = None;
+    for dj in -reach..=reach {
+        for di in -reach..=reach {
+            let q = robot::CellIndex {
+                i: c.i + di,
+                j: c.j + dj,
+            };
+            if !window.contains(q) || cost.cost(q).is_infinite() {
+                continue;
+            }
+            let at = window.cell_center(q);
+            let d = at.dist(p);
+            if d <= radius_m && best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, at));
+            }
+        }
+    }
+    best.map(|(_, at)| at)
 }
 
 #[cfg(test)]
@@ -223,11 +277,32 @@ mod tests {
             lp.plan(&m, robot, Vec2::new(16.0, 10.0), &[]),
             Err(PlanningError::GoalOutsideWindow { .. })
         ));
-        // The robot next to the wall.
+        // The robot within the inscribed radius of the wall starts from the
+        // nearest cell that is not lethal.
+        let near = Vec2::new(11.9, 10.0);
+        lp.plan(&m, near, Vec2::new(9.0, 10.0), &[]).unwrap();
+        let path = lp.path().to_vec();
+        assert_eq!(path[0], near);
+        let cm = lp.cost_map().unwrap();
+        assert!(cm.is_lethal(m.cell_of(near)) && !cm.is_lethal(m.cell_of(path[1])));
+        assert!(path[1].dist(near) <= LocalPlannerParams::default().escape_radius_m);
+        // Not without the escape, and never from inside the wall.
+        let mut strict = LocalPlanner::new(LocalPlannerParams {
+            escape_radius_m: 0.0,
+            ..LocalPlannerParams::default()
+        })
+        .unwrap();
         assert!(matches!(
-            lp.plan(&m, Vec2::new(11.9, 10.0), Vec2::new(9.0, 10.0), &[]),
+            strict.plan(&m, near, Vec2::new(9.0, 10.0), &[]),
             Err(PlanningError::StartBlocked {
                 why: Blocked::Inflated { .. },
+                ..
+            })
+        ));
+        assert!(matches!(
+            lp.plan(&m, Vec2::new(12.02, 10.0), Vec2::new(9.0, 10.0), &[]),
+            Err(PlanningError::StartBlocked {
+                why: Blocked::Occupied,
                 ..
             })
         ));

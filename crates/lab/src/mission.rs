@@ -1,0 +1,582 @@
+//! Guide missions on a map: the tour-guide robot driven by its own
+//! localizer and planners from one place to another, judged by the truth.
+//!
+//! A *leg* is one simulation: the Jinny-like robot (181-beam laser, wheel
+//! odometry with its realistic slips) starts at a pose, the
+//! [`GuideController`] gets the map, the start as its initial estimate and
+//! the goal, and runs until the simulator ends the run. The lab watches what
+//! the controller cannot: the distance between its estimate and the true
+//! pose at every tick. A *tour* is a sequence of legs through places in
+//! order: each leg starts where the last one ended (true pose; after a
+//! collision, where the robot was a second before it — an operator's nudge
+//! off the wall), and the controller starts from the last leg's final
+//! *estimate* — localization errors carry over, as on a real robot. People
+//! are placed anew for each leg.
+//!
+//! **Outcomes.** `reached` (within the goal tolerance of the true position
+//! when the controller declared arrival), `lost` (the controller declared
+//! arrival elsewhere, or its estimate was more than `lost_error_m` from the
+//! truth for `lost_after_s`), `collision`, `timeout`, `unreachable` (no
+//! route on the static map: the leg is not run), and `gave_up` (the
+//! controller stopped, e.g. without a laser).
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result};
+use nav::guide::{GuideController, GuideError, GuideParams, GuideStats, Policy};
+use robot::{Controller, Event, Notes, Perception, Pose, Request, Step, Vec2};
+use sim::render::{MarkerKind, Picture};
+use sim::{OccupancyGrid, Outcome, RobotParams, RunParams, Simulation, Task, World};
+
+/// How a leg ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LegOutcome {
+    /// At the goal (by the true position).
+    Reached,
+    /// Collided.
+    Collision,
+    /// Out of time.
+    Timeout,
+    /// The estimate was wrong: arrival declared elsewhere, or far from the
+    /// truth for too long.
+    Lost,
+    /// No route on the static map.
+    Unreachable,
+    /// The controller stopped.
+    GaveUp,
+}
+
+/// Localization over a leg (true error: estimate against truth).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct LocalizationSummary {
+    /// Mean position error over the ticks, metres.
+    pub mean_error_m: f64,
+    /// Median position error, metres.
+    pub median_error_m: f64,
+    /// Largest position error, metres.
+    pub max_error_m: f64,
+    /// Times the localizer went to Warning.
+    pub warnings: u32,
+    /// Time in Warning, seconds.
+    pub time_in_warning_s: f64,
+}
+
+/// AutoMove over a leg.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct PlannerSummary {
+    /// Times it became Abnormal.
+    pub abnormal_episodes: u32,
+    /// Time Abnormal, seconds.
+    pub time_abnormal_s: f64,
+}
+
+/// One leg's result (`nav go`/`nav tour` print it as JSON, keys stable).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LegResult {
+    /// Where from (a place's name, or `x,y,θ`).
+    pub from: String,
+    /// Where to.
+    pub to: String,
+    /// How it ended.
+    pub outcome: LegOutcome,
+    /// Simulated time, seconds.
+    pub time_s: f64,
+    /// Length of the true path, metres.
+    pub path_m: f64,
+    /// Distance from the true final position to the goal, metres.
+    pub final_error_m: f64,
+    /// The localizer.
+    pub localization: LocalizationSummary,
+    /// AutoMove.
+    pub planner: PlannerSummary,
+}
+
+/// Where the people of each leg stand at its start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeoplePlan {
+    /// How many.
+    pub count: usize,
+    /// They gather around these points (the places).
+    pub anchors: Vec<Vec2>,
+    /// Within this distance of an anchor, metres.
+    pub spread_m: f64,
+    /// And no nearer than this to the robot's footprint, metres.
+    pub keep_clear_m: f64,
+}
+
+/// What a mission runs on: the world (map and crowd), the robot, the
+/// controller's parameters, the run's limits.
+#[derive(Debug, Clone)]
+pub struct MissionSetup {
+    /// The world, with its crowd's parameters (waypoints, speeds…).
+    pub world: World,
+    /// Where each leg's people start ([`crowd_near`], drawn from the leg's
+    /// seed around the anchors, clear of the leg's start); `None`: the
+    /// world's crowd as it is.
+    pub people: Option<PeoplePlan>,
+    /// The robot (Jinny-like by default).
+    pub robot: RobotParams,
+    /// The guide controller's parameters.
+    pub guide: GuideParams,
+    /// Time limit of a leg, seconds.
+    pub time_limit_s: f64,
+    /// Goal tolerance, metres (the simulator's judgement).
+    pub goal_tolerance_m: f64,
+    /// A true error above this for `lost_after_s` ends the leg as lost,
+    /// metres. Default 2.
+    pub lost_error_m: f64,
+    /// Seconds, see `lost_error_m`. Default 5.
+    pub lost_after_s: f64,
+}
+
+impl MissionSetup {
+    /// The Jinny-like robot in `world` with default parameters and a time
+    /// limit.
+    pub fn new(world: World, time_limit_s: f64) -> MissionSetup {
+        MissionSetup {
+            world,
+            people: None,
+            robot: RobotParams::jinny(),
+            guide: GuideParams::default(),
+            time_limit_s,
+            goal_tolerance_m: 0.3,
+            lost_error_m: 2.0,
+            lost_after_s: 5.0,
+        }
+    }
+}
+
+/// A snapshot of the particle cloud when the localizer warned.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cloud {
+    /// When, seconds.
+    pub time_s: f64,
+    /// The particles' positions.
+    pub particles: Vec<Vec2>,
+}
+
+/// A leg as it was driven, for pictures: per tick the true pose and a
+/// state label, the events, the clouds at warnings.
+#[derive(Debug, Clone, Default)]
+pub struct LegTrace {
+    /// Time at each tick (when the sensors read), seconds.
+    pub times: Vec<f64>,
+    /// True pose at each tick.
+    pub poses: Vec<Pose>,
+    /// Estimated pose at each tick.
+    pub estimates: Vec<Pose>,
+    /// The behaviour and state at each tick (`automove`, `automove ·
+    /// warning`, `contour`, `asking`…).
+    pub labels: Vec<&'static str>,
+    /// The controller's events.
+    pub events: Vec<Event>,
+    /// Particle clouds at warnings.
+    pub clouds: Vec<Cloud>,
+}
+
+/// A leg's result, the estimate it ended with, and its trace.
+#[derive(Debug, Clone)]
+pub struct LegRun {
+    /// The result.
+    pub result: LegResult,
+    /// The controller's final estimate (where the next leg starts from).
+    pub final_estimate: Pose,
+    /// The true final pose.
+    pub final_pose: Pose,
+    /// The controller's counters.
+    pub stats: GuideStats,
+    /// The trace (poses, labels, events, clouds).
+    pub trace: LegTrace,
+}
+
+/// Passes a controller's notes through, keeping its events.
+struct Watch<'c> {
+    inner: &'c mut GuideController,
+    notes: Notes,
+}
+
+impl Controller for Watch<'_> {
+    fn step(&mut self, p: &Perception, _notes: &mut Notes) -> Step {
+        self.notes.clear();
+        self.inner.step(p, &mut self.notes)
+    }
+
+    fn request(&self) -> Option<Request> {
+        self.inner.request()
+    }
+}
+
+/// The label of the state the controller is in.
+fn label(c: &GuideController, asking: bool) -> &'static str {
+    use nav::localization::LocalizationStatus::Warning;
+    use nav::supervisor::Behaviour::{AutoMove, Contour};
+    let warning = c.status() == Warning;
+    match (c.active(), warning, asking) {
+        (AutoMove, _, true) => "automove / asking",
+        (AutoMove, false, false) => "automove",
+        (AutoMove, true, false) => "automove / warning",
+        (Contour, false, _) => "contour",
+        (Contour, true, _) => "contour / warning",
+    }
+}
+
+fn median(xs: &mut [f64]) -> f64 {
+    if xs.is_empty() {
+        return 0.0;
+    }
+    xs.sort_by(f64::total_cmp);
+    let n = xs.len();
+    if n % 2 == 1 {
+        xs[n / 2]
+    } else {
+        0.5 * (xs[n / 2 - 1] + xs[n / 2])
+    }
+}
+
+/// Runs one leg from the true pose `start`, the controller starting from
+/// `believed` (its initial estimate), to `goal`, with `policy`; `seed` for
+/// the simulator and the localizer. `from`/`to` name the leg.
+#[allow(clippy::too_many_arguments)]
+pub fn run_leg(
+    setup: &MissionSetup,
+    from: &str,
+    to: &str,
+    start: Pose,
+    believed: Pose,
+    goal: Vec2,
+    policy: Policy,
+    seed: u64,
+) -> Result<LegRun> {
+    let map = setup.world.grid().grid_map();
+    let unreachable = |why: String| LegRun {
+        result: LegResult {
+            from: from.to_string(),
+            to: to.to_string(),
+            outcome: LegOutcome::Unreachable,
+            time_s: 0.0,
+            path_m: 0.0,
+            final_error_m: start.position().dist(goal),
+            localization: LocalizationSummary::default(),
+            planner: PlannerSummary::default(),
+        },
+        final_estimate: believed,
+        final_pose: start,
+        stats: GuideStats::default(),
+        trace: LegTrace {
+            events: vec![Event::new("unreachable", 0.0).with("why", why)],
+            ..LegTrace::default()
+        },
+    };
+    let mut controller = match GuideController::new(
+        &map,
+        setup.guide.clone(),
+        believed,
+        goal,
+        policy,
+        seed ^ 0x6c6f_6361_6c69_7a65,
+    ) {
+        Ok(c) => c,
+        Err(GuideError::AutoMove(e)) => return Ok(unreachable(e.to_string())),
+        Err(e) => return Err(e).context("starting the guide controller"),
+    };
+    let run = RunParams {
+        time_limit_s: setup.time_limit_s,
+        goal_tolerance_m: setup.goal_tolerance_m,
+        ..RunParams::default()
+    };
+    let task = Task {
+        start,
+        goal: Some(goal),
+    };
+    let world = match &setup.people {
+        Some(plan) => {
+            let radius = setup.robot.drive.radius_m;
+            let at = crowd_near(
+                &setup.world,
+                &plan.anchors,
+                plan.count,
+                plan.spread_m,
+                start.position(),
+                radius + plan.keep_clear_m,
+                seed,
+            );
+            if at.len() < plan.count {
+                anyhow::bail!(
+                    "leg {from} → {to}: only {} of {} people fit around the places",
+                    at.len(),
+                    plan.count
+                );
+            }
+            std::borrow::Cow::Owned(setup.world.with_positions(at)?)
+        }
+        None => std::borrow::Cow::Borrowed(&setup.world),
+    };
+    let mut sim = Simulation::new(&world, setup.robot.clone(), run, task, seed)
+        .with_context(|| format!("leg {from} → {to}"))?;
+    let mut trace = LegTrace::default();
+    let mut errors = Vec::new();
+    let mut far_since: Option<f64> = None;
+    let mut lost = false;
+    let mut watch = Watch {
+        inner: &mut controller,
+        notes: Notes::enabled(),
+    };
+    loop {
+        let truth = sim.pose();
+        let time_s = sim.time_s();
+        let ended = sim.tick(&mut watch);
+        let estimate = watch.inner.estimate();
+        let error = truth.position().dist(estimate.position());
+        errors.push(error);
+        trace.times.push(time_s);
+        trace.poses.push(truth);
+        trace.estimates.push(estimate);
+        trace
+            .labels
+            .push(label(watch.inner, watch.inner.request().is_some()));
+        for e in &watch.notes.events {
+            if e.kind == "warning" {
+                trace.clouds.push(Cloud {
+                    time_s: e.time_s,
+                    particles: watch
+                        .inner
+                        .localizer()
+                        .particles()
+                        .map(|p| p.pose.position())
+                        .collect(),
+                });
+            }
+            trace.events.push(e.clone());
+        }
+        if ended.is_some() {
+            break;
+        }
+        if error > setup.lost_error_m {
+            let since = *far_since.get_or_insert(time_s);
+            if time_s - since >= setup.lost_after_s {
+                lost = true;
+                break;
+            }
+        } else {
+            far_since = None;
+        }
+    }
+    drop(watch);
+    let r = sim.result();
+    let outcome = if lost {
+        LegOutcome::Lost
+    } else {
+        match r.outcome {
+            Some(Outcome::Goal) => LegOutcome::Reached,
+            Some(Outcome::Collision) => LegOutcome::Collision,
+            Some(Outcome::TimeLimit) => LegOutcome::Timeout,
+            Some(Outcome::Lost) => LegOutcome::Lost,
+            Some(Outcome::GaveUp) | None => LegOutcome::GaveUp,
+        }
+    };
+    let stats = controller.stats();
+    let mean = if errors.is_empty() {
+        0.0
+    } else {
+        errors.iter().sum::<f64>() / errors.len() as f64
+    };
+    let max = errors.iter().copied().fold(0.0, f64::max);
+    let result = LegResult {
+        from: from.to_string(),
+        to: to.to_string(),
+        outcome,
+        time_s: r.time_s,
+        path_m: r.path_length_m,
+        final_error_m: r.final_pose.position().dist(goal),
+        localization: LocalizationSummary {
+            mean_error_m: mean,
+            median_error_m: median(&mut errors),
+            max_error_m: max,
+            warnings: stats.warnings,
+            time_in_warning_s: stats.time_in_warning_s,
+        },
+        planner: PlannerSummary {
+            abnormal_episodes: stats.abnormal_episodes,
+            time_abnormal_s: stats.time_abnormal_s,
+        },
+    };
+    Ok(LegRun {
+        result,
+        final_estimate: controller.estimate(),
+        final_pose: r.final_pose,
+        stats,
+        trace,
+    })
+}
+
+/// A named place or a pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stop {
+    /// Its name (the place's, or `x,y,θ`).
+    pub name: String,
+    /// The pose.
+    pub pose: Pose,
+}
+
+/// Runs a tour through `stops` in order: one leg between each consecutive
+/// pair (module docs). Leg `k` uses the seed derived from `seed` and `k`.
+pub fn run_tour(setup: &MissionSetup, stops: &[Stop], policy: Policy, seed: u64) -> Result<Vec<LegRun>> {
+    let mut legs = Vec::new();
+    let Some(first) = stops.first() else {
+        return Ok(legs);
+    };
+    let mut at = first.pose;
+    let mut believed = first.pose;
+    let mut from = first.name.clone();
+    for (k, next) in stops.iter().skip(1).enumerate() {
+        let leg_seed = crate::runner::derive_seed(seed, "tour leg", k as u32);
+        let leg = run_leg(
+            setup,
+            &from,
+            &next.name,
+            at,
+            believed,
+            next.pose.position(),
+            policy,
+            leg_seed,
+        )?;
+        // After an unreachable leg the robot is still where it was; after
+        // a collision it is set back to where it was a second before (an
+        // operator's nudge off the wall); after any other it goes on from
+        // where it stopped.
+        if leg.result.outcome != LegOutcome::Unreachable {
+            let back = leg.trace.poses.len().saturating_sub(11);
+            (at, believed) = match (leg.result.outcome, leg.trace.poses.get(back)) {
+                (LegOutcome::Collision, Some(&p)) => (p, leg.trace.estimates[back]),
+                _ => (leg.final_pose, leg.final_estimate),
+            };
+            from = if leg.result.outcome == LegOutcome::Reached {
+                next.name.clone()
+            } else {
+                format!("{:.2},{:.2},{:.2}", at.x_m, at.y_m, at.theta_rad)
+            };
+        }
+        legs.push(leg);
+    }
+    Ok(legs)
+}
+
+impl LegTrace {
+    /// Writes one JSON object per tick: time, true pose, estimate, state,
+    /// and the events of that tick.
+    pub fn write_json_lines(&self, mut out: impl std::io::Write) -> Result<()> {
+        let mut events = self.events.iter().peekable();
+        for k in 0..self.times.len() {
+            let t = self.times[k];
+            let mut now = Vec::new();
+            while let Some(e) = events.next_if(|e| e.time_s <= t + 1e-9) {
+                now.push(e);
+            }
+            let line = serde_json::json!({
+                "time_s": t,
+                "true_pose": self.poses[k],
+                "estimate": self.estimates[k],
+                "state": self.labels[k],
+                "events": now,
+            });
+            serde_json::to_writer(&mut out, &line)?;
+            out.write_all(b"\n")?;
+        }
+        Ok(())
+    }
+}
+
+/// Free places for `n` people near `anchors` (within `spread_m`, uniform in
+/// a disc around a random anchor), none overlapping a wall or another
+/// person, none within `keep_clear_m` of `robot`'s centre; drawn
+/// from `seed`. A crowd in a building gathers where the tour goes, not in
+/// the empty space a SLAM map shows around it. Fewer than `n` when the
+/// space runs out (after 200 tries per person).
+pub fn crowd_near(
+    world: &World,
+    anchors: &[Vec2],
+    n: usize,
+    spread_m: f64,
+    robot: Vec2,
+    keep_clear_m: f64,
+    seed: u64,
+) -> Vec<Vec2> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x0063_726f_7764);
+    let r = world.crowd().radius_m;
+    let mut out: Vec<Vec2> = Vec::with_capacity(n);
+    if anchors.is_empty() {
+        return out;
+    }
+    for _ in 0..n {
+        for _ in 0..200 {
+            let a = anchors[rng.random_range(0..anchors.len())];
+            let d = spread_m * rng.random::<f64>().sqrt();
+            let t = std::f64::consts::TAU * rng.random::<f64>();
+            let q = a + Vec2::new(d * t.cos(), d * t.sin());
+            if world.on_map(q)
+                && !world.grid().disc_blocked(q, r + 0.05)
+                && q.dist(robot) >= keep_clear_m + r
+                && out.iter().all(|o| o.dist(q) >= 2.0 * r + 0.05)
+            {
+                out.push(q);
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// Colour of the particles drawn at warnings.
+pub const CLOUD_RGB: [u8; 3] = [0, 160, 160];
+
+/// Draws legs over the map: true trajectories coloured by behaviour and
+/// state, the particle clouds at warnings, the places (`stops`, labelled),
+/// cropped to what was driven with a margin. PNG or SVG by extension.
+pub fn picture(grid: &OccupancyGrid, legs: &[LegRun], stops: &[Stop], path: &std::path::Path) -> Result<()> {
+    let mut pic = Picture::new(grid);
+    let mut lo = Vec2::new(f64::INFINITY, f64::INFINITY);
+    let mut hi = Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
+    let mut grow = |p: Vec2| {
+        lo = Vec2::new(lo.x.min(p.x), lo.y.min(p.y));
+        hi = Vec2::new(hi.x.max(p.x), hi.y.max(p.y));
+    };
+    for s in stops {
+        grow(s.pose.position());
+    }
+    for leg in legs {
+        for p in &leg.trace.poses {
+            grow(p.position());
+        }
+    }
+    if lo.x.is_finite() {
+        pic.crop(lo - Vec2::new(3.0, 3.0), hi + Vec2::new(3.0, 3.0));
+    }
+    for leg in legs {
+        for cloud in &leg.trace.clouds {
+            for &q in &cloud.particles {
+                pic.marker(q, MarkerKind::Square(CLOUD_RGB));
+            }
+        }
+    }
+    for leg in legs {
+        pic.trajectory(&leg.trace.poses, Some(&leg.trace.labels));
+    }
+    let mut named: BTreeMap<String, Vec2> = BTreeMap::new();
+    for (k, s) in stops.iter().enumerate() {
+        let kind = if k == 0 {
+            MarkerKind::Start
+        } else {
+            MarkerKind::Goal
+        };
+        pic.marker(s.pose.position(), kind);
+        named.entry(s.name.clone()).or_insert(s.pose.position());
+    }
+    for (name, at) in &named {
+        pic.text(*at + Vec2::new(0.3, 0.3), name);
+    }
+    pic.save(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}

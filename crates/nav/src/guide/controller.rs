@@ -1,0 +1,330 @@
+//! The tour-guide robot's controller: the localizer, AutoMove and contour
+//! tracking on one robot, with the behaviour chosen by a policy.
+//!
+//! Every cycle the localizer takes the odometry and the scan (a filter
+//! iteration after the robot moved `update_min_d` or turned
+//! `update_min_a`), the active behaviour drives from the localizer's
+//! estimate, and the controller reports what happened as typed events:
+//!
+//! | event | when | payload |
+//! |---|---|---|
+//! | `warning` | the localizer goes from Success to Warning | `score_estimate`, `score_odometry` |
+//! | `success` | back from Warning to Success | same |
+//! | `abnormal` | AutoMove's exception has lasted `abnormal_after_s` | `exception` |
+//! | `normal` | AutoMove is Normal again | — |
+//! | `ask` | the robot starts asking people to step aside | `exception` |
+//! | `switch` | the active behaviour changes | `from`, `to`, `reason` |
+//! | `arrived` | the estimate is within `arrive_m` of the goal | — |
+//!
+//! It never sees the true pose: it declares the goal reached from its
+//! estimate, and the simulator judges that by the truth.
+
+use robot::{Command, Controller, Event, GridMap, Notes, Perception, Pose, Request, Step, Vec2};
+
+use super::automove::{AutoMove, AutoMoveError, AutoMoveParams};
+use super::contour::{ContourParams, ContourTracker};
+use crate::localization::{LocalizationError, LocalizationStatus, Localizer, MclParams};
+use crate::supervisor::Behaviour;
+
+/// Parameters of the guide controller.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GuideParams {
+    /// The localizer.
+    pub mcl: MclParams,
+    /// AutoMove.
+    pub automove: AutoMoveParams,
+    /// Contour tracking.
+    pub contour: ContourParams,
+    /// The goal counts as reached when the estimate is within this
+    /// distance, metres. Default 0.2.
+    pub arrive_m: f64,
+    /// Spread of the initial particle cloud around the known start:
+    /// position, metres. Default 0.1.
+    pub initial_std_xy_m: f64,
+    /// Spread of the initial particle cloud: heading, radians. Default 0.05.
+    pub initial_std_theta_rad: f64,
+}
+
+impl Default for GuideParams {
+    fn default() -> GuideParams {
+        GuideParams {
+            mcl: MclParams::default(),
+            automove: AutoMoveParams::default(),
+            contour: ContourParams::default(),
+            arrive_m: 0.2,
+            initial_std_xy_m: 0.1,
+            initial_std_theta_rad: 0.05,
+        }
+    }
+}
+
+/// Why a guide controller cannot start.
+#[derive(Debug, thiserror::Error)]
+pub enum GuideError {
+    /// Bad parameters.
+    #[error("{0}")]
+    Params(String),
+    /// The localizer could not be built or started.
+    #[error("localizer: {0}")]
+    Localizer(#[from] LocalizationError),
+    /// AutoMove found no route.
+    #[error(transparent)]
+    AutoMove(#[from] AutoMoveError),
+}
+
+/// How the controller picks the behaviour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Policy {
+    /// One behaviour for the whole mission.
+    Fixed(Behaviour),
+}
+
+/// What the controller counted over its mission.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct GuideStats {
+    /// Times the localizer went to Warning.
+    pub warnings: u32,
+    /// Time in Warning, seconds.
+    pub time_in_warning_s: f64,
+    /// Times AutoMove became Abnormal.
+    pub abnormal_episodes: u32,
+    /// Time AutoMove was Abnormal, seconds.
+    pub time_abnormal_s: f64,
+    /// Time AutoMove drove, seconds.
+    pub time_automove_s: f64,
+    /// Time contour tracking drove, seconds.
+    pub time_contour_s: f64,
+    /// Control cycles in which the robot asked people to step aside.
+    pub asking_cycles: u32,
+    /// Filter iterations of the localizer.
+    pub filter_iterations: u64,
+}
+
+/// The tour-guide controller (module docs).
+pub struct GuideController {
+    p: GuideParams,
+    localizer: Localizer,
+    automove: AutoMove,
+    contour: ContourTracker,
+    policy: Policy,
+    active: Behaviour,
+    goal: Vec2,
+    last_time_s: Option<f64>,
+    status: LocalizationStatus,
+    abnormal: bool,
+    asking: bool,
+    request: Option<Request>,
+    stats: GuideStats,
+}
+
+impl GuideController {
+    /// A controller on `map`, starting from the known pose `start` (the
+    /// particle cloud spread around it) towards `goal`, with `policy`; the
+    /// localizer's randomness comes from `seed`. Fails on bad parameters or
+    /// when AutoMove finds no route from `start` to `goal`.
+    pub fn new(
+        map: &GridMap,
+        params: GuideParams,
+        start: Pose,
+        goal: Vec2,
+        policy: Policy,
+        seed: u64,
+    ) -> Result<GuideController, GuideError> {
+        params.contour.validate().map_err(GuideError::Params)?;
+        for (name, v) in [
+            ("arrive_m", params.arrive_m),
+            ("initial_std_xy_m", params.initial_std_xy_m),
+            ("initial_std_theta_rad", params.initial_std_theta_rad),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(GuideError::Params(format!(
+                    "guide.{name} must be a finite number ≥ 0, got {v}"
+                )));
+            }
+        }
+        let mut localizer = Localizer::new(map, params.mcl, seed)?;
+        localizer.init_pose(start, params.initial_std_xy_m, params.initial_std_theta_rad)?;
+        let mut automove = AutoMove::new(map, params.automove)?;
+        automove.set_goal(start.position(), goal)?;
+        let contour = ContourTracker::new(params.contour).map_err(GuideError::Params)?;
+        let Policy::Fixed(active) = policy;
+        Ok(GuideController {
+            p: params,
+            localizer,
+            automove,
+            contour,
+            policy,
+            active,
+            goal,
+            last_time_s: None,
+            status: LocalizationStatus::Success,
+            abnormal: false,
+            asking: false,
+            request: None,
+            stats: GuideStats::default(),
+        })
+    }
+
+    /// The localizer.
+    pub fn localizer(&self) -> &Localizer {
+        &self.localizer
+    }
+
+    /// AutoMove (its route, its last path).
+    pub fn automove(&self) -> &AutoMove {
+        &self.automove
+    }
+
+    /// The pose estimate now.
+    pub fn estimate(&self) -> Pose {
+        self.localizer.estimate()
+    }
+
+    /// The behaviour driving.
+    pub fn active(&self) -> Behaviour {
+        self.active
+    }
+
+    /// The policy.
+    pub fn policy(&self) -> Policy {
+        self.policy
+    }
+
+    /// The localizer's state.
+    pub fn status(&self) -> LocalizationStatus {
+        self.status
+    }
+
+    /// Whether AutoMove is Abnormal.
+    pub fn abnormal(&self) -> bool {
+        self.abnormal
+    }
+
+    /// What the controller counted so far.
+    pub fn stats(&self) -> GuideStats {
+        self.stats
+    }
+}
+
+fn behaviour_name(b: Behaviour) -> &'static str {
+    match b {
+        Behaviour::AutoMove => "automove",
+        Behaviour::Contour => "contour",
+    }
+}
+
+impl Controller for GuideController {
+    fn step(&mut self, p: &Perception, notes: &mut Notes) -> Step {
+        let t = p.time_s;
+        let dt = self.last_time_s.map_or(0.1, |t0| (t - t0).max(1e-3));
+        // Time spent in the states of the cycle that just ended.
+        if self.last_time_s.is_some() {
+            if self.status == LocalizationStatus::Warning {
+                self.stats.time_in_warning_s += dt;
+            }
+            if self.abnormal {
+                self.stats.time_abnormal_s += dt;
+            }
+            match self.active {
+                Behaviour::AutoMove => self.stats.time_automove_s += dt,
+                Behaviour::Contour => self.stats.time_contour_s += dt,
+            }
+        }
+        self.last_time_s = Some(t);
+        self.request = None;
+        let Some(scan) = p.lasers.first() else {
+            notes.event(Event::new("no_laser", t));
+            return Step::GiveUp;
+        };
+        match self.localizer.update(p.odometry, scan) {
+            Ok(Some(info)) => {
+                self.stats.filter_iterations += 1;
+                if info.status != self.status {
+                    let kind = match info.status {
+                        LocalizationStatus::Warning => {
+                            self.stats.warnings += 1;
+                            "warning"
+                        }
+                        LocalizationStatus::Success => "success",
+                    };
+                    notes.event(
+                        Event::new(kind, t)
+                            .at(info.estimate.position())
+                            .with("score_estimate", info.score_estimate)
+                            .with("score_odometry", info.score_odometry),
+                    );
+                    self.status = info.status;
+                }
+            }
+            Ok(None) => {}
+            Err(e) => {
+                notes.event(Event::new("localizer_error", t).with("error", e.to_string()));
+                return Step::GiveUp;
+            }
+        }
+        let estimate = self.localizer.estimate();
+        if notes.is_enabled() {
+            notes.value("estimate_x_m", estimate.x_m);
+            notes.value("estimate_y_m", estimate.y_m);
+            notes.value("estimate_theta_rad", estimate.theta_rad);
+            notes.value(
+                "warning",
+                f64::from(u8::from(self.status == LocalizationStatus::Warning)),
+            );
+        }
+        if estimate.position().dist(self.goal) <= self.p.arrive_m {
+            notes.event(Event::new("arrived", t).at(estimate.position()));
+            notes.behaviour(behaviour_name(self.active));
+            return Step::Done(Command::Stop);
+        }
+        notes.behaviour(behaviour_name(self.active));
+        let command = match self.active {
+            Behaviour::AutoMove => {
+                let s = self.automove.step(estimate, scan, dt, t);
+                if s.abnormal != self.abnormal {
+                    let mut e =
+                        Event::new(if s.abnormal { "abnormal" } else { "normal" }, t).at(estimate.position());
+                    if let Some(x) = s.exception {
+                        e = e.with("exception", x.name());
+                    }
+                    if s.abnormal {
+                        self.stats.abnormal_episodes += 1;
+                    }
+                    notes.event(e);
+                    self.abnormal = s.abnormal;
+                }
+                let asking = s.request.is_some();
+                if asking {
+                    self.stats.asking_cycles += 1;
+                    if !self.asking {
+                        let mut e = Event::new("ask", t).at(estimate.position());
+                        if let Some(x) = s.exception {
+                            e = e.with("exception", x.name());
+                        }
+                        notes.event(e);
+                    }
+                }
+                self.asking = asking;
+                self.request = s.request;
+                s.command
+            }
+            Behaviour::Contour => {
+                self.asking = false;
+                if self.abnormal {
+                    self.abnormal = false;
+                    notes.event(Event::new("normal", t).at(estimate.position()));
+                }
+                self.contour
+                    .step(scan, p.odometry, estimate, self.goal, t)
+                    .command
+            }
+        };
+        Step::Run(command)
+    }
+
+    fn request(&self) -> Option<Request> {
+        self.request
+    }
+}
