@@ -14,7 +14,7 @@ fn petrinav(args: &[&str]) -> Output {
 
 fn map(name: &str) -> String {
     format!(
-        "{}/../sim/tests/data/maps/{name}/{name}.yaml",
+        "{}/../../maps/{name}/{name}.yaml",
         env!("CARGO_MANIFEST_DIR")
     )
 }

@@ -38,7 +38,7 @@ fn main() {
 /// the left corridor facing north.
 fn setup() -> (GridMap, LaserScan, Pose) {
     let path = format!(
-        "{}/../sim/tests/data/maps/building_31/building_31.yaml",
+        "{}/../../maps/building_31/building_31.yaml",
         env!("CARGO_MANIFEST_DIR")
     );
     let grid = sim::map_server::load(path).expect("the test map loads").grid;

@@ -52,7 +52,7 @@ const PERSON_RADIUS_M: f64 = 0.25;
 
 fn load(name: &str) -> (OccupancyGrid, GridMap) {
     let path = format!(
-        "{}/../sim/tests/data/maps/{name}/{name}.yaml",
+        "{}/../../maps/{name}/{name}.yaml",
         env!("CARGO_MANIFEST_DIR")
     );
     let grid = map_server::load(path).expect("the test maps load").grid;

@@ -7,7 +7,7 @@
 //! ```
 //!
 //! `MAP` is `building_31`, `levine` (the maps shipped in
-//! `crates/sim/tests/data/maps/`) or the path of a map_server YAML file;
+//! `maps/`) or the path of a map_server YAML file;
 //! points are in metres, world frame. Prints the route's length, cost and
 //! goals; draws the map, the route and its goals (red markers) to `OUT.png`
 //! (default `global_route.png`).
@@ -26,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let yaml = match args[0].as_str() {
         name @ ("building_31" | "levine") => format!(
-            "{}/../sim/tests/data/maps/{name}/{name}.yaml",
+            "{}/../../maps/{name}/{name}.yaml",
             env!("CARGO_MANIFEST_DIR")
         ),
         path => path.to_string(),

@@ -1,4 +1,4 @@
-//! The global route on the two real SLAM maps of `crates/sim/tests/data/maps/`
+//! The global route on the two real SLAM maps of `maps/`
 //! against the shortest grid path, and the planners' errors on them.
 //!
 //! **How lengths are compared.** For each start/goal pair (corridor points,
@@ -28,7 +28,7 @@ use sim::{DistanceField, OccupancyGrid, map_server};
 
 fn load(name: &str) -> (OccupancyGrid, GridMap) {
     let path = format!(
-        "{}/../sim/tests/data/maps/{name}/{name}.yaml",
+        "{}/../../maps/{name}/{name}.yaml",
         env!("CARGO_MANIFEST_DIR")
     );
     let grid = map_server::load(path).expect("the test maps load").grid;

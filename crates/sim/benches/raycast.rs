@@ -33,7 +33,7 @@ fn main() {
 
 fn map(name: &str) -> OccupancyGrid {
     let path = format!(
-        "{}/tests/data/maps/{name}/{name}.yaml",
+        "{}/../../maps/{name}/{name}.yaml",
         env!("CARGO_MANIFEST_DIR")
     );
     map_server::load(path).expect("the test maps load").grid

@@ -6,7 +6,7 @@
 //! - `laser_office_crowd`: the Jinny-like robot (181-beam laser over 180°,
 //!   30 m) wandering along the corridors of the real `building_31` SLAM map
 //!   (693 × 648 cells at 0.05 m, ROS map_server format, in
-//!   `tests/data/maps/`) among 30 wandering people. Target ≥ 20 000 ticks/s.
+//!   the repository's `maps/`) among 30 wandering people. Target ≥ 20 000 ticks/s.
 //!
 //! Collisions are not fatal here, so every sample runs its full number of
 //! ticks; each sample is a fresh run with its own seed. The allocation
@@ -125,7 +125,7 @@ fn aibot_field(bencher: Bencher) {
 fn laser_office_crowd(bencher: Bencher) {
     let map = sim::map_server::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/maps/building_31/building_31.yaml"
+        "/../../maps/building_31/building_31.yaml"
     ))
     .unwrap();
     let world = World::new(map.grid)

@@ -47,7 +47,7 @@
 //! // A real building map (ROS map_server YAML + image)…
 //! let map = map_server::load(concat!(
 //!     env!("CARGO_MANIFEST_DIR"),
-//!     "/tests/data/maps/building_31/building_31.yaml"
+//!     "/../../maps/building_31/building_31.yaml"
 //! ))?;
 //! assert_eq!((map.grid.width(), map.grid.height()), (693, 648));
 //! // …or a world drawn with shapes, 5 cm cells.

@@ -8,7 +8,7 @@ use sim::map_server::{self, MapMode};
 use sim::{Cell, CellIndex, Error, OccupancyGrid};
 
 fn data(path: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/maps")).join(path)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../maps")).join(path)
 }
 
 /// A fresh folder for one test's files.

@@ -11,7 +11,7 @@ use sim::{cast_many, map_server};
 fn building_31_with_a_scan_a_path_and_people() {
     let m = map_server::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/maps/building_31/building_31.yaml"
+        "/../../maps/building_31/building_31.yaml"
     ))
     .unwrap();
     let g = &m.grid;

@@ -20,10 +20,10 @@ use nav::localization::{LocalizationStatus, Localizer, MclParams, UpdateInfo};
 use robot::{Command, Controller, GridMap, Notes, Perception, Pose, Step, Vec2};
 use sim::{CellIndex, CrowdParams, CrowdSize, RobotParams, RunParams, Simulation, Task, World};
 
-/// A real map of `crates/sim/tests/data/maps/`.
+/// A real map of `maps/`.
 pub fn map_path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../sim/tests/data/maps")
+        .join("../../maps")
         .join(name)
         .join(format!("{name}.yaml"))
 }
