@@ -59,7 +59,7 @@ struct Common {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Time limit per leg, seconds.
-    #[arg(long, default_value_t = 300.0)]
+    #[arg(long, default_value_t = 300.0, allow_negative_numbers = true)]
     time_limit: f64,
     /// Picture of the run: the map, the trajectory coloured by behaviour and localizer
     /// state, the particle cloud at each warning (.png or .svg).
@@ -183,6 +183,15 @@ fn setup(c: &Common, grid: OccupancyGrid, anchors: &[Vec2], start: Vec2) -> Resu
     }
     let mut world = World::new(grid);
     let mut people = None;
+    let r = CrowdParams::default().radius_m;
+    let most = world.free_area_m2() / (2.0 * 3f64.sqrt() * r * r);
+    if c.people as f64 > most {
+        bail!(
+            "--people {}: more than the {} that the map's free space could hold at the densest packing",
+            c.people,
+            most.floor()
+        );
+    }
     if c.people > 0 {
         world = world.with_crowd(CrowdParams {
             waypoints: anchors.to_vec(),

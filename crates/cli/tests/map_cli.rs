@@ -13,10 +13,7 @@ fn petrinav(args: &[&str]) -> Output {
 }
 
 fn map(name: &str) -> String {
-    format!(
-        "{}/../../maps/{name}/{name}.yaml",
-        env!("CARGO_MANIFEST_DIR")
-    )
+    format!("{}/../../maps/{name}/{name}.yaml", env!("CARGO_MANIFEST_DIR"))
 }
 
 fn tmp(name: &str) -> PathBuf {

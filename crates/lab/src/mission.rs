@@ -509,7 +509,7 @@ pub fn crowd_near(
     if anchors.is_empty() {
         return out;
     }
-    for _ in 0..n {
+    'people: for _ in 0..n {
         for _ in 0..200 {
             let a = anchors[rng.random_range(0..anchors.len())];
             let d = spread_m * rng.random::<f64>().sqrt();
@@ -521,9 +521,11 @@ pub fn crowd_near(
                 && out.iter().all(|o| o.dist(q) >= 2.0 * r + 0.05)
             {
                 out.push(q);
-                break;
+                continue 'people;
             }
         }
+        // This one found no room: nor will the next ones.
+        break;
     }
     out
 }

@@ -51,10 +51,7 @@ const RANGE_M: f64 = 30.0;
 const PERSON_RADIUS_M: f64 = 0.25;
 
 fn load(name: &str) -> (OccupancyGrid, GridMap) {
-    let path = format!(
-        "{}/../../maps/{name}/{name}.yaml",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let path = format!("{}/../../maps/{name}/{name}.yaml", env!("CARGO_MANIFEST_DIR"));
     let grid = map_server::load(path).expect("the test maps load").grid;
     let map = grid.grid_map();
     (grid, map)

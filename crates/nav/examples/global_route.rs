@@ -25,10 +25,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: global_route MAP X0 Y0 X1 Y1 [OUT.png]".into());
     }
     let yaml = match args[0].as_str() {
-        name @ ("building_31" | "levine") => format!(
-            "{}/../../maps/{name}/{name}.yaml",
-            env!("CARGO_MANIFEST_DIR")
-        ),
+        name @ ("building_31" | "levine") => {
+            format!("{}/../../maps/{name}/{name}.yaml", env!("CARGO_MANIFEST_DIR"))
+        }
         path => path.to_string(),
     };
     let number = |k: usize| -> Result<f64, Box<dyn std::error::Error>> {

@@ -27,10 +27,7 @@ use robot::{CellIndex, GridMap, Vec2};
 use sim::{DistanceField, OccupancyGrid, map_server};
 
 fn load(name: &str) -> (OccupancyGrid, GridMap) {
-    let path = format!(
-        "{}/../../maps/{name}/{name}.yaml",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let path = format!("{}/../../maps/{name}/{name}.yaml", env!("CARGO_MANIFEST_DIR"));
     let grid = map_server::load(path).expect("the test maps load").grid;
     let map = grid.grid_map();
     (grid, map)

@@ -32,10 +32,7 @@ fn main() {
 }
 
 fn map(name: &str) -> OccupancyGrid {
-    let path = format!(
-        "{}/../../maps/{name}/{name}.yaml",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let path = format!("{}/../../maps/{name}/{name}.yaml", env!("CARGO_MANIFEST_DIR"));
     map_server::load(path).expect("the test maps load").grid
 }
 
