@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use lab::mission::{self, LegOutcome, LegRun, MissionSetup, PeoplePlan, Stop};
+use lab::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop};
 use nav::guide::Policy;
 use nav::supervisor::Behaviour;
 use robot::{Pose, Vec2};
@@ -287,13 +287,16 @@ fn go(a: &GoArgs) -> Result<()> {
     let setup = setup(c, grid, &anchors, from.pose.position())?;
     let leg = mission::run_leg(
         &setup,
-        &from.name,
-        &to.name,
-        from.pose,
-        from.pose,
-        to.pose.position(),
-        policy(c),
-        c.seed,
+        &LegSpec {
+            from: &from.name,
+            to: &to.name,
+            start: from.pose,
+            believed: from.pose,
+            goal: to.pose.position(),
+            policy: policy(c),
+            seed: c.seed,
+            trace: sim::TraceParams::default(),
+        },
     )?;
     if let Some(path) = &a.trace {
         let f = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;

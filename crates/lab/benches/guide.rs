@@ -112,13 +112,16 @@ mod missions {
         bencher.bench_local(|| {
             let leg = mission::run_leg(
                 &setup,
-                "entrance",
-                "hall_south",
-                start,
-                start,
-                goal,
-                Policy::Fixed(Behaviour::AutoMove),
-                3,
+                &mission::LegSpec {
+                    from: "entrance",
+                    to: "hall_south",
+                    start,
+                    believed: start,
+                    goal,
+                    policy: Policy::Fixed(Behaviour::AutoMove),
+                    seed: 3,
+                    trace: sim::TraceParams::default(),
+                },
             )
             .unwrap();
             assert_eq!(leg.result.outcome, mission::LegOutcome::Reached);

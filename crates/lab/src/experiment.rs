@@ -234,6 +234,7 @@ impl Prepared {
             events: Vec::new(),
             start: [start.x_m, start.y_m, start.theta_rad],
             trap,
+            state: None,
         };
         let grid = if trace.enabled {
             Some(world.grid().clone())

@@ -26,7 +26,7 @@ use anyhow::{Context, Result};
 use nav::guide::{GuideController, GuideError, GuideParams, GuideStats, Policy};
 use robot::{Controller, Event, Notes, Perception, Pose, Request, Step, Vec2};
 use sim::render::{MarkerKind, Picture};
-use sim::{OccupancyGrid, Outcome, RobotParams, RunParams, Simulation, Task, World};
+use sim::{OccupancyGrid, Outcome, RobotParams, RunParams, Simulation, Task, TraceParams, World};
 
 /// How a leg ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -188,6 +188,21 @@ pub struct LegRun {
     pub stats: GuideStats,
     /// The trace (poses, labels, events, clouds).
     pub trace: LegTrace,
+    /// What the simulator measured (`None` for a leg not run).
+    pub sim: Option<SimSummary>,
+}
+
+/// What the simulator measured over a leg.
+#[derive(Debug, Clone)]
+pub struct SimSummary {
+    /// Control ticks.
+    pub ticks: u64,
+    /// Smallest clearance to walls and people, metres.
+    pub min_clearance_m: f64,
+    /// Final distance between the true and dead-reckoned positions, metres.
+    pub odometry_error_m: f64,
+    /// The simulator's trace, when the leg asked for one.
+    pub trace: Option<sim::Trace>,
 }
 
 /// Passes a controller's notes through, keeping its events.
@@ -234,20 +249,39 @@ fn median(xs: &mut [f64]) -> f64 {
     }
 }
 
-/// Runs one leg from the true pose `start`, the controller starting from
-/// `believed` (its initial estimate), to `goal`, with `policy`; `seed` for
-/// the simulator and the localizer. `from`/`to` name the leg.
-#[allow(clippy::too_many_arguments)]
-pub fn run_leg(
-    setup: &MissionSetup,
-    from: &str,
-    to: &str,
-    start: Pose,
-    believed: Pose,
-    goal: Vec2,
-    policy: Policy,
-    seed: u64,
-) -> Result<LegRun> {
+/// One leg to run.
+#[derive(Debug, Clone, Copy)]
+pub struct LegSpec<'a> {
+    /// Where from (a name for the result).
+    pub from: &'a str,
+    /// Where to (a name for the result).
+    pub to: &'a str,
+    /// The robot's true start pose.
+    pub start: Pose,
+    /// The controller's initial estimate (the start, on a first leg).
+    pub believed: Pose,
+    /// The goal.
+    pub goal: Vec2,
+    /// How the controller chooses its behaviour.
+    pub policy: Policy,
+    /// Seed of the simulator (the localizer's is derived from it).
+    pub seed: u64,
+    /// What the simulator's own trace records (off by default).
+    pub trace: TraceParams,
+}
+
+/// Runs one leg (module docs).
+pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
+    let &LegSpec {
+        from,
+        to,
+        start,
+        believed,
+        goal,
+        policy,
+        seed,
+        trace: sim_trace,
+    } = leg;
     let map = setup.world.grid().grid_map();
     let unreachable = |why: String| LegRun {
         result: LegResult {
@@ -267,6 +301,7 @@ pub fn run_leg(
             events: vec![Event::new("unreachable", 0.0).with("why", why)],
             ..LegTrace::default()
         },
+        sim: None,
     };
     let mut controller = match GuideController::new(
         &map,
@@ -283,6 +318,7 @@ pub fn run_leg(
     let run = RunParams {
         time_limit_s: setup.time_limit_s,
         goal_tolerance_m: setup.goal_tolerance_m,
+        trace: sim_trace,
         ..RunParams::default()
     };
     let task = Task {
@@ -407,6 +443,12 @@ pub fn run_leg(
         final_pose: r.final_pose,
         stats,
         trace,
+        sim: Some(SimSummary {
+            ticks: r.ticks,
+            min_clearance_m: r.min_clearance_m,
+            odometry_error_m: r.odometry_error_m,
+            trace: sim.take_trace(),
+        }),
     })
 }
 
@@ -426,40 +468,73 @@ pub fn run_tour(setup: &MissionSetup, stops: &[Stop], policy: Policy, seed: u64)
     let Some(first) = stops.first() else {
         return Ok(legs);
     };
-    let mut at = first.pose;
-    let mut believed = first.pose;
-    let mut from = first.name.clone();
+    let mut here = Whereabouts::at(first);
     for (k, next) in stops.iter().skip(1).enumerate() {
-        let leg_seed = crate::runner::derive_seed(seed, "tour leg", k as u32);
         let leg = run_leg(
             setup,
-            &from,
-            &next.name,
-            at,
-            believed,
-            next.pose.position(),
-            policy,
-            leg_seed,
+            &LegSpec {
+                from: &here.name,
+                to: &next.name,
+                start: here.pose,
+                believed: here.estimate,
+                goal: next.pose.position(),
+                policy,
+                seed: crate::runner::derive_seed(seed, "tour leg", k as u32),
+                trace: TraceParams::default(),
+            },
         )?;
-        // After an unreachable leg the robot is still where it was; after
-        // a collision it is set back to where it was a second before (an
-        // operator's nudge off the wall); after any other it goes on from
-        // where it stopped.
-        if leg.result.outcome != LegOutcome::Unreachable {
-            let back = leg.trace.poses.len().saturating_sub(11);
-            (at, believed) = match (leg.result.outcome, leg.trace.poses.get(back)) {
-                (LegOutcome::Collision, Some(&p)) => (p, leg.trace.estimates[back]),
-                _ => (leg.final_pose, leg.final_estimate),
-            };
-            from = if leg.result.outcome == LegOutcome::Reached {
-                next.name.clone()
-            } else {
-                format!("{:.2},{:.2},{:.2}", at.x_m, at.y_m, at.theta_rad)
-            };
-        }
+        here = here.after(&leg, next);
         legs.push(leg);
     }
     Ok(legs)
+}
+
+/// Where the robot of a tour is between legs.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Whereabouts {
+    /// A name for it: the last place reached, else `x,y,θ`.
+    pub name: String,
+    /// The true pose.
+    pub pose: Pose,
+    /// The controller's estimate.
+    pub estimate: Pose,
+}
+
+impl Whereabouts {
+    /// At a place, knowing it.
+    pub fn at(stop: &Stop) -> Whereabouts {
+        Whereabouts {
+            name: stop.name.clone(),
+            pose: stop.pose,
+            estimate: stop.pose,
+        }
+    }
+
+    /// After `leg` towards `to`: where it stopped; after a collision where
+    /// it was a second before (an operator's nudge off the wall); after an
+    /// unreachable leg where it was.
+    pub fn after(&self, leg: &LegRun, to: &Stop) -> Whereabouts {
+        match leg.result.outcome {
+            LegOutcome::Unreachable => self.clone(),
+            LegOutcome::Reached => Whereabouts {
+                name: to.name.clone(),
+                pose: leg.final_pose,
+                estimate: leg.final_estimate,
+            },
+            outcome => {
+                let back = leg.trace.poses.len().saturating_sub(11);
+                let (pose, estimate) = match (outcome, leg.trace.poses.get(back)) {
+                    (LegOutcome::Collision, Some(&p)) => (p, leg.trace.estimates[back]),
+                    _ => (leg.final_pose, leg.final_estimate),
+                };
+                Whereabouts {
+                    name: format!("{:.2},{:.2},{:.2}", pose.x_m, pose.y_m, pose.theta_rad),
+                    pose,
+                    estimate,
+                }
+            }
+        }
+    }
 }
 
 impl LegTrace {

@@ -50,6 +50,10 @@ pub struct RunRecord {
     /// The trap drawn for this run, if the scenario has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trap: Option<DrawnTrap>,
+    /// What a campaign's next run starts from (the suite's own data: where
+    /// the robot stopped, what it learnt), if the suite keeps any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub state: Option<Value>,
 }
 
 impl RunRecord {
@@ -125,6 +129,7 @@ mod tests {
             events: vec![Event::new("warning", 0.5).with("score", 0.25)],
             start: [0.0; 3],
             trap: None,
+            state: None,
         };
         r.set_metric("warnings", 1.0).unwrap();
         let err = r.set_metric("ratio", f64::NAN).unwrap_err().to_string();

@@ -158,6 +158,7 @@ mod tests {
             events: Vec::new(),
             start: [0.0; 3],
             trap: None,
+            state: None,
         }
     }
 

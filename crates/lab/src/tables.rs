@@ -194,6 +194,7 @@ mod tests {
             events: Vec::new(),
             start: [0.0; 3],
             trap: None,
+            state: None,
         };
         Summary::of(name, &[&r])
     }

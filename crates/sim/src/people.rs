@@ -137,6 +137,11 @@ pub struct CrowdParams {
     /// Strength of the repulsion from the robot, m/s² (0: people ignore the
     /// robot, but still never walk into it). Default 2.0.
     pub robot_repulsion_mps2: f64,
+    /// People never step closer than this to the robot's footprint, metres
+    /// (a person does not press against a machine; the robot's own small
+    /// motions then do not count as bumping into someone standing by).
+    /// Default 0.1.
+    pub robot_clearance_m: f64,
     /// Strength `A_w` of the repulsion from walls, m/s². Default 5.0.
     pub wall_repulsion_mps2: f64,
     /// Range `B_w` of the repulsion from walls, metres. Default 0.1.
@@ -178,6 +183,7 @@ impl Default for CrowdParams {
             person_repulsion_mps2: 2.0,
             person_range_m: 0.3,
             robot_repulsion_mps2: 2.0,
+            robot_clearance_m: 0.1,
             wall_repulsion_mps2: 5.0,
             wall_range_m: 0.1,
             anisotropy: 0.5,
@@ -218,6 +224,7 @@ impl CrowdParams {
         validate::non_negative("crowd.person_repulsion_mps2", self.person_repulsion_mps2)?;
         validate::positive("crowd.person_range_m", self.person_range_m)?;
         validate::non_negative("crowd.robot_repulsion_mps2", self.robot_repulsion_mps2)?;
+        validate::non_negative("crowd.robot_clearance_m", self.robot_clearance_m)?;
         validate::non_negative("crowd.wall_repulsion_mps2", self.wall_repulsion_mps2)?;
         validate::positive("crowd.wall_range_m", self.wall_range_m)?;
         validate::within("crowd.anisotropy", self.anisotropy, 0.0, 1.0, "in [0, 1]")?;
@@ -706,7 +713,11 @@ impl Crowd {
             let next = me.position + v.scale(dt_s);
             let mut free = field.free_radius_m(next) >= r || field.distance_m(next) >= r;
             if let Some((c, rr)) = robot {
-                free &= dist(next, c) >= r + rr;
+                // Not closer than the clearance, unless already closer and
+                // moving away.
+                let keep = r + rr + p.robot_clearance_m;
+                let d = dist(next, c);
+                free &= d >= keep || d > dist(me.position, c);
             }
             if free {
                 let contact2 = 4.0 * r * r;

@@ -7,6 +7,7 @@
 
 pub mod deadlock;
 pub mod files;
+pub mod maps;
 pub mod shared;
 pub mod voting;
 
@@ -15,7 +16,12 @@ use anyhow::{Result, bail};
 use crate::suite::{Registration, Suite, SuiteArgs, SuiteInfo};
 
 /// Every suite, by name.
-pub const REGISTRY: &[Registration] = &[voting::REGISTRATION, deadlock::REGISTRATION, files::REGISTRATION];
+pub const REGISTRY: &[Registration] = &[
+    voting::REGISTRATION,
+    deadlock::REGISTRATION,
+    maps::REGISTRATION,
+    files::REGISTRATION,
+];
 
 /// The suite registered as `name`.
 pub fn find(name: &str) -> Option<&'static Registration> {

@@ -33,6 +33,7 @@
 
 use robot::{Cell, Command, GridMap, LaserScan, Pose, Request, Vec2, wrap_angle};
 
+use super::scan;
 use crate::planning::distance_transform::{BEYOND, DistanceTransform};
 use crate::planning::{
     Blocked, GlobalPlanner, LocalPlanner, LocalPlannerParams, PlanningError, Route, RouteParams,
@@ -76,6 +77,12 @@ pub struct AutoMoveParams {
     pub abnormal_after_s: f64,
     /// Radius of the request to step aside, metres. Default 1.5.
     pub ask_radius_m: f64,
+    /// The speed is kept low enough to stop (at 80 % of `max_accel_mps2`)
+    /// before the footprint grown by this much touches anything the scan
+    /// shows (a person stepping in front), metres. Default 0.06 (a
+    /// remembered echo lies up to a cell from the nearest point of its
+    /// wall).
+    pub safety_margin_m: f64,
     /// Laser echoes within this distance of a mapped obstacle are that
     /// obstacle seen, not a new one, metres. Default 0.15 (the localizer's
     /// error and the spread of echoes at grazing angles).
@@ -101,6 +108,7 @@ impl Default for AutoMoveParams {
             pass_goal_m: 1.0,
             abnormal_after_s: 3.0,
             ask_radius_m: 1.5,
+            safety_margin_m: 0.03,
             echo_tolerance_m: 0.15,
         }
     }
@@ -125,6 +133,7 @@ impl AutoMoveParams {
             ("lookahead_m", self.lookahead_m),
             ("pass_goal_m", self.pass_goal_m),
             ("ask_radius_m", self.ask_radius_m),
+            ("safety_margin_m", self.safety_margin_m),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(format!("automove.{name} must be a finite number > 0, got {v}"));
@@ -209,6 +218,8 @@ pub struct AutoMove {
     endpoints: Vec<Vec2>,
     /// Map cells within `echo_tolerance_m` of a blocked cell, row-major.
     near_wall: Vec<bool>,
+    /// The scan's points near the robot, and recent ones out of view.
+    nearby: scan::NearbyPoints,
 }
 
 impl AutoMove {
@@ -231,6 +242,7 @@ impl AutoMove {
             last: (0.0, 0.0),
             endpoints: Vec::new(),
             near_wall,
+            nearby: scan::NearbyPoints::default(),
         })
     }
 
@@ -265,8 +277,16 @@ impl AutoMove {
         self.last = (v_mps, omega_radps);
     }
 
-    /// One control cycle from the pose estimate, the scan and the time.
-    pub fn step(&mut self, estimate: Pose, scan: &LaserScan, dt_s: f64, time_s: f64) -> AutoMoveStep {
+    /// One control cycle from the pose estimate, the scan, the odometry (for
+    /// the short memory of points out of the laser's view) and the time.
+    pub fn step(
+        &mut self,
+        estimate: Pose,
+        scan: &LaserScan,
+        odometry: Pose,
+        dt_s: f64,
+        time_s: f64,
+    ) -> AutoMoveStep {
         let here = estimate.position();
         let Some(route) = &self.route else {
             return self.stopped(here, Some(Exception::PathBlocking), dt_s, time_s);
@@ -312,7 +332,6 @@ impl AutoMove {
         };
         match outcome {
             Ok(goal) => {
-                self.since_s = None;
                 let target = self.lookahead(here);
                 let psi = wrap_angle((target - here).angle() - estimate.theta_rad);
                 let omega = (self.p.k_heading * psi).clamp(-self.p.max_turn_radps, self.p.max_turn_radps);
@@ -325,7 +344,21 @@ impl AutoMove {
                     .and_then(|c| c.clearance_m(self.map.cell_of(here)))
                     .map_or(f64::INFINITY, |c| c - self.p.robot_radius_m);
                 let slow_when_narrow = (spare / 0.4).clamp(0.35, 1.0);
-                let v = self.p.cruise_mps * psi.cos().max(0.0).powi(2) * slow_near_goal * slow_when_narrow;
+                let wanted =
+                    self.p.cruise_mps * psi.cos().max(0.0).powi(2) * slow_near_goal * slow_when_narrow;
+                // Safety: stop in time for what the laser sees, or saw
+                // beside the robot (out of a 180° laser's view now).
+                let points = self.nearby.update(scan, odometry, time_s);
+                let radius = self.p.robot_radius_m + self.p.safety_margin_m;
+                let v = wanted.min(scan::safe_speed(
+                    points,
+                    wanted,
+                    omega,
+                    radius,
+                    0.8 * self.p.max_accel_mps2,
+                    dt_s,
+                ));
+                self.since_s = None;
                 let command = self.limit(v, omega, dt_s);
                 AutoMoveStep {
                     command,

@@ -125,6 +125,14 @@ pub struct ContourParams {
     pub stall_s: f64,
     /// See `stall_s`, metres. Default 0.3.
     pub stall_m: f64,
+    /// The speed is kept low enough to stop, at `decel_mps2`, before the
+    /// footprint grown by this much touches anything the scan shows or
+    /// showed beside the robot, metres. Default 0.06 (a remembered echo
+    /// lies up to a cell from the nearest point of its wall).
+    pub safety_margin_m: f64,
+    /// Deceleration the stopping distance assumes, m/s². Default 0.4
+    /// (below Jinny's 0.5 m/s² per wheel).
+    pub decel_mps2: f64,
     /// How far ahead along the contour the tracker steers, metres.
     /// Default 0.4 (longer cuts convex corners, shorter swings wide of
     /// concave ones; both measured in `tests/contour.rs`).
@@ -149,6 +157,8 @@ impl Default for ContourParams {
             memory_s: 4.0,
             stall_s: 8.0,
             stall_m: 0.3,
+            safety_margin_m: 0.03,
+            decel_mps2: 0.4,
             lookahead_m: 0.4,
         }
     }
@@ -173,6 +183,7 @@ impl ContourParams {
             ("lookahead_m", self.lookahead_m),
             ("stall_s", self.stall_s),
             ("stall_m", self.stall_m),
+            ("decel_mps2", self.decel_mps2),
         ];
         for (name, v) in fields {
             if !(v.is_finite() && v > 0.0) {
@@ -235,6 +246,10 @@ pub struct ContourTracker {
     memory: VecDeque<(Vec2, f64)>,
     /// Where (odometry) and when the robot last made progress.
     checkpoint: Option<(Vec2, f64)>,
+    /// What the safety layer keeps clear of.
+    nearby: scan::NearbyPoints,
+    /// Turning on the spot to this side (+1 left, −1 right) while blocked.
+    turning: Option<f64>,
 }
 
 /// The nearest point of `points` with bearing in `[lo, hi]` (robot frame,
@@ -248,30 +263,6 @@ fn nearest_in(points: &[Vec2], lo: f64, hi: f64) -> Option<Vec2> {
             a >= lo && a <= hi
         })
         .min_by(|a, b| a.norm().total_cmp(&b.norm()))
-}
-
-/// The share of `v` that keeps the footprint (radius `radius_m`) off every
-/// point over the next second of the arc `(v, ω)`: 1 when the whole second
-/// is clear, 0 when the first tenth is not (a circular robot turning on the
-/// spot sweeps nothing, so the turn itself is never slowed).
-fn safe_fraction(points: &[Vec2], v: f64, omega: f64, radius_m: f64) -> f64 {
-    if v <= 0.0 {
-        return 1.0;
-    }
-    let r2 = radius_m * radius_m;
-    for k in 1..=10 {
-        let t = 0.1 * k as f64;
-        let (x, y) = if omega.abs() < 1e-9 {
-            (v * t, 0.0)
-        } else {
-            let rho = v / omega;
-            (rho * (omega * t).sin(), rho * (1.0 - (omega * t).cos()))
-        };
-        if points.iter().any(|q| (q.x - x).powi(2) + (q.y - y).powi(2) < r2) {
-            return 0.1 * (k - 1) as f64;
-        }
-    }
-    1.0
 }
 
 /// Whether a corridor of half-width `half_m` along bearing `bearing` is
@@ -294,6 +285,8 @@ impl ContourTracker {
             mode: ContourMode::Seek,
             memory: VecDeque::new(),
             checkpoint: None,
+            nearby: scan::NearbyPoints::default(),
+            turning: None,
         })
     }
 
@@ -396,10 +389,11 @@ impl ContourTracker {
             .map(|q| q.x)
             .fold(f64::INFINITY, f64::min);
         let room = ((front - body) / (p.distance_m + 1.0 - body)).clamp(0.0, 1.0);
-        if room == 0.0 && psi.abs() < 0.3 {
+        if room == 0.0 && (psi.abs() < 0.3 || self.turning.is_some()) {
             // Blocked the way it wants to go: turn on the spot, away from
-            // the contour (or towards the freer side when seeking).
-            let side = match self.mode {
+            // the contour (or towards the freer side when seeking), and keep
+            // turning that way until the way ahead opens.
+            let side = *self.turning.get_or_insert_with(|| match self.mode {
                 ContourMode::Follow { side, .. } => -side.sign(),
                 ContourMode::Seek => {
                     let left =
@@ -408,12 +402,22 @@ impl ContourTracker {
                         nearest_in(&points, -std::f64::consts::PI, 0.0).map_or(f64::INFINITY, Vec2::norm);
                     if left >= right { 1.0 } else { -1.0 }
                 }
-            };
+            });
             psi = side * std::f64::consts::FRAC_PI_2;
+        } else {
+            self.turning = None;
         }
         let omega = (p.k_heading * psi).clamp(-p.max_turn_radps, p.max_turn_radps);
         let v = p.cruise_mps * psi.cos().max(0.0) * room;
-        let v = v * safe_fraction(&points, v, omega, p.robot_radius_m + 0.03);
+        let near = self.nearby.update(scan, odometry, time_s);
+        let v = v.min(scan::safe_speed(
+            near,
+            v,
+            omega,
+            p.robot_radius_m + p.safety_margin_m,
+            p.decel_mps2,
+            0.1,
+        ));
         ContourStep {
             command: Command::Twist {
                 v_mps: v,

@@ -282,7 +282,7 @@ impl Controller for GuideController {
         notes.behaviour(behaviour_name(self.active));
         let command = match self.active {
             Behaviour::AutoMove => {
-                let s = self.automove.step(estimate, scan, dt, t);
+                let s = self.automove.step(estimate, scan, p.odometry, dt, t);
                 if s.abnormal != self.abnormal {
                     let mut e =
                         Event::new(if s.abnormal { "abnormal" } else { "normal" }, t).at(estimate.position());

@@ -53,6 +53,10 @@ pub struct RouteParams {
     /// and the straight lines between consecutive corner goals, metres,
     /// ≥ 0. Default 0.25.
     pub corner_tolerance_m: f64,
+    /// A start lethal only by inflation (within the inscribed radius of an
+    /// obstacle) descends from the nearest cell that is not lethal within
+    /// this distance, metres, ≥ 0. Default 0.3.
+    pub escape_radius_m: f64,
 }
 
 impl Default for RouteParams {
@@ -62,6 +66,7 @@ impl Default for RouteParams {
             gradient: GradientParams::default(),
             max_spacing_m: 4.0,
             corner_tolerance_m: 0.25,
+            escape_radius_m: 0.3,
         }
     }
 }
@@ -82,6 +87,13 @@ impl RouteParams {
             return Err(PlanningError::BadParam {
                 name: "corner_tolerance_m",
                 value: self.corner_tolerance_m,
+                expected: "a finite number ≥ 0",
+            });
+        }
+        if !(self.escape_radius_m.is_finite() && self.escape_radius_m >= 0.0) {
+            return Err(PlanningError::BadParam {
+                name: "escape_radius_m",
+                value: self.escape_radius_m,
                 expected: "a finite number ≥ 0",
             });
         }
@@ -160,19 +172,37 @@ impl GlobalPlanner {
                 window: self.cost_map.window(),
             });
         }
-        let start_cell = check_start(&self.cost_map, start)?;
+        // A start within the inscribed radius of an obstacle (a robot that
+        // stopped close to a wall) descends from the nearest free cell.
+        let (from, start_cell) = match check_start(&self.cost_map, start) {
+            Ok(cell) => (start, cell),
+            Err(
+                e @ PlanningError::StartBlocked {
+                    why: super::Blocked::Inflated { .. },
+                    cell,
+                    ..
+                },
+            ) => (
+                super::nearest_free(&self.cost_map, start, self.params.escape_radius_m).ok_or(e)?,
+                cell,
+            ),
+            Err(e) => return Err(e),
+        };
         check_endpoint(&self.cost_map, "goal", goal, |cell, why| {
             PlanningError::GoalBlocked { goal, cell, why }
         })?;
         let navigation = self.nf.compute(&self.cost_map, goal)?;
         let mut path = Vec::new();
-        let descent = descend(&self.nf, start, &self.params.gradient, &mut path).map_err(|e| match e {
+        let descent = descend(&self.nf, from, &self.params.gradient, &mut path).map_err(|e| match e {
             PlanningError::Unreachable { .. } => PlanningError::Unreachable {
                 start,
                 cell: start_cell,
             },
             e => e,
         })?;
+        if from != start {
+            path.insert(0, start);
+        }
         let goals = intermediate_goals(
             &self.cost_map,
             &path,

@@ -159,7 +159,7 @@ impl LocalPlanner {
                     why: super::Blocked::Inflated { .. },
                     ..
                 },
-            ) => nearest_free(cost_map, robot, self.params.escape_radius_m).ok_or(e)?,
+            ) => super::nearest_free(cost_map, robot, self.params.escape_radius_m).ok_or(e)?,
             Err(e) => return Err(e),
         };
         let navigation = self.nf.compute(cost_map, goal)?;
@@ -195,33 +195,6 @@ impl LocalPlanner {
     pub fn navigation_function(&self) -> &NavigationFunction {
         &self.nf
     }
-}
-
-/// The centre of the cell nearest `p` that is not lethal, within
-/// `radius_m` (ties to the first in row-major order).
-fn nearest_free(cost: &CostMap, p: Vec2, radius_m: f64) -> Option<Vec2> {
-    let window = cost.window();
-    let r = window.resolution_m();
-    let c = window.cell_of("start", p).ok()?;
-    let reach = (radius_m / r).ceil() as i64;
-    let mut best: Option<(f64, Vec2)> = None;
-    for dj in -reach..=reach {
-        for di in -reach..=reach {
-            let q = robot::CellIndex {
-                i: c.i + di,
-                j: c.j + dj,
-            };
-            if !window.contains(q) || cost.cost(q).is_infinite() {
-                continue;
-            }
-            let at = window.cell_center(q);
-            let d = at.dist(p);
-            if d <= radius_m && best.is_none_or(|(b, _)| d < b) {
-                best = Some((d, at));
-            }
-        }
-    }
-    best.map(|(_, at)| at)
 }
 
 #[cfg(test)]

@@ -174,6 +174,33 @@ fn check_endpoint(
     }
 }
 
+/// The centre of the cell nearest `p` that is not lethal, within
+/// `radius_m` (ties to the first in row-major order).
+pub(crate) fn nearest_free(cost: &CostMap, p: Vec2, radius_m: f64) -> Option<Vec2> {
+    let window = cost.window();
+    let r = window.resolution_m();
+    let c = window.cell_of("start", p).ok()?;
+    let reach = (radius_m / r).ceil() as i64;
+    let mut best: Option<(f64, Vec2)> = None;
+    for dj in -reach..=reach {
+        for di in -reach..=reach {
+            let q = robot::CellIndex {
+                i: c.i + di,
+                j: c.j + dj,
+            };
+            if !window.contains(q) || cost.cost(q).is_infinite() {
+                continue;
+            }
+            let at = window.cell_center(q);
+            let d = at.dist(p);
+            if d <= radius_m && best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, at));
+            }
+        }
+    }
+    best.map(|(_, at)| at)
+}
+
 /// [`check_endpoint`] for a start.
 fn check_start(cost: &CostMap, start: Vec2) -> Result<CellIndex, PlanningError> {
     check_endpoint(cost, "start", start, |cell, why| PlanningError::StartBlocked {

@@ -1,0 +1,438 @@
+//! The maps suite: the tour-guide robot on the two real SLAM maps of
+//! `maps/`, touring their places (`places.yaml`) with AutoMove and with
+//! contour tracking, among 0, 20 and 60 people.
+//!
+//! A *tour* is a campaign: its legs run in sequence, each starting where the
+//! last one stopped, the localizer from the last one's estimate (the state a
+//! record carries in `state`). Tour `t` meets the same noise streams in every
+//! scenario of its map (common random numbers: the behaviours and crowds are
+//! compared on the same draws). Scenarios are named `MAP/BEHAVIOUR/Np`.
+//!
+//! Per leg it records the common measures and, as metrics, the localizer's
+//! true error (`loc_mean_error_m`, `loc_max_error_m`), its warnings
+//! (`warnings`, `time_in_warning_s`) and AutoMove's abnormal episodes
+//! (`abnormal_episodes`, `time_abnormal_s`). The report puts side by side,
+//! per map, what crowds do to the localizer and to each behaviour, and
+//! explains it from the numbers.
+
+mod explanation;
+
+use std::collections::BTreeMap;
+use std::sync::OnceLock;
+
+use anyhow::{Context, Result, bail};
+use nav::guide::Policy;
+use nav::supervisor::Behaviour;
+use sim::{CrowdParams, Places, TraceParams, World};
+
+use crate::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop, Whereabouts};
+use crate::page::{Block, Figure};
+use crate::pictures::{EventMarker, MarkerPlace, Replay};
+use crate::record::RunRecord;
+use crate::runner::{Campaign, Job, derive_seed};
+use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, SuiteReport};
+use crate::tables::{self, MetricColumn};
+
+/// The suite in the registry.
+pub const REGISTRATION: Registration = Registration {
+    name: "maps",
+    about: "the tour-guide robot touring the places of two real SLAM maps: AutoMove and contour tracking among 0, 20, 60 people",
+    build,
+};
+
+/// The maps, as shipped in the repository's `maps/`.
+pub const MAPS: [&str; 2] = ["building_31", "levine"];
+
+/// The maps' files, compiled in (map_server YAML, PNG, places), so that the
+/// suite runs from anywhere.
+const FILES: [(&str, &[u8], &str); 2] = [
+    (
+        include_str!("../../../../../maps/building_31/building_31.yaml"),
+        include_bytes!("../../../../../maps/building_31/building_31.png"),
+        include_str!("../../../../../maps/building_31/places.yaml"),
+    ),
+    (
+        include_str!("../../../../../maps/levine/levine.yaml"),
+        include_bytes!("../../../../../maps/levine/levine.png"),
+        include_str!("../../../../../maps/levine/places.yaml"),
+    ),
+];
+
+/// Crowd sizes.
+pub const CROWDS: [usize; 3] = [0, 20, 60];
+
+/// The behaviours compared.
+pub const BEHAVIOURS: [(Behaviour, &str); 2] =
+    [(Behaviour::AutoMove, "automove"), (Behaviour::Contour, "contour")];
+
+/// Tours per scenario by default.
+pub const DEFAULT_TOURS: u32 = 3;
+
+/// Base seed.
+pub const SEED: u64 = 11;
+
+/// Time limit of a leg, seconds.
+pub const LEG_TIME_LIMIT_S: f64 = 300.0;
+
+/// The metric names.
+pub mod metric {
+    /// Mean true position error of the localizer over a leg, metres.
+    pub const LOC_MEAN: &str = "loc_mean_error_m";
+    /// Largest true position error over a leg, metres.
+    pub const LOC_MAX: &str = "loc_max_error_m";
+    /// Warnings of the localizer in a leg.
+    pub const WARNINGS: &str = "warnings";
+    /// Time in Warning in a leg, seconds.
+    pub const WARNING_S: &str = "time_in_warning_s";
+    /// AutoMove's abnormal episodes in a leg.
+    pub const ABNORMAL: &str = "abnormal_episodes";
+    /// Time Abnormal in a leg, seconds.
+    pub const ABNORMAL_S: &str = "time_abnormal_s";
+}
+
+/// One map: its world (with the crowd's waypoints), places.
+struct MapData {
+    world: World,
+    stops: Vec<Stop>,
+}
+
+fn load_map(k: usize) -> Result<MapData> {
+    let name = MAPS[k];
+    let (yaml, png, places) = FILES[k];
+    let yaml = sim::map_server::parse_yaml(yaml, &format!("maps/{name}/{name}.yaml"))?;
+    let pixels = sim::map_server::decode_image(png).map_err(anyhow::Error::msg)?;
+    let (grid, _) = sim::map_server::grid_from_pixels(&yaml, &pixels)?;
+    let places = Places::parse(places, &format!("maps/{name}/places.yaml"))?;
+    let stops: Vec<Stop> = places
+        .iter()
+        .map(|p| Stop {
+            name: p.name.clone(),
+            pose: p.pose,
+        })
+        .collect();
+    let world = World::new(grid).with_crowd(CrowdParams {
+        waypoints: stops.iter().map(|s| s.pose.position()).collect(),
+        gather_radius_m: 1.5,
+        ..CrowdParams::default()
+    })?;
+    Ok(MapData { world, stops })
+}
+
+/// A scenario: map, behaviour, crowd.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Scenario {
+    map: usize,
+    behaviour: usize,
+    people: usize,
+}
+
+impl Scenario {
+    fn name(&self) -> String {
+        format!(
+            "{}/{}/{}p",
+            MAPS[self.map], BEHAVIOURS[self.behaviour].1, CROWDS[self.people]
+        )
+    }
+}
+
+/// The maps suite (module docs).
+pub struct MapsSuite {
+    info: SuiteInfo,
+    scenarios: Vec<Scenario>,
+    maps: [OnceLock<Result<MapData, String>>; 2],
+}
+
+fn build(args: &SuiteArgs) -> Result<Box<dyn Suite>> {
+    Ok(Box::new(MapsSuite::new(args.runs.unwrap_or(DEFAULT_TOURS))?))
+}
+
+impl MapsSuite {
+    /// The suite with `tours` tours per scenario.
+    pub fn new(tours: u32) -> Result<MapsSuite> {
+        if tours == 0 {
+            bail!("the maps suite needs at least one tour per scenario");
+        }
+        let mut scenarios = Vec::new();
+        for map in 0..MAPS.len() {
+            for behaviour in 0..BEHAVIOURS.len() {
+                for people in 0..CROWDS.len() {
+                    scenarios.push(Scenario {
+                        map,
+                        behaviour,
+                        people,
+                    });
+                }
+            }
+        }
+        Ok(MapsSuite {
+            info: SuiteInfo {
+                name: REGISTRATION.name.into(),
+                suite: REGISTRATION.name.into(),
+                runs: tours,
+                seed: SEED,
+                scenarios: scenarios.iter().map(Scenario::name).collect(),
+                sources: BTreeMap::new(),
+            },
+            scenarios,
+            maps: [OnceLock::new(), OnceLock::new()],
+        })
+    }
+
+    fn map(&self, k: usize) -> Result<&MapData> {
+        self.maps[k]
+            .get_or_init(|| load_map(k).map_err(|e| format!("{e:#}")))
+            .as_ref()
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    }
+
+    fn scenario(&self, name: &str) -> Result<Scenario> {
+        self.scenarios
+            .iter()
+            .copied()
+            .find(|s| s.name() == name)
+            .with_context(|| format!("no scenario `{name}` in the maps suite"))
+    }
+
+    /// Legs per tour on map `k`.
+    fn legs(&self, k: usize) -> Result<u32> {
+        Ok(self.map(k)?.stops.len().saturating_sub(1) as u32)
+    }
+
+    /// Runs leg `job.run` of its tour; returns it with where the robot was
+    /// before it.
+    fn leg(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<(LegRun, Whereabouts)> {
+        let s = self.scenario(&job.scenario)?;
+        let data = self.map(s.map)?;
+        let legs = self.legs(s.map)?;
+        let k = (job.run % legs) as usize;
+        if earlier.len() != k {
+            bail!("leg {k} of its tour got {} earlier legs", earlier.len());
+        }
+        let here = match earlier.last() {
+            None => Whereabouts::at(&data.stops[0]),
+            Some(r) => serde_json::from_value(r.state.clone().context("an earlier leg without its state")?)
+                .context("the state of an earlier leg")?,
+        };
+        let mut setup = MissionSetup::new(data.world.clone(), LEG_TIME_LIMIT_S);
+        if CROWDS[s.people] > 0 {
+            setup.people = Some(PeoplePlan {
+                count: CROWDS[s.people],
+                anchors: data.stops.iter().map(|p| p.pose.position()).collect(),
+                spread_m: 4.0,
+                keep_clear_m: 1.0,
+            });
+        }
+        let to = &data.stops[k + 1];
+        let leg = mission::run_leg(
+            &setup,
+            &LegSpec {
+                from: &here.name,
+                to: &to.name,
+                start: here.pose,
+                believed: here.estimate,
+                goal: to.pose.position(),
+                policy: Policy::Fixed(BEHAVIOURS[s.behaviour].0),
+                seed: job.seed,
+                trace,
+            },
+        )?;
+        Ok((leg, here))
+    }
+
+    /// The record of a leg run from `before`.
+    fn record(&self, job: &Job, leg: &LegRun, before: &Whereabouts) -> Result<RunRecord> {
+        let s = self.scenario(&job.scenario)?;
+        let data = self.map(s.map)?;
+        let k = (job.run % self.legs(s.map)?) as usize;
+        let after = before.after(leg, &data.stops[k + 1]);
+        let r = &leg.result;
+        let sim = leg.sim.as_ref();
+        let mut behaviour_ticks = BTreeMap::new();
+        for l in &leg.trace.labels {
+            *behaviour_ticks.entry(l.to_string()).or_insert(0) += 1;
+        }
+        let start = leg.trace.poses.first().copied().unwrap_or_default();
+        let mut record = RunRecord {
+            success: r.outcome == LegOutcome::Reached,
+            // The lab's common outcome names (summaries count them).
+            outcome: match r.outcome {
+                LegOutcome::Reached => "goal",
+                LegOutcome::Collision => "collision",
+                LegOutcome::Timeout => "time_limit",
+                LegOutcome::Lost => "lost",
+                LegOutcome::Unreachable => "unreachable",
+                LegOutcome::GaveUp => "gave_up",
+            }
+            .to_string(),
+            time_s: r.time_s,
+            path_length_m: r.path_m,
+            collisions: u32::from(r.outcome == LegOutcome::Collision),
+            min_clearance_m: sim.map_or(0.0, |s| s.min_clearance_m),
+            odometry_error_m: sim.map_or(0.0, |s| s.odometry_error_m),
+            goal_distance_m: r.final_error_m,
+            ticks: sim.map_or(0, |s| s.ticks),
+            behaviour_ticks,
+            metrics: BTreeMap::new(),
+            events: Vec::new(),
+            start: [start.x_m, start.y_m, start.theta_rad],
+            trap: None,
+            state: Some(serde_json::to_value(&after)?),
+        };
+        let l = &r.localization;
+        record.set_metric(metric::LOC_MEAN, l.mean_error_m)?;
+        record.set_metric(metric::LOC_MAX, l.max_error_m)?;
+        record.set_metric(metric::WARNINGS, f64::from(l.warnings))?;
+        record.set_metric(metric::WARNING_S, l.time_in_warning_s)?;
+        record.set_metric(metric::ABNORMAL, f64::from(r.planner.abnormal_episodes))?;
+        record.set_metric(metric::ABNORMAL_S, r.planner.time_abnormal_s)?;
+        Ok(record)
+    }
+}
+
+impl Suite for MapsSuite {
+    fn info(&self) -> &SuiteInfo {
+        &self.info
+    }
+
+    fn campaigns(&self) -> Vec<Campaign> {
+        let mut out = Vec::new();
+        for s in &self.scenarios {
+            let Ok(legs) = self.legs(s.map) else {
+                continue;
+            };
+            for tour in 0..self.info.runs {
+                let stream = format!("{} tour {tour}", MAPS[s.map]);
+                out.push(Campaign {
+                    jobs: (0..legs)
+                        .map(|leg| Job {
+                            scenario: s.name(),
+                            run: tour * legs + leg,
+                            seed: derive_seed(self.info.seed, &stream, leg),
+                        })
+                        .collect(),
+                });
+            }
+        }
+        out
+    }
+
+    fn run(&self, job: &Job, earlier: &[RunRecord]) -> Result<RunRecord> {
+        let (leg, before) = self.leg(job, earlier, TraceParams::default())?;
+        self.record(job, &leg, &before)
+    }
+
+    fn replay(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<Replay> {
+        let trace = TraceParams {
+            enabled: true,
+            ..trace
+        };
+        let (leg, before) = self.leg(job, earlier, trace)?;
+        let record = self.record(job, &leg, &before)?;
+        let s = self.scenario(&job.scenario)?;
+        let data = self.map(s.map)?;
+        let k = (job.run % self.legs(s.map)?) as usize;
+        Ok(Replay {
+            record,
+            trace: leg
+                .sim
+                .and_then(|s| s.trace)
+                .context("a leg that could not run has no trace")?,
+            grid: data.world.grid().clone(),
+            goal: Some(data.stops[k + 1].pose.position()),
+            robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
+            control_period_s: 0.1,
+        })
+    }
+
+    fn markers(&self) -> &[EventMarker] {
+        &MARKERS
+    }
+
+    fn report(&self, ctx: &ReportContext<'_>) -> Result<SuiteReport> {
+        let columns = [
+            MetricColumn {
+                metric: metric::LOC_MEAN,
+                heading: "true error (m)",
+                short: "err(m)",
+                decimals: 3,
+            },
+            MetricColumn {
+                metric: metric::WARNINGS,
+                heading: "warnings/leg",
+                short: "warnings",
+                decimals: 2,
+            },
+            MetricColumn {
+                metric: metric::WARNING_S,
+                heading: "in Warning (s/leg)",
+                short: "warn(s)",
+                decimals: 1,
+            },
+            MetricColumn {
+                metric: metric::ABNORMAL_S,
+                heading: "Abnormal (s/leg)",
+                short: "abn(s)",
+                decimals: 1,
+            },
+        ];
+        let (text, table) = tables::generic_table(ctx.summaries, &columns);
+        let mut blocks = vec![
+            Block::Table(table),
+            Block::Text(explanation::explanation(ctx.summaries, ctx.runs)),
+        ];
+        let mut files = Vec::new();
+        if ctx.pictures {
+            let mut figures = Vec::new();
+            for s in &self.scenarios {
+                let name = s.name();
+                let data = self.map(s.map)?;
+                let (path, src) = ctx.picture_path(&format!("{}.png", name.replace('/', "-")))?;
+                let legs = self.tour_legs(s, ctx)?;
+                mission::picture(data.world.grid(), &legs, &data.stops, &path)?;
+                files.push(path);
+                figures.push(Figure { title: name, src });
+            }
+            blocks.push(Block::Figures {
+                heading: "The first tour of each scenario".into(),
+                caption: "Re-simulated from their seeds: the true trajectory of every leg coloured by the behaviour and the localizer's state (automove, contour, asking people to step aside, in Warning), the particle cloud (teal) at each warning, the places in tour order.".into(),
+                figures,
+            });
+        }
+        Ok(SuiteReport { text, blocks, files })
+    }
+}
+
+/// No events are drawn on `lab replay` pictures of legs beyond the
+/// trajectory's colours.
+const MARKERS: [EventMarker; 1] = [EventMarker {
+    kind: "warning",
+    marker: sim::render::MarkerKind::Ring([0, 160, 160]),
+    place: MarkerPlace::Event,
+    single_run_only: false,
+}];
+
+impl MapsSuite {
+    /// The legs of the first tour of `s`, re-run from the records on file.
+    fn tour_legs(&self, s: &Scenario, ctx: &ReportContext<'_>) -> Result<Vec<LegRun>> {
+        let campaign = self
+            .campaigns()
+            .into_iter()
+            .find(|c| c.jobs.first().is_some_and(|j| j.scenario == s.name()))
+            .context("no tour")?;
+        let on_file: BTreeMap<u32, &RunRecord> = ctx
+            .runs
+            .get(&s.name())
+            .map(|v| v.iter().map(|(k, r)| (*k, r)).collect())
+            .unwrap_or_default();
+        let mut earlier: Vec<RunRecord> = Vec::new();
+        let mut legs = Vec::new();
+        for job in &campaign.jobs {
+            let Some(&recorded) = on_file.get(&job.run) else {
+                break;
+            };
+            legs.push(self.leg(job, &earlier, TraceParams::default())?.0);
+            earlier.push(recorded.clone());
+        }
+        Ok(legs)
+    }
+}
