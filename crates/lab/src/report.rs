@@ -49,7 +49,10 @@ pub fn write(dir: &Path, suite: &dyn Suite, pictures: bool) -> Result<Written> {
     let part = suite.report(&ctx)?;
     let page = Page {
         title: info.name.clone(),
-        intro: format!("{} runs per scenario, base seed {}.", info.runs, info.seed),
+        intro: part
+            .intro
+            .clone()
+            .unwrap_or_else(|| format!("{} runs per scenario, base seed {}.", info.runs, info.seed)),
         raw_data: format!(
             "Intervals are {}% (Wilson for I_R, Student-t for I_T). Raw data: <a href=\"results.jsonl\">results.jsonl</a>, <a href=\"summary.csv\">summary.csv</a>, <a href=\"summary.json\">summary.json</a>, <a href=\"tables.md\">tables.md</a>.",
             CONFIDENCE * 100.0

@@ -125,6 +125,9 @@ impl ReportContext<'_> {
 pub struct SuiteReport {
     /// What the terminal shows after a batch (its main table).
     pub text: String,
+    /// The page's first sentence, in place of "N runs per scenario, base
+    /// seed S." when the suite counts otherwise.
+    pub intro: Option<String>,
     /// The page's blocks after the introduction.
     pub blocks: Vec<Block>,
     /// Files the suite wrote (pictures).

@@ -189,6 +189,7 @@ impl Suite for ToySuite {
         );
         Ok(SuiteReport {
             text,
+            intro: Some("Three campaigns of two runs: the second learns from the first.".into()),
             blocks: vec![Block::Table(table)],
             files: Vec::new(),
         })
@@ -283,4 +284,8 @@ fn a_suite_from_test_code_runs_learns_resumes_and_reports_its_metric() {
     );
     let html = std::fs::read_to_string(whole.join("index.html")).unwrap();
     assert!(html.contains("<th>marks/run</th>"));
+    assert!(
+        md.contains("Three campaigns of two runs"),
+        "the suite's own introduction"
+    );
 }

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use super::{BEHAVIOURS, CROWDS, MAPS, metric};
+use crate::page::Block;
 use crate::record::{RunRecord, Runs};
 use crate::summary::Summary;
 
@@ -108,14 +109,17 @@ fn paired_time_ratio(runs: &Runs, map: usize, people: usize) -> (usize, f64) {
     (n, median)
 }
 
-/// Markdown paragraphs for the report.
-pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
+/// The report's blocks after the table of all scenarios.
+pub fn explanation(summaries: &[Summary], runs: &Runs) -> Vec<Block> {
     let by: BTreeMap<&str, &Summary> = summaries.iter().map(|s| (s.scenario.as_str(), s)).collect();
-    let mut out = String::from("\n## The localizer among people\n\n");
-    out.push_str(
-        "People are not in the map: they hide the walls from the laser and put echoes where the map has none. The localizer warns when the scan matches the map no better at its estimate than at the pose odometry predicts and fewer than 80 % of the beams land on a wall. With AutoMove on every leg of the same tours:\n\n",
-    );
-    out.push_str(&localizer_table(runs));
+    let mut blocks = vec![
+        Block::Heading("The localizer among people".into()),
+        Block::Text(
+            "People are not in the map: they hide the walls from the laser and put echoes where the map has none. The localizer warns when the scan matches the map no better at its estimate than at the pose odometry predicts and fewer than 80 % of the beams land on a wall. With AutoMove on every leg of the same tours:\n\n".into(),
+        ),
+        Block::Table(localizer_table(runs)),
+    ];
+    let mut out = String::new();
     for (map, map_name) in MAPS.iter().enumerate() {
         let shares: Vec<f64> = (0..CROWDS.len())
             .map(|p| warning_share(&records(runs, &name(map, 0, p))))
@@ -151,7 +155,10 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             errors[2],
         );
     }
-    out.push_str("\n## AutoMove and contour tracking on the same tours\n\n");
+    blocks.push(Block::Text(std::mem::take(&mut out)));
+    blocks.push(Block::Heading(
+        "AutoMove and contour tracking on the same tours".into(),
+    ));
     for (map, map_name) in MAPS.iter().enumerate() {
         for (people, count) in CROWDS.iter().enumerate() {
             let (Some(a), Some(c)) = (
@@ -190,7 +197,8 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         }
     }
     out.push_str(
-        "Contour tracking follows walls, exhibits and people from the raw scan and leaves them for the goal when the way is clear and the goal nearer than where it started following (Bug2's rule); it is slower because its path hugs contours and it drives at 0.4 m/s against AutoMove's 0.5 m/s. Where it fails, it is on legs whose straight line crosses a wall with a gap too narrow for the robot: from the raw scan a gap and a passage look alike until the robot is in them, and the detour it then follows along the contour can be long (`petrinav lab replay out/maps 'MAP/contour/0p#K' -o leg.png` draws one).\n",
+        "Contour tracking follows walls, exhibits — and people — from the raw scan, and leaves a contour for the goal when the way is clear and the goal nearer than where it started following (Bug2's rule). It is slower because its path hugs contours and it drives at 0.4 m/s against AutoMove's 0.5 m/s. It has no map: a gap in a wall and a passage look alike until the robot is in them, and a person is a contour like a wall — among people it circles them, which the time limits above count. `petrinav lab replay out/maps 'MAP/contour/Np#K' -o leg.png` draws any leg.\n",
     );
-    out
+    blocks.push(Block::Text(out));
+    blocks
 }

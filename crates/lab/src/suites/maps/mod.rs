@@ -376,10 +376,8 @@ impl Suite for MapsSuite {
             },
         ];
         let (text, table) = tables::generic_table(ctx.summaries, &columns);
-        let mut blocks = vec![
-            Block::Table(table),
-            Block::Text(explanation::explanation(ctx.summaries, ctx.runs)),
-        ];
+        let mut blocks = vec![Block::Table(table)];
+        blocks.extend(explanation::explanation(ctx.summaries, ctx.runs));
         let mut files = Vec::new();
         if ctx.pictures {
             let mut figures = Vec::new();
@@ -398,7 +396,15 @@ impl Suite for MapsSuite {
                 figures,
             });
         }
-        Ok(SuiteReport { text, blocks, files })
+        Ok(SuiteReport {
+            text,
+            intro: Some(format!(
+                "{} tours of every map's places per scenario (a leg from each place to the next: the rows count legs), base seed {}.",
+                self.info.runs, self.info.seed
+            )),
+            blocks,
+            files,
+        })
     }
 }
 

@@ -174,5 +174,10 @@ fn report(suite: &ScenarioSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
     ];
     let mut files = Vec::new();
     blocks.extend(suite.pictures(ctx, &shared::pictures_caption(), &mut files)?);
-    Ok(SuiteReport { text, blocks, files })
+    Ok(SuiteReport {
+        text,
+        intro: None,
+        blocks,
+        files,
+    })
 }
