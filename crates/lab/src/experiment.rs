@@ -296,17 +296,7 @@ impl Controller for Counting {
             *self.ticks.entry(b).or_insert(0) += 1;
         }
         self.events.extend(self.notes.events.iter().cloned());
-        if notes.is_enabled() {
-            if let Some(b) = self.notes.behaviour {
-                notes.behaviour(b);
-            }
-            for &(k, v) in &self.notes.values {
-                notes.value(k, v);
-            }
-            for e in &self.notes.events {
-                notes.event(e.clone());
-            }
-        }
+        self.notes.forward_to(notes);
         step
     }
 

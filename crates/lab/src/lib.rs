@@ -11,6 +11,7 @@
 //! [`suites::REGISTRY`]; nothing outside that module names one.
 #![warn(missing_docs)]
 
+pub mod charts;
 pub mod experiment;
 pub mod mission;
 pub mod page;

@@ -23,7 +23,7 @@
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
-use nav::guide::{GuideController, GuideError, GuideParams, GuideStats, Policy};
+use nav::guide::{GuideController, GuideError, GuideParams, GuideStats, GuideSummary, Policy};
 use robot::{Controller, Event, Notes, Perception, Pose, Request, Step, Vec2};
 use sim::render::{MarkerKind, Picture};
 use sim::{OccupancyGrid, Outcome, RobotParams, RunParams, Simulation, Task, TraceParams, World};
@@ -186,6 +186,8 @@ pub struct LegRun {
     pub final_pose: Pose,
     /// The controller's counters.
     pub stats: GuideStats,
+    /// What the leg leaves for a mission log (sojourns, decisions).
+    pub summary: GuideSummary,
     /// The trace (poses, labels, events, clouds).
     pub trace: LegTrace,
     /// What the simulator measured (`None` for a leg not run).
@@ -212,9 +214,12 @@ struct Watch<'c> {
 }
 
 impl Controller for Watch<'_> {
-    fn step(&mut self, p: &Perception, _notes: &mut Notes) -> Step {
+    fn step(&mut self, p: &Perception, notes: &mut Notes) -> Step {
         self.notes.clear();
-        self.inner.step(p, &mut self.notes)
+        let step = self.inner.step(p, &mut self.notes);
+        // The simulator's own trace (replays) gets the notes too.
+        self.notes.forward_to(notes);
+        step
     }
 
     fn request(&self) -> Option<Request> {
@@ -250,7 +255,7 @@ fn median(xs: &mut [f64]) -> f64 {
 }
 
 /// One leg to run.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct LegSpec<'a> {
     /// Where from (a name for the result).
     pub from: &'a str,
@@ -272,16 +277,16 @@ pub struct LegSpec<'a> {
 
 /// Runs one leg (module docs).
 pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
-    let &LegSpec {
+    let LegSpec {
         from,
         to,
         start,
         believed,
         goal,
-        policy,
+        ref policy,
         seed,
         trace: sim_trace,
-    } = leg;
+    } = *leg;
     let map = setup.world.grid().grid_map();
     let unreachable = |why: String| LegRun {
         result: LegResult {
@@ -297,6 +302,7 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         final_estimate: believed,
         final_pose: start,
         stats: GuideStats::default(),
+        summary: GuideSummary::default(),
         trace: LegTrace {
             events: vec![Event::new("unreachable", 0.0).with("why", why)],
             ..LegTrace::default()
@@ -308,7 +314,7 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         setup.guide.clone(),
         believed,
         goal,
-        policy,
+        policy.clone(),
         seed ^ 0x6c6f_6361_6c69_7a65,
     ) {
         Ok(c) => c,
@@ -442,6 +448,7 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         final_estimate: controller.estimate(),
         final_pose: r.final_pose,
         stats,
+        summary: controller.summary(r.time_s),
         trace,
         sim: Some(SimSummary {
             ticks: r.ticks,
@@ -478,7 +485,7 @@ pub fn run_tour(setup: &MissionSetup, stops: &[Stop], policy: Policy, seed: u64)
                 start: here.pose,
                 believed: here.estimate,
                 goal: next.pose.position(),
-                policy,
+                policy: policy.clone(),
                 seed: crate::runner::derive_seed(seed, "tour leg", k as u32),
                 trace: TraceParams::default(),
             },

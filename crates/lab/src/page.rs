@@ -32,6 +32,15 @@ pub enum Block {
         /// The pictures.
         figures: Vec<Figure>,
     },
+    /// Charts under a heading, shown wide (HTML page only).
+    Charts {
+        /// Section heading.
+        heading: String,
+        /// What the charts show.
+        caption: String,
+        /// The charts.
+        figures: Vec<Figure>,
+    },
 }
 
 /// A report page.
@@ -50,6 +59,29 @@ pub struct Page {
 /// Escapes text for HTML.
 pub fn html_escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// Text for HTML with Markdown's inline `**strong**` and `` `code` ``
+/// (escaped first; a text with an unpaired marker keeps its markers).
+pub fn inline_html(s: &str) -> String {
+    fn pairs(text: &str, marker: &str, tag: &str, inner: impl Fn(&str) -> String) -> String {
+        let parts: Vec<&str> = text.split(marker).collect();
+        if parts.len() % 2 == 0 {
+            return parts.iter().map(|p| inner(p)).collect::<Vec<_>>().join(marker);
+        }
+        let mut out = String::new();
+        for (k, p) in parts.iter().enumerate() {
+            if k % 2 == 1 {
+                let _ = write!(out, "<{tag}>{}</{tag}>", inner(p));
+            } else {
+                out.push_str(&inner(p));
+            }
+        }
+        out
+    }
+    pairs(&html_escape(s), "`", "code", |t| {
+        pairs(t, "**", "strong", str::to_string)
+    })
 }
 
 /// A Markdown table as an HTML table (the separator row is dropped).
@@ -71,7 +103,7 @@ pub fn table_to_html(md: &str) -> String {
     out
 }
 
-const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\ntable{border-collapse:collapse;margin:1em 0;font-size:14px}\ntd,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\ntd:first-child,th:first-child{text-align:left}\nth{background:#f2f2f2}\n.pics{display:flex;flex-wrap:wrap;gap:12px}\nfigure{margin:0;width:280px}\nfigure img{width:280px;border:1px solid #ccc}\nfigcaption{font-size:13px}\n";
+const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\ntable{border-collapse:collapse;margin:1em 0;font-size:14px}\ntd,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\ntd:first-child,th:first-child{text-align:left}\nth{background:#f2f2f2}\n.pics{display:flex;flex-wrap:wrap;gap:12px}\nfigure{margin:0;width:280px}\nfigure img{width:280px;border:1px solid #ccc}\nfigcaption{font-size:13px}\nfigure.chart{width:760px}\nfigure.chart img{width:760px;border:none}\ncode{background:#f4f4f4;padding:0 2px}\n";
 
 impl Page {
     /// The page as Markdown (tables and text; pictures are on the HTML
@@ -88,7 +120,7 @@ impl Page {
                     let _ = write!(md, "\n## {h}\n\n");
                 }
                 Block::Text(t) => md.push_str(t),
-                Block::Figures { .. } => {}
+                Block::Figures { .. } | Block::Charts { .. } => {}
             }
         }
         md
@@ -116,7 +148,7 @@ impl Page {
                         if let Some(h) = p.strip_prefix("## ") {
                             let _ = writeln!(html, "<h2>{}</h2>", html_escape(h));
                         } else {
-                            let _ = writeln!(html, "<p>{}</p>", html_escape(&p.replace('\n', " ")));
+                            let _ = writeln!(html, "<p>{}</p>", inline_html(&p.replace('\n', " ")));
                         }
                     }
                 }
@@ -124,17 +156,27 @@ impl Page {
                     heading,
                     caption,
                     figures,
+                }
+                | Block::Charts {
+                    heading,
+                    caption,
+                    figures,
                 } => {
+                    let class = if matches!(b, Block::Charts { .. }) {
+                        " class=\"chart\""
+                    } else {
+                        ""
+                    };
                     let _ = writeln!(
                         html,
                         "<h2>{}</h2>\n<p>{}</p>\n<div class=\"pics\">",
                         html_escape(heading),
-                        html_escape(caption)
+                        inline_html(caption)
                     );
                     for f in figures {
                         let _ = writeln!(
                             html,
-                            "<figure><a href=\"{src}\"><img src=\"{src}\" alt=\"{0}\"></a><figcaption>{0}</figcaption></figure>",
+                            "<figure{class}><a href=\"{src}\"><img src=\"{src}\" alt=\"{0}\"></a><figcaption>{0}</figcaption></figure>",
                             html_escape(&f.title),
                             src = html_escape(&f.src),
                         );
@@ -182,5 +224,15 @@ mod tests {
         assert!(html.contains("<p>Because a &lt; b and so on.</p>"));
         assert!(html.contains("<img src=\"pictures/x.png\" alt=\"x\">"));
         assert!(html.ends_with("</body></html>\n"));
+    }
+
+    #[test]
+    fn inline_markdown_becomes_html() {
+        assert_eq!(
+            inline_html("**a** and `b<c`"),
+            "<strong>a</strong> and <code>b&lt;c</code>"
+        );
+        assert_eq!(inline_html("2 ** 3"), "2 ** 3");
+        assert_eq!(inline_html("one ` tick"), "one ` tick");
     }
 }

@@ -38,7 +38,7 @@ pub fn fmt_it(s: &Summary) -> String {
     }
 }
 
-/// Width of the scenario column of the terminal table.
+/// Smallest width of the scenario column of the terminal table.
 const NAME_WIDTH: usize = 24;
 
 /// Column widths of the terminal table after the scenario's.
@@ -76,7 +76,13 @@ pub fn generic_table(summaries: &[Summary], metrics: &[MetricColumn]) -> (String
         .copied()
         .chain(metrics.iter().map(|m| m.short.chars().count().max(METRIC_WIDTH)))
         .collect();
-    let mut txt = format!("{:<NAME_WIDTH$}", HEADS[0]);
+    let name_width = summaries
+        .iter()
+        .map(|s| s.scenario.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(NAME_WIDTH);
+    let mut txt = format!("{:<name_width$}", HEADS[0]);
     let heads = HEADS[1..].iter().copied().chain(metrics.iter().map(|m| m.short));
     for (h, w) in heads.zip(&widths) {
         let _ = write!(txt, " {h:>w$}");
@@ -115,7 +121,7 @@ pub fn generic_table(summaries: &[Summary], metrics: &[MetricColumn]) -> (String
             });
         }
         let _ = writeln!(md, "| {} |", cells.join(" | "));
-        let _ = write!(txt, "{:<NAME_WIDTH$}", cells[0]);
+        let _ = write!(txt, "{:<name_width$}", cells[0]);
         for (c, w) in cells[1..].iter().zip(&widths) {
             let _ = write!(txt, " {c:>w$}");
         }

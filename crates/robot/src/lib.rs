@@ -322,6 +322,19 @@ impl Notes {
         }
     }
 
+    /// Copies these notes into `to` (when `to` records): for a controller
+    /// that wraps another and passes its notes on.
+    pub fn forward_to(&self, to: &mut Notes) {
+        if !to.enabled {
+            return;
+        }
+        if let Some(b) = self.behaviour {
+            to.behaviour = Some(b);
+        }
+        to.values.extend_from_slice(&self.values);
+        to.events.extend(self.events.iter().cloned());
+    }
+
     /// Records an event.
     pub fn event(&mut self, event: Event) {
         if self.enabled {

@@ -9,6 +9,7 @@ pub mod deadlock;
 pub mod files;
 pub mod maps;
 pub mod shared;
+pub mod tourguide;
 pub mod voting;
 
 use anyhow::{Result, bail};
@@ -20,6 +21,7 @@ pub const REGISTRY: &[Registration] = &[
     voting::REGISTRATION,
     deadlock::REGISTRATION,
     maps::REGISTRATION,
+    tourguide::REGISTRATION,
     files::REGISTRATION,
 ];
 

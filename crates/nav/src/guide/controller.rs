@@ -14,12 +14,27 @@
 //! | `normal` | AutoMove is Normal again | — |
 //! | `ask` | the robot starts asking people to step aside | `exception` |
 //! | `switch` | the active behaviour changes | `from`, `to`, `reason` |
+//! | `decision` | the GSPN supervisor decides | `reason`, `f_auto`, `f_cont`, `choice`, `lambda3`…`lambda10`, `p_loc_succ`, `p_loc_warn` |
 //! | `arrived` | the estimate is within `arrive_m` of the goal | — |
 //!
 //! It never sees the true pose: it declares the goal reached from its
 //! estimate, and the simulator judges that by the truth.
+//!
+//! **Policies** (tour-guide.md, the comparison): one behaviour throughout;
+//! AutoMove until the first Warning and contour tracking from then on (the
+//! rule added to AutoMove); the rule alone (contour tracking while the
+//! localizer warns, AutoMove while it succeeds); and the GSPN supervisor:
+//! the rule, plus a decision by `f_auto > f_cont` at the start of the
+//! mission and whenever the localizer returns from Warning to Success — at
+//! the start with the learnt λ7, λ8, on a return with λ7, λ8 from the
+//! remaining part of each behaviour's reference trajectory
+//! ([`crate::supervisor::reference`]).
 
 use robot::{Command, Controller, Event, GridMap, Notes, Perception, Pose, Request, Step, Vec2};
+
+use crate::supervisor::log::{DecisionLog, Sojourn, StateName};
+use crate::supervisor::reference::Reference;
+use crate::supervisor::{Rates, Supervisor};
 
 use super::automove::{AutoMove, AutoMoveError, AutoMoveParams};
 use super::contour::{ContourParams, ContourTracker};
@@ -73,12 +88,64 @@ pub enum GuideError {
     AutoMove(#[from] AutoMoveError),
 }
 
-/// How the controller picks the behaviour.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+/// How the controller picks the behaviour (module docs).
+#[derive(Debug, Clone)]
 pub enum Policy {
-    /// One behaviour for the whole mission.
+    /// One behaviour for the whole mission, whatever the localizer says.
     Fixed(Behaviour),
+    /// AutoMove until the localizer first warns, contour tracking from
+    /// then on.
+    AutoMoveThenContour,
+    /// Contour tracking while the localizer warns, AutoMove while it
+    /// succeeds.
+    Rule,
+    /// The rule, and the GSPN supervisor's decisions.
+    Supervisor(Box<SupervisorPlan>),
+}
+
+impl Policy {
+    /// A short name: `automove`, `contour`, `automove_then_contour`, `rule`,
+    /// `supervisor`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Policy::Fixed(Behaviour::AutoMove) => "automove",
+            Policy::Fixed(Behaviour::Contour) => "contour",
+            Policy::AutoMoveThenContour => "automove_then_contour",
+            Policy::Rule => "rule",
+            Policy::Supervisor(_) => "supervisor",
+        }
+    }
+}
+
+/// What the supervisor decides with: the net compiled, the learnt rates and
+/// the behaviours' references.
+#[derive(Debug, Clone)]
+pub struct SupervisorPlan {
+    /// The supervisor.
+    pub supervisor: Supervisor,
+    /// λ1…λ11 as learnt (λ7, λ8 from the references' mean times).
+    pub rates: Rates,
+    /// AutoMove's reference.
+    pub automove: Reference,
+    /// Contour tracking's reference.
+    pub contour: Reference,
+}
+
+/// What a mission leaves for the log: sojourns, time per behaviour,
+/// decisions.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct GuideSummary {
+    /// The localizer's sojourns in Success and Warning, in order (the last
+    /// one open).
+    pub localizer: Vec<Sojourn>,
+    /// The planner's sojourns in Normal and Abnormal, in order.
+    pub planner: Vec<Sojourn>,
+    /// Time AutoMove drove, seconds.
+    pub time_automove_s: f64,
+    /// Time contour tracking drove, seconds.
+    pub time_contour_s: f64,
+    /// The supervisor's decisions.
+    pub decisions: Vec<DecisionLog>,
 }
 
 /// What the controller counted over its mission.
@@ -117,6 +184,14 @@ pub struct GuideController {
     asking: bool,
     request: Option<Request>,
     stats: GuideStats,
+    /// Whether the first step has been taken.
+    started: bool,
+    /// When the localizer's and the planner's current states began.
+    loc_since_s: f64,
+    plan_since_s: f64,
+    sojourns_loc: Vec<Sojourn>,
+    sojourns_plan: Vec<Sojourn>,
+    decisions: Vec<DecisionLog>,
 }
 
 impl GuideController {
@@ -149,7 +224,10 @@ impl GuideController {
         let mut automove = AutoMove::new(map, params.automove)?;
         automove.set_goal(start.position(), goal)?;
         let contour = ContourTracker::new(params.contour).map_err(GuideError::Params)?;
-        let Policy::Fixed(active) = policy;
+        let active = match &policy {
+            Policy::Fixed(b) => *b,
+            Policy::AutoMoveThenContour | Policy::Rule | Policy::Supervisor(_) => Behaviour::AutoMove,
+        };
         Ok(GuideController {
             p: params,
             localizer,
@@ -164,6 +242,12 @@ impl GuideController {
             asking: false,
             request: None,
             stats: GuideStats::default(),
+            started: false,
+            loc_since_s: 0.0,
+            plan_since_s: 0.0,
+            sojourns_loc: Vec::new(),
+            sojourns_plan: Vec::new(),
+            decisions: Vec::new(),
         })
     }
 
@@ -188,8 +272,103 @@ impl GuideController {
     }
 
     /// The policy.
-    pub fn policy(&self) -> Policy {
-        self.policy
+    pub fn policy(&self) -> &Policy {
+        &self.policy
+    }
+
+    /// What the mission leaves for the log, the open sojourns closed at
+    /// `end_s` (the time the mission ended).
+    pub fn summary(&self, end_s: f64) -> GuideSummary {
+        let mut localizer = self.sojourns_loc.clone();
+        localizer.push(Sojourn {
+            state: match self.status {
+                LocalizationStatus::Success => StateName::Success,
+                LocalizationStatus::Warning => StateName::Warning,
+            },
+            duration_s: (end_s - self.loc_since_s).max(0.0),
+            ended: false,
+        });
+        let mut planner = self.sojourns_plan.clone();
+        planner.push(Sojourn {
+            state: if self.abnormal {
+                StateName::Abnormal
+            } else {
+                StateName::Normal
+            },
+            duration_s: (end_s - self.plan_since_s).max(0.0),
+            ended: false,
+        });
+        GuideSummary {
+            localizer,
+            planner,
+            time_automove_s: self.stats.time_automove_s,
+            time_contour_s: self.stats.time_contour_s,
+            decisions: self.decisions.clone(),
+        }
+    }
+
+    /// Makes `to` the active behaviour (an event when it changes).
+    fn switch(&mut self, to: Behaviour, reason: &str, t: f64, at: Vec2, notes: &mut Notes) {
+        if to == self.active {
+            return;
+        }
+        notes.event(
+            Event::new("switch", t)
+                .at(at)
+                .with("from", behaviour_name(self.active))
+                .with("to", behaviour_name(to))
+                .with("reason", reason),
+        );
+        match to {
+            Behaviour::AutoMove => self.automove.resume(0.0, 0.0),
+            Behaviour::Contour => self.contour.reset(),
+        }
+        self.active = to;
+    }
+
+    /// The supervisor's decision at `t` (`reason`: `start` or `recovered`):
+    /// the behaviour it chooses, or the active one when it cannot decide
+    /// (an event says why).
+    fn decide(&mut self, reason: &str, t: f64, estimate: Pose, notes: &mut Notes) -> Behaviour {
+        let Policy::Supervisor(plan) = &self.policy else {
+            return self.active;
+        };
+        let mut rates = plan.rates;
+        if reason != "start" {
+            rates.set(7, plan.automove.rate_from(estimate.position()));
+            rates.set(8, plan.contour.rate_from(estimate.position()));
+        }
+        match plan.supervisor.decide(&rates) {
+            Ok(d) => {
+                let mut e = Event::new("decision", t)
+                    .at(estimate.position())
+                    .with("reason", reason)
+                    .with("f_auto", d.f_auto)
+                    .with("f_cont", d.f_cont)
+                    .with("choice", behaviour_name(d.choice))
+                    .with("p_loc_succ", d.p_loc_succ)
+                    .with("p_loc_warn", d.p_loc_warn);
+                for i in 3..=10 {
+                    e = e.with(format!("lambda{i}"), rates.get(i));
+                }
+                notes.event(e);
+                self.decisions.push(DecisionLog {
+                    time_s: t,
+                    reason: reason.to_string(),
+                    rates: rates.as_array(),
+                    f_auto: d.f_auto,
+                    f_cont: d.f_cont,
+                    p_loc_succ: d.p_loc_succ,
+                    p_loc_warn: d.p_loc_warn,
+                    choice: d.choice,
+                });
+                d.choice
+            }
+            Err(err) => {
+                notes.event(Event::new("decision_error", t).with("error", err.to_string()));
+                self.active
+            }
+        }
     }
 
     /// The localizer's state.
@@ -255,7 +434,31 @@ impl Controller for GuideController {
                             .with("score_estimate", info.score_estimate)
                             .with("score_odometry", info.score_odometry),
                     );
+                    self.sojourns_loc.push(Sojourn {
+                        state: match self.status {
+                            LocalizationStatus::Success => StateName::Success,
+                            LocalizationStatus::Warning => StateName::Warning,
+                        },
+                        duration_s: t - self.loc_since_s,
+                        ended: true,
+                    });
+                    self.loc_since_s = t;
                     self.status = info.status;
+                    let at = info.estimate;
+                    match (&self.policy, info.status) {
+                        (Policy::Fixed(_), _) => {}
+                        (_, LocalizationStatus::Warning) => {
+                            self.switch(Behaviour::Contour, "warning", t, at.position(), notes)
+                        }
+                        (Policy::AutoMoveThenContour, LocalizationStatus::Success) => {}
+                        (Policy::Rule, LocalizationStatus::Success) => {
+                            self.switch(Behaviour::AutoMove, "success", t, at.position(), notes)
+                        }
+                        (Policy::Supervisor(_), LocalizationStatus::Success) => {
+                            let choice = self.decide("recovered", t, at, notes);
+                            self.switch(choice, "decision", t, at.position(), notes);
+                        }
+                    }
                 }
             }
             Ok(None) => {}
@@ -265,6 +468,15 @@ impl Controller for GuideController {
             }
         }
         let estimate = self.localizer.estimate();
+        if !self.started {
+            self.started = true;
+            self.loc_since_s = t;
+            self.plan_since_s = t;
+            if matches!(self.policy, Policy::Supervisor(_)) {
+                let choice = self.decide("start", t, estimate, notes);
+                self.switch(choice, "decision", t, estimate.position(), notes);
+            }
+        }
         if notes.is_enabled() {
             notes.value("estimate_x_m", estimate.x_m);
             notes.value("estimate_y_m", estimate.y_m);
@@ -284,6 +496,16 @@ impl Controller for GuideController {
             Behaviour::AutoMove => {
                 let s = self.automove.step(estimate, scan, p.odometry, dt, t);
                 if s.abnormal != self.abnormal {
+                    self.sojourns_plan.push(Sojourn {
+                        state: if self.abnormal {
+                            StateName::Abnormal
+                        } else {
+                            StateName::Normal
+                        },
+                        duration_s: t - self.plan_since_s,
+                        ended: true,
+                    });
+                    self.plan_since_s = t;
                     let mut e =
                         Event::new(if s.abnormal { "abnormal" } else { "normal" }, t).at(estimate.position());
                     if let Some(x) = s.exception {
@@ -313,6 +535,12 @@ impl Controller for GuideController {
             Behaviour::Contour => {
                 self.asking = false;
                 if self.abnormal {
+                    self.sojourns_plan.push(Sojourn {
+                        state: StateName::Abnormal,
+                        duration_s: t - self.plan_since_s,
+                        ended: true,
+                    });
+                    self.plan_since_s = t;
                     self.abnormal = false;
                     notes.event(Event::new("normal", t).at(estimate.position()));
                 }

@@ -8,4 +8,6 @@ pub mod scan;
 
 pub use automove::{AutoMove, AutoMoveError, AutoMoveParams, AutoMoveStep, Exception};
 pub use contour::{ContourMode, ContourParams, ContourStep, ContourTracker, Side};
-pub use controller::{GuideController, GuideError, GuideParams, GuideStats, Policy};
+pub use controller::{
+    GuideController, GuideError, GuideParams, GuideStats, GuideSummary, Policy, SupervisorPlan,
+};

@@ -23,10 +23,14 @@
 //! localizer and planner probabilities are read under the hypothesis that was
 //! chosen — the behaviour the robot is about to run.
 
+pub mod learning;
+pub mod log;
+pub mod reference;
+
 use petri::{CompiledGspn, ExploreParams, Net, Params, PlaceId, Solution, SolveParams, TransitionId};
 
 /// The supervisor net as shipped in `models/supervisor.toml`.
-pub const MODEL: &str = include_str!("../../../models/supervisor.toml");
+pub const MODEL: &str = include_str!("../../../../models/supervisor.toml");
 
 /// Number of rates λ1…λ11.
 pub const NUM_RATES: usize = 11;
@@ -99,7 +103,7 @@ impl Rates {
 }
 
 /// The two navigation behaviours.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Behaviour {
     /// Map-based planner (navigation function).
@@ -208,6 +212,7 @@ struct Ids {
 /// The supervisor: both hypotheses compiled, ready to decide.
 #[derive(Debug, Clone)]
 pub struct Supervisor {
+    net_id: String,
     auto: Hypothesis,
     cont: Hypothesis,
     auto_ids: Ids,
@@ -239,16 +244,31 @@ impl Supervisor {
     /// Compiles a supervisor net of the same structure (places `P0`…`P8`,
     /// transitions `t0`…`t14`, rates `lambda1`…`lambda11`, weight `p`).
     pub fn from_net(net: &Net) -> Result<Supervisor, SupervisorError> {
+        let text = petri::io::write_string(net, petri::io::Format::Toml)?;
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in text.bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        let net_id = format!("{}-{h:016x}", net.name);
         let auto = Hypothesis::new(net, "t1", 1.0, SLOW_SWITCH, FAST_SWITCH)?;
         let cont = Hypothesis::new(net, "t0", 0.0, FAST_SWITCH, SLOW_SWITCH)?;
         let auto_ids = ids(&auto.compiled)?;
         let cont_ids = ids(&cont.compiled)?;
         Ok(Supervisor {
+            net_id,
             auto,
             cont,
             auto_ids,
             cont_ids,
         })
+    }
+
+    /// The net's identity: its name and a hash of its text (as written in
+    /// TOML). Mission logs name it, so that rates learnt for one net are
+    /// never read for another.
+    pub fn net_id(&self) -> &str {
+        &self.net_id
     }
 
     /// Tangible markings of the supervisor net.

@@ -1,0 +1,372 @@
+//! The mission log: what the guide robot keeps between missions, one JSON
+//! line per calibration run or mission, appended and flushed, never
+//! rewritten (tour-guide.md, "Learning across missions").
+//!
+//! ```text
+//! {"kind":"calibration","net":"…","behaviour":"automove","success":true,"duration_s":61.2,"path_m":21.8,"trajectory":[[8.1,6.4],…]}
+//! {"kind":"mission","net":"…","mission":1,"success":true,"outcome":"goal","duration_s":70.4,"localizer":[…],"planner":[…],…}
+//! ```
+//!
+//! Every line names the supervisor net it was learnt for (`net`,
+//! [`super::Supervisor::net_id`]): a log of another net is refused, not
+//! mixed. Reading ([`MissionLog::open`]) keeps every complete line; a last
+//! line cut mid-write (a crash) is reported and cut off the file, so that
+//! the next mission appends after the last complete one — nothing already
+//! written is lost. Any other unreadable line is an error naming its line.
+
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+use super::Behaviour;
+
+/// One stretch of time in one state.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Sojourn {
+    /// The state: `success`/`warning` (localizer), `normal`/`abnormal`
+    /// (planner).
+    pub state: StateName,
+    /// How long, seconds.
+    pub duration_s: f64,
+    /// It ended by a transition (not by the end of the mission).
+    pub ended: bool,
+}
+
+/// The states whose sojourns are logged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StateName {
+    /// Localizer: Success.
+    Success,
+    /// Localizer: Warning.
+    Warning,
+    /// Planner: Normal.
+    Normal,
+    /// Planner: Abnormal.
+    Abnormal,
+}
+
+/// A decision of the supervisor during a mission.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DecisionLog {
+    /// When, seconds since the start of the mission.
+    pub time_s: f64,
+    /// Why it was taken: `start` or `recovered` (Warning → Success).
+    pub reason: String,
+    /// λ1…λ11 used.
+    pub rates: [f64; super::NUM_RATES],
+    /// Throughput of AutoMove's completion under the AutoMove hypothesis.
+    pub f_auto: f64,
+    /// Throughput of Contour tracking's completion under its hypothesis.
+    pub f_cont: f64,
+    /// `P{#P5 = 1}`: localizer Success, under the chosen hypothesis.
+    pub p_loc_succ: f64,
+    /// `P{#P6 = 1}`: localizer Warning, under the chosen hypothesis.
+    pub p_loc_warn: f64,
+    /// The behaviour chosen.
+    pub choice: Behaviour,
+}
+
+/// A calibration run: one behaviour alone from the start to the goal.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CalibrationRun {
+    /// The behaviour.
+    pub behaviour: Behaviour,
+    /// Reached the goal.
+    pub success: bool,
+    /// Travel time, seconds.
+    pub duration_s: f64,
+    /// Path length, metres.
+    pub path_m: f64,
+    /// The trajectory as the robot estimated it, world frame, every 0.5 m.
+    pub trajectory: Vec<[f64; 2]>,
+}
+
+/// A mission: what the supervisor learns from.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MissionRecord {
+    /// Mission number in the log, from 1.
+    pub mission: u32,
+    /// Reached the goal.
+    pub success: bool,
+    /// How it ended (`goal`, `collision`, `time_limit`, `lost`…).
+    pub outcome: String,
+    /// Duration, seconds.
+    pub duration_s: f64,
+    /// The localizer's sojourns in Success and Warning, in order.
+    pub localizer: Vec<Sojourn>,
+    /// The planner's sojourns in Normal and Abnormal, in order.
+    pub planner: Vec<Sojourn>,
+    /// Time AutoMove drove, seconds.
+    pub time_automove_s: f64,
+    /// Time contour tracking drove, seconds.
+    pub time_contour_s: f64,
+    /// The supervisor's decisions.
+    pub decisions: Vec<DecisionLog>,
+}
+
+/// One line of the log.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Entry {
+    /// A calibration run.
+    Calibration(CalibrationRun),
+    /// A mission.
+    Mission(MissionRecord),
+}
+
+/// A line as written: the net it belongs to, and the entry.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Line {
+    /// The supervisor net's id.
+    pub net: String,
+    /// The entry.
+    #[serde(flatten)]
+    pub entry: Entry,
+}
+
+/// What can go wrong with a log.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// The file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A complete line that is not a log entry.
+    #[error("{path}:{line}: not a mission log entry: {message}")]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Its line, from 1.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A line of another supervisor net.
+    #[error(
+        "{path}:{line}: this entry was logged for the supervisor net `{found}`, not `{expected}`: keep one log per net"
+    )]
+    OtherNet {
+        /// The file.
+        path: PathBuf,
+        /// Its line.
+        line: usize,
+        /// The net of the line.
+        found: String,
+        /// The net of this log.
+        expected: String,
+    },
+}
+
+/// A last line cut mid-write, found and cut off the file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TornLine {
+    /// Its line number.
+    pub line: usize,
+    /// Its bytes (what was cut off).
+    pub bytes: usize,
+}
+
+/// An open mission log.
+#[derive(Debug)]
+pub struct MissionLog {
+    path: PathBuf,
+    net: String,
+    entries: Vec<Entry>,
+    torn: Option<TornLine>,
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> LogError + '_ {
+    move |source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+impl MissionLog {
+    /// Opens (or creates) the log at `path` for the net `net`: reads every
+    /// entry, reports a last line cut mid-write ([`MissionLog::torn`]) and
+    /// cuts it off the file. Errors: unreadable file, a complete line that
+    /// is not an entry (its line), a line of another net.
+    pub fn open(path: &Path, net: &str) -> Result<MissionLog, LogError> {
+        let mut log = MissionLog {
+            path: path.to_path_buf(),
+            net: net.to_string(),
+            entries: Vec::new(),
+            torn: None,
+        };
+        if !path.exists() {
+            return Ok(log);
+        }
+        let file = File::open(path).map_err(io(path))?;
+        let mut reader = BufReader::new(file);
+        let mut good = 0u64;
+        let mut number = 0;
+        let mut text = String::new();
+        loop {
+            text.clear();
+            let n = reader.read_line(&mut text).map_err(io(path))?;
+            if n == 0 {
+                break;
+            }
+            number += 1;
+            if !text.ends_with('\n') {
+                log.torn = Some(TornLine {
+                    line: number,
+                    bytes: n,
+                });
+                break;
+            }
+            let trimmed = text.trim();
+            if !trimmed.is_empty() {
+                let line: Line = serde_json::from_str(trimmed).map_err(|e| LogError::Malformed {
+                    path: path.to_path_buf(),
+                    line: number,
+                    message: e.to_string(),
+                })?;
+                if line.net != net {
+                    return Err(LogError::OtherNet {
+                        path: path.to_path_buf(),
+                        line: number,
+                        found: line.net,
+                        expected: net.to_string(),
+                    });
+                }
+                log.entries.push(line.entry);
+            }
+            good += n as u64;
+        }
+        if log.torn.is_some() {
+            OpenOptions::new()
+                .write(true)
+                .open(path)
+                .and_then(|f| f.set_len(good))
+                .map_err(io(path))?;
+        }
+        Ok(log)
+    }
+
+    /// The entries, in the file's order.
+    pub fn entries(&self) -> &[Entry] {
+        &self.entries
+    }
+
+    /// The last line cut mid-write found on opening (and cut off).
+    pub fn torn(&self) -> Option<&TornLine> {
+        self.torn.as_ref()
+    }
+
+    /// The missions logged so far.
+    pub fn missions(&self) -> u32 {
+        self.entries
+            .iter()
+            .filter(|e| matches!(e, Entry::Mission(_)))
+            .count() as u32
+    }
+
+    /// Appends an entry: one line, written and flushed to the disk before
+    /// returning.
+    pub fn append(&mut self, entry: Entry) -> Result<(), LogError> {
+        let path = self.path.clone();
+        let line = Line {
+            net: self.net.clone(),
+            entry,
+        };
+        let mut text = serde_json::to_string(&line).map_err(|e| LogError::Malformed {
+            path: path.clone(),
+            line: 0,
+            message: e.to_string(),
+        })?;
+        text.push('\n');
+        let mut f = OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .map_err(io(&path))?;
+        f.write_all(text.as_bytes()).map_err(io(&path))?;
+        f.sync_data().map_err(io(&path))?;
+        self.entries.push(line.entry);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("petrinav-log-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join("missions.jsonl")
+    }
+
+    fn mission(k: u32) -> Entry {
+        Entry::Mission(MissionRecord {
+            mission: k,
+            success: true,
+            outcome: "goal".into(),
+            duration_s: 60.0 + f64::from(k),
+            localizer: vec![Sojourn {
+                state: StateName::Success,
+                duration_s: 60.0,
+                ended: false,
+            }],
+            planner: Vec::new(),
+            time_automove_s: 60.0,
+            time_contour_s: 0.0,
+            decisions: Vec::new(),
+        })
+    }
+
+    #[test]
+    fn a_crash_mid_write_loses_nothing_written_and_is_reported() {
+        let path = temp("torn");
+        let mut log = MissionLog::open(&path, "net-a").unwrap();
+        log.append(mission(1)).unwrap();
+        log.append(mission(2)).unwrap();
+        // The process dies while writing mission 3.
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(br#"{"net":"net-a","kind":"mission","miss"#).unwrap();
+        drop(f);
+        let mut log = MissionLog::open(&path, "net-a").unwrap();
+        assert_eq!(log.missions(), 2);
+        assert_eq!(log.torn(), Some(&TornLine { line: 3, bytes: 37 }));
+        // The next mission goes on from there.
+        log.append(mission(3)).unwrap();
+        let log = MissionLog::open(&path, "net-a").unwrap();
+        assert_eq!(log.missions(), 3);
+        assert!(log.torn().is_none());
+        assert_eq!(log.entries()[2], mission(3));
+    }
+
+    #[test]
+    fn foreign_lines_and_other_nets_are_errors_naming_the_line() {
+        let path = temp("foreign");
+        let mut log = MissionLog::open(&path, "net-a").unwrap();
+        log.append(mission(1)).unwrap();
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(b"{\"net\":\"net-a\",\"kind\":\"lunch\"}\n").unwrap();
+        drop(f);
+        let e = MissionLog::open(&path, "net-a").unwrap_err().to_string();
+        assert!(e.contains(":2:") && e.contains("lunch"), "{e}");
+        let path = temp("other");
+        MissionLog::open(&path, "net-b")
+            .unwrap()
+            .append(mission(1))
+            .unwrap();
+        let e = MissionLog::open(&path, "net-a").unwrap_err().to_string();
+        assert!(e.contains(":1:") && e.contains("net-b"), "{e}");
+        let path = temp("garbage");
+        std::fs::write(&path, "not json\n").unwrap();
+        assert!(matches!(
+            MissionLog::open(&path, "net-a"),
+            Err(LogError::Malformed { line: 1, .. })
+        ));
+    }
+}
