@@ -2,6 +2,7 @@
 //! command lives in its own module.
 
 mod gspn;
+mod guide_cmd;
 mod lab_cmd;
 mod map;
 mod nav_cmd;
@@ -39,6 +40,9 @@ enum Command {
     /// The tour-guide robot on a map: drive between named places, or a guided tour.
     #[command(subcommand)]
     Nav(nav_cmd::NavCommand),
+    /// The tour-guide robot's mission log and the supervisor's learnt rates.
+    #[command(subcommand)]
+    Guide(guide_cmd::GuideCommand),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +53,7 @@ fn main() -> ExitCode {
         Command::Sim(cmd) => sim_cmd::run(cmd),
         Command::Lab(cmd) => lab_cmd::run(cmd),
         Command::Nav(cmd) => nav_cmd::run(cmd),
+        Command::Guide(cmd) => guide_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

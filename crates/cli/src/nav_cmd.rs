@@ -5,8 +5,11 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use lab::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop};
-use nav::guide::Policy;
+use nav::guide::{Policy, SupervisorPlan};
 use nav::supervisor::Behaviour;
+use nav::supervisor::Supervisor;
+use nav::supervisor::learning;
+use nav::supervisor::log::MissionLog;
 use robot::{Pose, Vec2};
 use sim::{CrowdParams, OccupancyGrid, Places, World};
 
@@ -39,6 +42,12 @@ enum BehaviourArg {
     Automove,
     /// Wall following from the raw scan, leaving walls towards the goal.
     Contour,
+    /// AutoMove until the localizer first warns, contour tracking from then on.
+    AutomoveThenContour,
+    /// Contour tracking while the localizer warns, AutoMove while it succeeds.
+    Rule,
+    /// The GSPN supervisor with the rates learnt from --log (which needs calibration runs).
+    Supervisor,
 }
 
 #[derive(Args, Debug)]
@@ -68,6 +77,13 @@ struct Common {
     /// Print JSON (one object per leg; stable keys).
     #[arg(long)]
     json: bool,
+    /// The robot's mission log (JSON lines): the supervisor learns from it, and every leg is
+    /// appended to it (a mission; a calibration run with --calibration).
+    #[arg(long, value_name = "LOG")]
+    log: Option<PathBuf>,
+    /// Log the legs as calibration runs of the behaviour (automove or contour).
+    #[arg(long, requires = "log")]
+    calibration: bool,
 }
 
 #[derive(Args, Debug)]
@@ -219,11 +235,59 @@ fn setup(c: &Common, grid: OccupancyGrid, anchors: &[Vec2], start: Vec2) -> Resu
     Ok(setup)
 }
 
-fn policy(c: &Common) -> Policy {
-    Policy::Fixed(match c.behaviour {
-        BehaviourArg::Automove => Behaviour::AutoMove,
-        BehaviourArg::Contour => Behaviour::Contour,
+/// The policy, learnt from the log for the supervisor.
+fn policy(c: &Common) -> Result<Policy> {
+    Ok(match c.behaviour {
+        BehaviourArg::Automove => Policy::Fixed(Behaviour::AutoMove),
+        BehaviourArg::Contour => Policy::Fixed(Behaviour::Contour),
+        BehaviourArg::AutomoveThenContour => Policy::AutoMoveThenContour,
+        BehaviourArg::Rule => Policy::Rule,
+        BehaviourArg::Supervisor => {
+            let Some(path) = &c.log else {
+                bail!(
+                    "--behaviour supervisor learns its rates from a mission log: give --log LOG (calibrate first with --calibration)"
+                );
+            };
+            let entries = crate::guide_cmd::read(path)?;
+            let learned =
+                learning::learn(&entries).with_context(|| format!("learning from {}", path.display()))?;
+            Policy::Supervisor(Box::new(SupervisorPlan {
+                supervisor: Supervisor::new()?,
+                rates: learned.rates,
+                automove: learned.automove,
+                contour: learned.contour,
+            }))
+        }
     })
+}
+
+/// Appends the legs to the mission log, if one is kept.
+fn log_legs(c: &Common, legs: &[LegRun], policy: &Policy) -> Result<()> {
+    let Some(path) = &c.log else {
+        return Ok(());
+    };
+    let net = Supervisor::new()?.net_id().to_string();
+    let mut log = MissionLog::open(path, &net)?;
+    if let Some(t) = log.torn() {
+        eprintln!(
+            "warning: {}:{}: a last line cut mid-write ({} bytes) was dropped; the entries before it are kept",
+            path.display(),
+            t.line,
+            t.bytes
+        );
+    }
+    for leg in legs
+        .iter()
+        .filter(|l| l.result.outcome != LegOutcome::Unreachable)
+    {
+        let entry = match (c.calibration, policy) {
+            (true, Policy::Fixed(b)) => mission::calibration_entry(leg, *b),
+            (true, _) => bail!("--calibration runs one behaviour alone: --behaviour automove or contour"),
+            (false, _) => mission::mission_entry(leg, log.missions() + 1),
+        };
+        log.append(entry)?;
+    }
+    Ok(())
 }
 
 fn print_legs(legs: &[LegRun], json: bool) -> Result<()> {
@@ -285,6 +349,7 @@ fn go(a: &GoArgs) -> Result<()> {
         None => vec![from.pose.position(), to.pose.position()],
     };
     let setup = setup(c, grid, &anchors, from.pose.position())?;
+    let policy = policy(c)?;
     let leg = mission::run_leg(
         &setup,
         &LegSpec {
@@ -293,7 +358,7 @@ fn go(a: &GoArgs) -> Result<()> {
             start: from.pose,
             believed: from.pose,
             goal: to.pose.position(),
-            policy: policy(c),
+            policy: policy.clone(),
             seed: c.seed,
             trace: sim::TraceParams::default(),
         },
@@ -307,6 +372,7 @@ fn go(a: &GoArgs) -> Result<()> {
     if let Some(path) = &c.output {
         mission::picture(setup.world.grid(), std::slice::from_ref(&leg), &[from, to], path)?;
     }
+    log_legs(c, std::slice::from_ref(&leg), &policy)?;
     print_legs(std::slice::from_ref(&leg), c.json)?;
     exit_status(&[leg])
 }
@@ -334,7 +400,9 @@ fn tour(a: &TourArgs) -> Result<()> {
     check_stops(&grid, &stops, radius)?;
     let anchors: Vec<Vec2> = stops.iter().map(|s| s.pose.position()).collect();
     let setup = setup(c, grid, &anchors, stops[0].pose.position())?;
-    let legs = mission::run_tour(&setup, &stops, policy(c), c.seed)?;
+    let policy = policy(c)?;
+    let legs = mission::run_tour(&setup, &stops, policy.clone(), c.seed)?;
+    log_legs(c, &legs, &policy)?;
     if let Some(path) = &c.output {
         mission::picture(setup.world.grid(), &legs, &stops, path)?;
     }

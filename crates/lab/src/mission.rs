@@ -24,6 +24,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
 use nav::guide::{GuideController, GuideError, GuideParams, GuideStats, GuideSummary, Policy};
+use nav::supervisor::Behaviour;
+use nav::supervisor::log::{CalibrationRun, Entry, MissionRecord};
 use robot::{Controller, Event, Notes, Perception, Pose, Request, Step, Vec2};
 use sim::render::{MarkerKind, Picture};
 use sim::{OccupancyGrid, Outcome, RobotParams, RunParams, Simulation, Task, TraceParams, World};
@@ -610,6 +612,69 @@ pub fn crowd_near(
         break;
     }
     out
+}
+
+/// The lab's common outcome name of a leg's outcome (`goal`, `collision`,
+/// `time_limit`, `lost`, `unreachable`, `gave_up`): what summaries count.
+pub fn outcome_name(o: LegOutcome) -> &'static str {
+    match o {
+        LegOutcome::Reached => "goal",
+        LegOutcome::Collision => "collision",
+        LegOutcome::Timeout => "time_limit",
+        LegOutcome::Lost => "lost",
+        LegOutcome::Unreachable => "unreachable",
+        LegOutcome::GaveUp => "gave_up",
+    }
+}
+
+/// A trajectory thinned to points at least `step_m` apart (and its last).
+fn thin(poses: &[Pose], step_m: f64) -> Vec<[f64; 2]> {
+    let mut out: Vec<[f64; 2]> = Vec::new();
+    for p in poses {
+        if out
+            .last()
+            .is_none_or(|q| Vec2::new(q[0], q[1]).dist(p.position()) >= step_m)
+        {
+            out.push([p.x_m, p.y_m]);
+        }
+    }
+    if let (Some(last), Some(p)) = (out.last(), poses.last())
+        && Vec2::new(last[0], last[1]).dist(p.position()) > 0.0
+    {
+        out.push([p.x_m, p.y_m]);
+    }
+    out
+}
+
+/// A leg driven by one behaviour alone, as a calibration run of the
+/// mission log: its time, length, and the trajectory the robot estimated
+/// (every 0.5 m).
+pub fn calibration_entry(leg: &LegRun, behaviour: Behaviour) -> Entry {
+    Entry::Calibration(CalibrationRun {
+        behaviour,
+        success: leg.result.outcome == LegOutcome::Reached,
+        duration_s: leg.result.time_s,
+        path_m: leg.result.path_m,
+        trajectory: thin(&leg.trace.estimates, 0.5),
+    })
+}
+
+/// A leg as mission `number` of the mission log: outcome, duration, the
+/// sojourns of the localizer and the planner, time per behaviour,
+/// decisions.
+pub fn mission_entry(leg: &LegRun, number: u32) -> Entry {
+    let s = &leg.summary;
+    Entry::Mission(MissionRecord {
+        mission: number,
+        success: leg.result.outcome == LegOutcome::Reached,
+        outcome: outcome_name(leg.result.outcome).to_string(),
+        duration_s: leg.result.time_s,
+        localizer: s.localizer.clone(),
+        planner: s.planner.clone(),
+        time_automove_s: s.time_automove_s,
+        time_contour_s: s.time_contour_s,
+        decisions: s.decisions.clone(),
+    })
 }
 
 /// Colour of the particles drawn at warnings.

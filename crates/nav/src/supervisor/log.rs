@@ -190,10 +190,31 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> LogError + '_ {
 
 impl MissionLog {
     /// Opens (or creates) the log at `path` for the net `net`: reads every
-    /// entry, reports a last line cut mid-write ([`MissionLog::torn`]) and
-    /// cuts it off the file. Errors: unreadable file, a complete line that
-    /// is not an entry (its line), a line of another net.
+    /// entry ([`MissionLog::read`]), and cuts a last line cut mid-write
+    /// off the file (it stays reported in [`MissionLog::torn`]), so that
+    /// the next entry starts a line of its own.
     pub fn open(path: &Path, net: &str) -> Result<MissionLog, LogError> {
+        let (log, good) = MissionLog::load(path, net)?;
+        if log.torn.is_some() {
+            OpenOptions::new()
+                .write(true)
+                .open(path)
+                .and_then(|f| f.set_len(good))
+                .map_err(io(path))?;
+        }
+        Ok(log)
+    }
+
+    /// Reads the log at `path` for the net `net` without changing the file:
+    /// every complete entry, and a last line cut mid-write reported in
+    /// [`MissionLog::torn`]. Errors: unreadable file, a complete line that
+    /// is not an entry (its line), a line of another net. A missing file is
+    /// an empty log.
+    pub fn read(path: &Path, net: &str) -> Result<MissionLog, LogError> {
+        Ok(MissionLog::load(path, net)?.0)
+    }
+
+    fn load(path: &Path, net: &str) -> Result<(MissionLog, u64), LogError> {
         let mut log = MissionLog {
             path: path.to_path_buf(),
             net: net.to_string(),
@@ -201,7 +222,7 @@ impl MissionLog {
             torn: None,
         };
         if !path.exists() {
-            return Ok(log);
+            return Ok((log, 0));
         }
         let file = File::open(path).map_err(io(path))?;
         let mut reader = BufReader::new(file);
@@ -241,14 +262,7 @@ impl MissionLog {
             }
             good += n as u64;
         }
-        if log.torn.is_some() {
-            OpenOptions::new()
-                .write(true)
-                .open(path)
-                .and_then(|f| f.set_len(good))
-                .map_err(io(path))?;
-        }
-        Ok(log)
+        Ok((log, good))
     }
 
     /// The entries, in the file's order.
@@ -334,6 +348,10 @@ mod tests {
         let mut f = OpenOptions::new().append(true).open(&path).unwrap();
         f.write_all(br#"{"net":"net-a","kind":"mission","miss"#).unwrap();
         drop(f);
+        // Reading leaves the file as it is.
+        let before = std::fs::read(&path).unwrap();
+        assert!(MissionLog::read(&path, "net-a").unwrap().torn().is_some());
+        assert_eq!(std::fs::read(&path).unwrap(), before);
         let mut log = MissionLog::open(&path, "net-a").unwrap();
         assert_eq!(log.missions(), 2);
         assert_eq!(log.torn(), Some(&TornLine { line: 3, bytes: 37 }));

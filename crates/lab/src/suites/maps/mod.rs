@@ -254,16 +254,7 @@ impl MapsSuite {
         let start = leg.trace.poses.first().copied().unwrap_or_default();
         let mut record = RunRecord {
             success: r.outcome == LegOutcome::Reached,
-            // The lab's common outcome names (summaries count them).
-            outcome: match r.outcome {
-                LegOutcome::Reached => "goal",
-                LegOutcome::Collision => "collision",
-                LegOutcome::Timeout => "time_limit",
-                LegOutcome::Lost => "lost",
-                LegOutcome::Unreachable => "unreachable",
-                LegOutcome::GaveUp => "gave_up",
-            }
-            .to_string(),
+            outcome: mission::outcome_name(r.outcome).to_string(),
             time_s: r.time_s,
             path_length_m: r.path_m,
             collisions: u32::from(r.outcome == LegOutcome::Collision),

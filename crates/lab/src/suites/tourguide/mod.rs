@@ -34,7 +34,7 @@ use std::sync::OnceLock;
 
 use anyhow::{Context, Result, bail};
 use nav::guide::{Policy, SupervisorPlan};
-use nav::supervisor::log::{CalibrationRun, Entry, MissionRecord};
+use nav::supervisor::log::Entry;
 use nav::supervisor::{Behaviour, Supervisor, learning};
 use robot::{Pose, Vec2};
 use sim::shapes::WorldSpec;
@@ -313,31 +313,10 @@ impl TourGuideSuite {
                 trace,
             },
         )?;
-        let success = leg.result.outcome == LegOutcome::Reached;
-        let entry = match kind {
-            Kind::Calibration(_) => {
-                let Policy::Fixed(behaviour) = policy else {
-                    unreachable!("calibration runs one behaviour")
-                };
-                Entry::Calibration(CalibrationRun {
-                    behaviour,
-                    success,
-                    duration_s: leg.result.time_s,
-                    path_m: leg.result.path_m,
-                    trajectory: thin(&leg.trace.estimates, 0.5),
-                })
-            }
-            Kind::Mission(_, m) => Entry::Mission(MissionRecord {
-                mission: m + 1,
-                success,
-                outcome: outcome_name(leg.result.outcome).to_string(),
-                duration_s: leg.result.time_s,
-                localizer: leg.summary.localizer.clone(),
-                planner: leg.summary.planner.clone(),
-                time_automove_s: leg.summary.time_automove_s,
-                time_contour_s: leg.summary.time_contour_s,
-                decisions: leg.summary.decisions.clone(),
-            }),
+        let entry = match (kind, &policy) {
+            (Kind::Calibration(_), Policy::Fixed(b)) => mission::calibration_entry(&leg, *b),
+            (Kind::Mission(_, m), _) => mission::mission_entry(&leg, m + 1),
+            (Kind::Calibration(_), _) => bail!("a calibration run drives one behaviour"),
         };
         Ok((leg, entry))
     }
@@ -352,7 +331,7 @@ impl TourGuideSuite {
         let kept = ["decision", "switch", "warning", "success"];
         let mut record = RunRecord {
             success: r.outcome == LegOutcome::Reached,
-            outcome: outcome_name(r.outcome).to_string(),
+            outcome: mission::outcome_name(r.outcome).to_string(),
             time_s: r.time_s,
             path_length_m: r.path_m,
             collisions: u32::from(r.outcome == LegOutcome::Collision),
@@ -386,37 +365,6 @@ impl TourGuideSuite {
         record.set_metric(metric::SWITCHES, switches as f64)?;
         Ok(record)
     }
-}
-
-/// The lab's common outcome names.
-fn outcome_name(o: LegOutcome) -> &'static str {
-    match o {
-        LegOutcome::Reached => "goal",
-        LegOutcome::Collision => "collision",
-        LegOutcome::Timeout => "time_limit",
-        LegOutcome::Lost => "lost",
-        LegOutcome::Unreachable => "unreachable",
-        LegOutcome::GaveUp => "gave_up",
-    }
-}
-
-/// A trajectory thinned to points at least `step_m` apart (and its last).
-fn thin(poses: &[Pose], step_m: f64) -> Vec<[f64; 2]> {
-    let mut out: Vec<[f64; 2]> = Vec::new();
-    for p in poses {
-        if out
-            .last()
-            .is_none_or(|q| Vec2::new(q[0], q[1]).dist(p.position()) >= step_m)
-        {
-            out.push([p.x_m, p.y_m]);
-        }
-    }
-    if let (Some(last), Some(p)) = (out.last_mut(), poses.last()) {
-        if Vec2::new(last[0], last[1]).dist(p.position()) > 0.0 {
-            out.push([p.x_m, p.y_m]);
-        }
-    }
-    out
 }
 
 impl Suite for TourGuideSuite {
