@@ -1,0 +1,159 @@
+//! The guide robot's policies in the museum, from their events: the rule
+//! hands the robot to contour tracking at every Warning; the supervisor
+//! decides only at the start and on returns from Warning to Success, with
+//! λ7, λ8 from the remaining reference trajectories.
+
+use lab::mission::{self, LegSpec, MissionSetup, PeoplePlan};
+use lab::suites::tourguide::{EXHIBITS, GOAL, START, museum};
+use nav::guide::{Policy, SupervisorPlan};
+use nav::supervisor::reference::Reference;
+use nav::supervisor::{Rates, Supervisor};
+use robot::{Event, Vec2};
+use sim::TraceParams;
+
+fn setup(people: usize) -> MissionSetup {
+    let mut s = MissionSetup::new(museum().unwrap(), 300.0);
+    s.people = Some(PeoplePlan {
+        count: people,
+        anchors: EXHIBITS.to_vec(),
+        spread_m: 2.5,
+        keep_clear_m: 1.0,
+    });
+    s
+}
+
+fn run(policy: Policy, seed: u64) -> Vec<Event> {
+    let leg = mission::run_leg(
+        &setup(40),
+        &LegSpec {
+            from: "start",
+            to: "goal",
+            start: START,
+            believed: START,
+            goal: GOAL,
+            policy,
+            seed,
+            trace: TraceParams::default(),
+        },
+    )
+    .unwrap();
+    leg.trace.events
+}
+
+fn at(events: &[Event], kind: &str) -> Vec<f64> {
+    events
+        .iter()
+        .filter(|e| e.kind == kind)
+        .map(|e| e.time_s)
+        .collect()
+}
+
+/// The switch at time `t`, its target.
+fn switch_to(events: &[Event], t: f64) -> Option<String> {
+    events
+        .iter()
+        .find(|e| e.kind == "switch" && e.time_s == t)
+        .and_then(|e| e.text("to").map(str::to_string))
+}
+
+#[test]
+fn the_rule_hands_over_at_every_warning_and_back_at_every_success() {
+    let events = run(Policy::Rule, 5);
+    let warnings = at(&events, "warning");
+    assert!(
+        warnings.len() >= 2,
+        "a crowded hall makes the localizer warn: {warnings:?}"
+    );
+    for &t in &warnings {
+        assert_eq!(
+            switch_to(&events, t).as_deref(),
+            Some("contour"),
+            "warning at {t}"
+        );
+    }
+    for t in at(&events, "success") {
+        assert_eq!(
+            switch_to(&events, t).as_deref(),
+            Some("automove"),
+            "success at {t}"
+        );
+    }
+    // No switch happens at any other moment.
+    let moments: Vec<f64> = at(&events, "warning")
+        .into_iter()
+        .chain(at(&events, "success"))
+        .collect();
+    assert!(at(&events, "switch").iter().all(|t| moments.contains(t)));
+}
+
+fn plan() -> SupervisorPlan {
+    let line = |len: f64| vec![START.position(), Vec2::new(START.x_m, START.y_m + len)];
+    let mut rates = Rates::initial();
+    rates.set(3, 0.05);
+    rates.set(4, 0.1);
+    rates.set(7, 1.0 / 60.0);
+    rates.set(8, 1.0 / 130.0);
+    SupervisorPlan {
+        supervisor: Supervisor::new().unwrap(),
+        rates,
+        automove: Reference {
+            mean_time_s: 60.0,
+            mean_speed_mps: 0.4,
+            trajectory: line(24.0),
+        },
+        contour: Reference {
+            mean_time_s: 130.0,
+            mean_speed_mps: 0.3,
+            trajectory: line(40.0),
+        },
+    }
+}
+
+#[test]
+fn the_supervisor_decides_at_the_start_and_on_returns_to_success_only() {
+    let p = plan();
+    let events = run(Policy::Supervisor(Box::new(p.clone())), 5);
+    let decisions: Vec<&Event> = events.iter().filter(|e| e.kind == "decision").collect();
+    assert!(decisions.len() >= 2, "{} decisions", decisions.len());
+    assert_eq!(decisions[0].time_s, 0.0);
+    assert_eq!(decisions[0].text("reason"), Some("start"));
+    // At the start: the learnt λ7, λ8.
+    let start = p.supervisor.decide(&p.rates).unwrap();
+    assert_eq!(decisions[0].number("f_auto"), Some(start.f_auto));
+    let successes = at(&events, "success");
+    for d in &decisions[1..] {
+        assert_eq!(d.text("reason"), Some("recovered"));
+        assert!(
+            successes.contains(&d.time_s),
+            "a decision at {} without a return to Success",
+            d.time_s
+        );
+        // λ7, λ8 from the remaining part of each reference, from where the
+        // robot believed it was.
+        let here = d.position.unwrap();
+        let mut r = p.rates;
+        r.set(7, p.automove.rate_from(here));
+        r.set(8, p.contour.rate_from(here));
+        let again = p.supervisor.decide(&r).unwrap();
+        assert_eq!(d.number("lambda3"), Some(0.05));
+        assert!((d.number("f_auto").unwrap() - again.f_auto).abs() < 1e-15);
+        assert!((d.number("f_cont").unwrap() - again.f_cont).abs() < 1e-15);
+    }
+    assert_eq!(
+        decisions.len() - 1,
+        successes.len(),
+        "one decision per return to Success"
+    );
+    // The rule still holds under the supervisor.
+    for t in at(&events, "warning") {
+        assert!(
+            switch_to(&events, t).as_deref() == Some("contour")
+                || events
+                    .iter()
+                    .rfind(|e| e.kind == "switch" && e.time_s < t)
+                    .and_then(|e| e.text("to"))
+                    == Some("contour"),
+            "warning at {t}: contour tracking drives"
+        );
+    }
+}
