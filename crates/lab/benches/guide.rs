@@ -16,6 +16,11 @@
 //!   AutoMove, on one core. Target: a 200 s mission ≥ 50× faster than real
 //!   time, i.e. ≤ 4 s per 200 s simulated.
 //!
+//! - `campaign/moderate_supervisor`: a whole campaign of the tour-guide suite
+//!   on one core — ten calibration runs and 24 supervised missions in the
+//!   museum among 25 visitors (laser, MCL, AutoMove or contour tracking,
+//!   the GSPN decisions, learning from the log). Target ≤ 15 s.
+//!
 //! Figures: `crates/lab/BENCHMARKS.md`. Run with
 //! `cargo bench -p lab --bench guide`.
 
@@ -97,6 +102,33 @@ mod step {
             // iteration, as at cruise speed.
             k += 1;
             c.step(&ps[(k / 4) % 2], &mut notes)
+        });
+    }
+}
+
+#[divan::bench_group(sample_count = 3)]
+mod campaign {
+    use lab::record::RunRecord;
+    use lab::suite::Suite;
+    use lab::suites::tourguide::TourGuideSuite;
+
+    use super::*;
+
+    #[divan::bench]
+    fn moderate_supervisor(bencher: Bencher) {
+        let suite = TourGuideSuite::new(1).unwrap();
+        let campaign = suite
+            .campaigns()
+            .into_iter()
+            .find(|c| c.jobs.last().is_some_and(|j| j.scenario == "moderate/supervisor"))
+            .expect("the moderate supervisor campaign");
+        bencher.bench_local(|| {
+            let mut earlier: Vec<RunRecord> = Vec::new();
+            for job in &campaign.jobs {
+                let r = suite.run(job, &earlier).unwrap();
+                earlier.push(r);
+            }
+            divan::black_box(earlier.len())
         });
     }
 }
