@@ -315,6 +315,9 @@ pub enum Activity {
         checkpoint: Vec2,
         /// When that was, seconds.
         checkpoint_s: f64,
+        /// Whether the target is where they were asked to step aside to
+        /// (until there, they take no interest in the robot).
+        stepping_aside: bool,
     },
     /// Standing until this time, seconds.
     Lingering {
@@ -347,6 +350,7 @@ impl Activity {
             since_s: time_s,
             checkpoint: position,
             checkpoint_s: time_s,
+            stepping_aside: false,
         }
     }
 
@@ -383,9 +387,6 @@ pub struct Person {
     pub waypoint: Option<usize>,
     /// A request to step aside the person will act on.
     pub asked: Option<Asked>,
-    /// Walking to where they were asked to step aside to: until there, they
-    /// take no interest in the robot (module docs).
-    pub stepping_aside: bool,
 }
 
 /// A request to step aside, pending until its reaction time.
@@ -505,26 +506,6 @@ fn spot_by_robot(from: Vec2, robot_at: Vec2, distance_m: f64) -> Vec2 {
     }
 }
 
-/// The progress check of a walk: every `stuck_timeout_s`, whether the
-/// person at `position` has moved less than their radius `r` since the
-/// last check; the check point then moves to `position`.
-fn stuck(
-    p: &CrowdParams,
-    r: f64,
-    position: Vec2,
-    time_s: f64,
-    checkpoint: &mut Vec2,
-    checkpoint_s: &mut f64,
-) -> bool {
-    if time_s - *checkpoint_s < p.stuck_timeout_s {
-        return false;
-    }
-    let stuck = dist(position, *checkpoint) < r;
-    *checkpoint = position;
-    *checkpoint_s = time_s;
-    stuck
-}
-
 impl Crowd {
     /// Places the world's crowd at random free positions drawn from the
     /// run's `seed` (its placement stream): no person overlaps a wall or
@@ -632,7 +613,6 @@ impl Crowd {
             activity,
             waypoint,
             asked: None,
-            stepping_aside: false,
         }
     }
 
@@ -749,16 +729,26 @@ impl Crowd {
             {
                 me.target = Self::aside_target(world, &mut self.rng, &me, &asked);
                 me.waypoint = None;
-                me.activity = Activity::walking(me.position, time_s);
+                me.activity = Activity::Walking {
+                    since_s: time_s,
+                    checkpoint: me.position,
+                    checkpoint_s: time_s,
+                    stepping_aside: true,
+                };
                 me.asked = None;
-                me.stepping_aside = true;
             }
             // Taking an interest in the robot (in sight, within range)?
             if interest > 0.0
                 && let Some((c, rr)) = robot
                 && !me.activity.with_robot()
                 && me.asked.is_none()
-                && !me.stepping_aside
+                && !matches!(
+                    me.activity,
+                    Activity::Walking {
+                        stepping_aside: true,
+                        ..
+                    }
+                )
                 && dist(me.position, c) <= p.robot_interest_range_m
                 && self.rng.chance(interest)
             {
@@ -775,11 +765,11 @@ impl Crowd {
                 Activity::Lingering { until_s } => new_target = time_s >= until_s,
                 Activity::Walking {
                     since_s,
-                    mut checkpoint,
-                    mut checkpoint_s,
+                    checkpoint,
+                    checkpoint_s,
+                    stepping_aside,
                 } => {
                     if dist(me.position, me.target) <= p.arrival_tolerance_m {
-                        me.stepping_aside = false;
                         if self.rng.chance(p.linger_probability) {
                             me.activity = Activity::Lingering {
                                 until_s: time_s + self.rng.exponential(p.linger_mean_s),
@@ -787,21 +777,22 @@ impl Crowd {
                         } else {
                             new_target = true;
                         }
-                    } else {
-                        // Stuck behind something?
-                        new_target = stuck(p, r, me.position, time_s, &mut checkpoint, &mut checkpoint_s);
+                    } else if time_s - checkpoint_s >= p.stuck_timeout_s {
+                        // Progress check: stuck behind something?
+                        new_target = dist(me.position, checkpoint) < r;
                         me.activity = Activity::Walking {
                             since_s,
-                            checkpoint,
-                            checkpoint_s,
+                            checkpoint: me.position,
+                            checkpoint_s: time_s,
+                            stepping_aside,
                         };
                     }
                     new_target |= time_s - since_s > p.target_timeout_s;
                 }
                 Activity::ComingToRobot {
                     since_s,
-                    mut checkpoint,
-                    mut checkpoint_s,
+                    checkpoint,
+                    checkpoint_s,
                 } => match robot {
                     Some((c, rr)) if dist(me.position, c) <= p.robot_interest_range_m => {
                         let by = gather_distance_m(p, r, rr);
@@ -811,13 +802,16 @@ impl Crowd {
                                 until_s: time_s + self.rng.exponential(p.robot_linger_mean_s),
                             };
                         } else {
-                            new_target = stuck(p, r, me.position, time_s, &mut checkpoint, &mut checkpoint_s)
-                                || time_s - since_s > p.target_timeout_s;
-                            me.activity = Activity::ComingToRobot {
-                                since_s,
-                                checkpoint,
-                                checkpoint_s,
-                            };
+                            // Progress check and time out, as for any walk.
+                            if time_s - checkpoint_s >= p.stuck_timeout_s {
+                                new_target = dist(me.position, checkpoint) < r;
+                                me.activity = Activity::ComingToRobot {
+                                    since_s,
+                                    checkpoint: me.position,
+                                    checkpoint_s: time_s,
+                                };
+                            }
+                            new_target |= time_s - since_s > p.target_timeout_s;
                         }
                     }
                     // The robot has gone out of range.
@@ -832,7 +826,6 @@ impl Crowd {
                 },
             }
             if new_target {
-                me.stepping_aside = false;
                 (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
                 me.activity = Activity::walking(me.position, time_s);
             }

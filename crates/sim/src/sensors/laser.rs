@@ -234,7 +234,6 @@ mod tests {
             activity: Activity::Lingering { until_s: 1e9 },
             waypoint: None,
             asked: None,
-            stepping_aside: false,
         }
     }
 
