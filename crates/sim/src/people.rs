@@ -44,11 +44,11 @@
 //!
 //! **Visitors and the robot.** Museum visitors sometimes come to see the
 //! robot and stand around it for a while. With `robot_interest_rate_per_s`
-//! above 0, at each step of `Δt` each person not already with the robot nor
-//! asked to step aside, whose centre is within `robot_interest_range_m` of
-//! the robot's, takes an interest in it with probability
-//! `1 − exp(−rate Δt)` (a Poisson process of that rate), drawn in index
-//! order; they come if they can walk straight to it (the three rays of the
+//! above 0, at each step of `Δt` each person not already with the robot,
+//! asked to step aside or on their way aside, whose centre is within
+//! `robot_interest_range_m` of the robot's, takes an interest in it with
+//! probability `1 − exp(−rate Δt)` (a Poisson process of that rate), drawn
+//! in index order; they come if they can walk straight to it (the three rays of the
 //! wanderers: a robot behind a wall is not seen). Coming, they walk straight
 //! at the point at the gather distance from the robot's *current* centre on
 //! their own side, re-aimed at every step, until their centre is within
@@ -68,9 +68,9 @@
 //! `target_timeout_s` or they are stuck (`stuck_timeout_s`, as any walk),
 //! or when asked to step aside: the request wins, they step aside as below
 //! (taking no interest in the robot on their way) and may take an interest
-//! again once there, by the same Poisson process. At
-//! the default rate 0 nothing of this happens and no number is drawn: the
-//! crowd moves exactly as without it.
+//! again once there, by the same Poisson process. At the default rate 0
+//! nothing of this happens and no number is drawn: the crowd moves exactly
+//! as without it.
 //!
 //! **Asked to step aside.** When the robot asks ([`robot::Request`]), each
 //! person whose centre is within the request's radius complies with
