@@ -48,29 +48,28 @@
 //! asked to step aside or on their way aside, whose centre is within
 //! `robot_interest_range_m` of the robot's, takes an interest in it with
 //! probability `1 − exp(−rate Δt)` (a Poisson process of that rate), drawn
-//! in index order; they come if they can walk straight to it (the three rays of the
-//! wanderers: a robot behind a wall is not seen). Coming, they walk straight
-//! at the point at the gather distance from the robot's *current* centre on
-//! their own side, re-aimed at every step, until their centre is within
-//! that distance: people coming from all sides stand all around the robot,
-//! and the repulsion between people spreads those who come from the same
-//! side. The gather distance is `robot_gather_distance_m`, or for a robot
-//! too big for it 5 cm beyond `robot_clearance_m`, closer than which
-//! nobody comes anyway. Then they stand by the robot for an exponential
-//! time of mean `robot_linger_mean_s`, keeping to the gather distance: they
-//! walk back to it either way at `distance / τ` (at most their preferred
-//! speed), so they step back when the robot comes closer and follow it when
-//! it moves off, while the people around them still push them along the
-//! circle. People with the robot do not shy away from it (its repulsion is
-//! off for them; the clearance holds). They go back to their usual
-//! behaviour — a new exhibit, as after any target — when their time is up,
-//! when the robot is out of range (or gone), when coming takes more than
-//! `target_timeout_s` or they are stuck (`stuck_timeout_s`, as any walk),
-//! or when asked to step aside: the request wins, they step aside as below
-//! (taking no interest in the robot on their way) and may take an interest
-//! again once there, by the same Poisson process. At the default rate 0
-//! nothing of this happens and no number is drawn: the crowd moves exactly
-//! as without it.
+//! in index order; they come if they can walk straight to it (the three rays
+//! of the wanderers: a robot behind a wall is not seen). Coming, they walk
+//! straight at the point at the gather distance from the robot's *current*
+//! centre on their own side, re-aimed at every step, until their centre is
+//! within that distance: people coming from all sides stand all around the
+//! robot, and the repulsion between people spreads those who come from the
+//! same side. The gather distance is `robot_gather_distance_m`, or for a
+//! robot too big for it 5 cm beyond `robot_clearance_m`, closer than which
+//! nobody comes anyway. Then they stand by the robot for an exponential time
+//! of mean `robot_linger_mean_s`, keeping to the gather distance: they walk
+//! back to it either way at `distance / τ` (at most their preferred speed),
+//! so they step back when the robot comes closer and follow it when it moves
+//! off, while the people around them still push them along the circle.
+//! People with the robot do not shy away from it (its repulsion is off for
+//! them; the clearance holds). They go back to their usual behaviour — a new
+//! exhibit, as after any target — when their time is up, when the robot is
+//! out of range (or gone), when coming takes more than `target_timeout_s` or
+//! they are stuck (`stuck_timeout_s`, as any walk), or when asked to step
+//! aside: the request wins, they step aside as below (taking no interest in
+//! the robot on their way) and may take an interest again once there, by the
+//! same Poisson process. At the default rate 0 nothing of this happens and
+//! no number is drawn: the crowd moves exactly as without it.
 //!
 //! **Asked to step aside.** When the robot asks ([`robot::Request`]), each
 //! person whose centre is within the request's radius complies with
