@@ -1,17 +1,20 @@
-//! People: discs that walk between exhibits (or wander), linger, avoid walls,
-//! each other and the robot, and get in the way.
+//! People: discs that walk between exhibits (or wander), linger, sometimes
+//! come to see the robot, avoid walls, each other and the robot, and get in
+//! the way.
 //!
 //! **Model.** Each person is a disc of radius `radius_m` moved by the social
 //! force model (D. Helbing, P. Molnár, *Social force model for pedestrian
 //! dynamics*, Phys. Rev. E 51, 1995), per unit mass:
 //!
 //! - driving: `(v⁰ e − v)/τ`, `e` the unit vector to the current target,
-//!   `v⁰` the person's preferred speed (zero while lingering);
+//!   `v⁰` the person's preferred speed (zero while lingering; by the robot,
+//!   see below);
 //! - other people: `A exp((2r − d)/B) n`, `n` the unit vector from the other
 //!   person, `d` the centre distance, weighted by Helbing's field of view
 //!   `λ + (1 − λ)(1 + cos φ)/2` (`φ` between the walking direction and the
 //!   other person), ignored beyond `2r + 4B`;
-//! - the robot: the same, with its footprint radius and its own strength;
+//! - the robot: the same, with its footprint radius and its own strength
+//!   (not for people who came to see it);
 //! - walls: `A_w exp((r − d_w)/B_w) n_w` from the nearest obstacle point
 //!   (the world's distance field).
 //!
@@ -38,6 +41,35 @@
 //! Lingering people stand still but can still be pushed: they block
 //! corridors and exhibits, and people crossing to the next target step in
 //! front of the robot.
+//!
+//! **Visitors and the robot.** Museum visitors sometimes come to see the
+//! robot and stand around it for a while. With `robot_interest_rate_per_s`
+//! above 0, at each step of `Δt` each person not already with the robot,
+//! asked to step aside or on their way aside, whose centre is within
+//! `robot_interest_range_m` of the robot's, takes an interest in it with
+//! probability `1 − exp(−rate Δt)` (a Poisson process of that rate), drawn
+//! in index order; they come if they can walk straight to it (the three rays
+//! of the wanderers: a robot behind a wall is not seen). Coming, they walk
+//! straight at the point at the gather distance from the robot's *current*
+//! centre on their own side, re-aimed at every step, until their centre is
+//! within that distance: people coming from all sides stand all around the
+//! robot, and the repulsion between people spreads those who come from the
+//! same side. The gather distance is `robot_gather_distance_m`, or for a
+//! robot too big for it 5 cm beyond `robot_clearance_m`, closer than which
+//! nobody comes anyway. Then they stand by the robot for an exponential time
+//! of mean `robot_linger_mean_s`, keeping to the gather distance: they walk
+//! back to it either way at `distance / τ` (at most their preferred speed),
+//! so they step back when the robot comes closer and follow it when it moves
+//! off, while the people around them still push them along the circle.
+//! People with the robot do not shy away from it (its repulsion is off for
+//! them; the clearance holds). They go back to their usual behaviour — a new
+//! exhibit, as after any target — when their time is up, when the robot is
+//! out of range (or gone), when coming takes more than `target_timeout_s` or
+//! they are stuck (`stuck_timeout_s`, as any walk), or when asked to step
+//! aside: the request wins, they step aside as below (taking no interest in
+//! the robot on their way) and may take an interest again once there, by the
+//! same Poisson process. At the default rate 0 nothing of this happens and
+//! no number is drawn: the crowd moves exactly as without it.
 //!
 //! **Asked to step aside.** When the robot asks ([`robot::Request`]), each
 //! person whose centre is within the request's radius complies with
@@ -161,6 +193,23 @@ pub struct CrowdParams {
     /// Probability that a person asked to step aside does, in [0, 1].
     /// Default 1.0.
     pub step_aside_compliance: f64,
+    /// Rate at which a person takes an interest in the robot and comes to
+    /// see it, per second of simulated time (a Poisson process: each step
+    /// of `Δt`, a person who may (module docs) does with probability
+    /// `1 − exp(−rate Δt)`); 0: nobody ever does. Default 0.
+    pub robot_interest_rate_per_s: f64,
+    /// Only people within this distance of the robot's centre take an
+    /// interest in it, and people coming to it or standing by it lose
+    /// interest when it is farther, metres. Default 8.0.
+    pub robot_interest_range_m: f64,
+    /// People who come to see the robot stop when their centre is within
+    /// this distance of the robot's centre and stand at this distance
+    /// (for a robot too big for that, just outside `robot_clearance_m`),
+    /// metres. Default 0.9.
+    pub robot_gather_distance_m: f64,
+    /// Mean time a person stands by the robot (exponential), seconds.
+    /// Default 20.
+    pub robot_linger_mean_s: f64,
 }
 
 impl Default for CrowdParams {
@@ -191,6 +240,10 @@ impl Default for CrowdParams {
             step_aside_delay_s: 1.0,
             step_aside_distance_m: 1.0,
             step_aside_compliance: 1.0,
+            robot_interest_rate_per_s: 0.0,
+            robot_interest_range_m: 8.0,
+            robot_gather_distance_m: 0.9,
+            robot_linger_mean_s: 20.0,
         }
     }
 }
@@ -231,7 +284,11 @@ impl CrowdParams {
         validate::non_negative("crowd.keep_clear_m", self.keep_clear_m)?;
         validate::non_negative("crowd.step_aside_delay_s", self.step_aside_delay_s)?;
         validate::non_negative("crowd.step_aside_distance_m", self.step_aside_distance_m)?;
-        validate::probability("crowd.step_aside_compliance", self.step_aside_compliance)
+        validate::probability("crowd.step_aside_compliance", self.step_aside_compliance)?;
+        validate::non_negative("crowd.robot_interest_rate_per_s", self.robot_interest_rate_per_s)?;
+        validate::non_negative("crowd.robot_interest_range_m", self.robot_interest_range_m)?;
+        validate::non_negative("crowd.robot_gather_distance_m", self.robot_gather_distance_m)?;
+        validate::non_negative("crowd.robot_linger_mean_s", self.robot_linger_mean_s)
     }
 
     /// How many people this crowd places at random on a map with
@@ -257,10 +314,30 @@ pub enum Activity {
         checkpoint: Vec2,
         /// When that was, seconds.
         checkpoint_s: f64,
+        /// Whether the target is where they were asked to step aside to
+        /// (until there, they take no interest in the robot).
+        stepping_aside: bool,
     },
     /// Standing until this time, seconds.
     Lingering {
         /// When the pause ends, seconds.
+        until_s: f64,
+    },
+    /// Coming to see the robot: walking straight at the point at the
+    /// gather distance from the robot on the person's side, re-aimed at
+    /// every step (module docs).
+    ComingToRobot {
+        /// When the walk started, seconds.
+        since_s: f64,
+        /// Where the person was at the last progress check.
+        checkpoint: Vec2,
+        /// When that was, seconds.
+        checkpoint_s: f64,
+    },
+    /// Standing by the robot, at the gather distance from it, until this
+    /// time, seconds (module docs).
+    AtRobot {
+        /// When the visit ends, seconds.
         until_s: f64,
     },
 }
@@ -272,7 +349,23 @@ impl Activity {
             since_s: time_s,
             checkpoint: position,
             checkpoint_s: time_s,
+            stepping_aside: false,
         }
+    }
+
+    /// Starting to come to the robot from `position` at `time_s`.
+    pub fn coming_to_robot(position: Vec2, time_s: f64) -> Activity {
+        Activity::ComingToRobot {
+            since_s: time_s,
+            checkpoint: position,
+            checkpoint_s: time_s,
+        }
+    }
+
+    /// Whether the person has come to see the robot: coming to it or
+    /// standing by it.
+    pub fn with_robot(&self) -> bool {
+        matches!(self, Activity::ComingToRobot { .. } | Activity::AtRobot { .. })
     }
 }
 
@@ -287,7 +380,7 @@ pub struct Person {
     pub preferred_speed_mps: f64,
     /// Where the person is heading, world frame.
     pub target: Vec2,
-    /// Walking or lingering.
+    /// Walking, lingering, or with the robot.
     pub activity: Activity,
     /// The exhibit the target belongs to, if any.
     pub waypoint: Option<usize>,
@@ -386,6 +479,30 @@ fn pick_target(
     let target = free_point(world, p.radius_m, Some(from), &mut around)
         .or_else(|| free_point(world, p.radius_m, None, &mut around));
     (target.unwrap_or(centre), Some(k))
+}
+
+/// People who come to see a robot too big for the gather distance stand
+/// this far outside the clearance, metres (so that they can arrive: a
+/// step ending inside the clearance is refused).
+const GATHER_SLACK_M: f64 = 0.05;
+
+/// How far from the centre of a robot of radius `robot_radius_m` people of
+/// radius `r` who come to see it stand, metres (module docs).
+fn gather_distance_m(p: &CrowdParams, r: f64, robot_radius_m: f64) -> f64 {
+    p.robot_gather_distance_m
+        .max(r + robot_radius_m + p.robot_clearance_m + GATHER_SLACK_M)
+}
+
+/// The point at `distance_m` from the robot's centre `robot_at` on the
+/// side of `from` (`from` itself if it is the centre).
+fn spot_by_robot(from: Vec2, robot_at: Vec2, distance_m: f64) -> Vec2 {
+    let away = from - robot_at;
+    let d = norm(away);
+    if d > 1e-9 {
+        robot_at + away.scale(distance_m / d)
+    } else {
+        from
+    }
 }
 
 impl Crowd {
@@ -596,6 +713,13 @@ impl Crowd {
         // the buckets (built at the start) stay a superset.
         let slack = 2.0 * MAX_SPEED_RATIO * 1.8 * p.speed_mean_mps * dt_s;
         let wall_reach = r + 4.0 * p.wall_range_m;
+        // Probability that a person takes an interest in the robot in this
+        // step: 1 − exp(−rate Δt).
+        let interest = if p.robot_interest_rate_per_s > 0.0 {
+            -(-p.robot_interest_rate_per_s * dt_s).exp_m1()
+        } else {
+            0.0
+        };
         for i in 0..self.people.len() {
             let mut me = self.people[i];
             // Asked to step aside, and time to move?
@@ -604,8 +728,35 @@ impl Crowd {
             {
                 me.target = Self::aside_target(world, &mut self.rng, &me, &asked);
                 me.waypoint = None;
-                me.activity = Activity::walking(me.position, time_s);
+                me.activity = Activity::Walking {
+                    since_s: time_s,
+                    checkpoint: me.position,
+                    checkpoint_s: time_s,
+                    stepping_aside: true,
+                };
                 me.asked = None;
+            }
+            // Taking an interest in the robot (in sight, within range)?
+            if interest > 0.0
+                && let Some((c, rr)) = robot
+                && !me.activity.with_robot()
+                && me.asked.is_none()
+                && !matches!(
+                    me.activity,
+                    Activity::Walking {
+                        stepping_aside: true,
+                        ..
+                    }
+                )
+                && dist(me.position, c) <= p.robot_interest_range_m
+                && self.rng.chance(interest)
+            {
+                let spot = spot_by_robot(me.position, c, gather_distance_m(p, r, rr));
+                if walkable(world, me.position, spot, r) {
+                    me.target = spot;
+                    me.waypoint = None;
+                    me.activity = Activity::coming_to_robot(me.position, time_s);
+                }
             }
             // What to do.
             let mut new_target = false;
@@ -615,6 +766,7 @@ impl Crowd {
                     since_s,
                     checkpoint,
                     checkpoint_s,
+                    stepping_aside,
                 } => {
                     if dist(me.position, me.target) <= p.arrival_tolerance_m {
                         if self.rng.chance(p.linger_probability) {
@@ -631,10 +783,46 @@ impl Crowd {
                             since_s,
                             checkpoint: me.position,
                             checkpoint_s: time_s,
+                            stepping_aside,
                         };
                     }
                     new_target |= time_s - since_s > p.target_timeout_s;
                 }
+                Activity::ComingToRobot {
+                    since_s,
+                    checkpoint,
+                    checkpoint_s,
+                } => match robot {
+                    Some((c, rr)) if dist(me.position, c) <= p.robot_interest_range_m => {
+                        let by = gather_distance_m(p, r, rr);
+                        me.target = spot_by_robot(me.position, c, by);
+                        if dist(me.position, c) <= by {
+                            me.activity = Activity::AtRobot {
+                                until_s: time_s + self.rng.exponential(p.robot_linger_mean_s),
+                            };
+                        } else {
+                            // Progress check and time out, as for any walk.
+                            if time_s - checkpoint_s >= p.stuck_timeout_s {
+                                new_target = dist(me.position, checkpoint) < r;
+                                me.activity = Activity::ComingToRobot {
+                                    since_s,
+                                    checkpoint: me.position,
+                                    checkpoint_s: time_s,
+                                };
+                            }
+                            new_target |= time_s - since_s > p.target_timeout_s;
+                        }
+                    }
+                    // The robot has gone out of range.
+                    _ => new_target = true,
+                },
+                Activity::AtRobot { until_s } => match robot {
+                    Some((c, rr)) if time_s < until_s && dist(me.position, c) <= p.robot_interest_range_m => {
+                        me.target = spot_by_robot(me.position, c, gather_distance_m(p, r, rr));
+                    }
+                    // Time to go, or the robot has gone out of range.
+                    _ => new_target = true,
+                },
             }
             if new_target {
                 (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
@@ -659,6 +847,27 @@ impl Crowd {
                     }
                 }
                 Activity::Lingering { .. } => Vec2::default(),
+                Activity::ComingToRobot { .. } => {
+                    let to = me.target - me.position;
+                    let d = norm(to);
+                    if d > 1e-9 {
+                        to.scale(me.preferred_speed_mps / d)
+                    } else {
+                        Vec2::default()
+                    }
+                }
+                Activity::AtRobot { .. } => {
+                    // Back to the gather distance (either way), the faster
+                    // the farther, at most at the preferred speed.
+                    let to = me.target - me.position;
+                    let d = norm(to);
+                    if d > 1e-9 {
+                        let speed = (d / p.relaxation_time_s).min(me.preferred_speed_mps);
+                        to.scale(speed / d)
+                    } else {
+                        Vec2::default()
+                    }
+                }
             };
             let mut force = (desired - me.velocity).scale(1.0 / p.relaxation_time_s);
             let heading = {
@@ -685,7 +894,10 @@ impl Crowd {
                 let mag = p.person_repulsion_mps2 * ((2.0 * r - d) / p.person_range_m).exp();
                 force = force + u.scale(mag * fov(u));
             });
-            if let Some((c, rr)) = robot {
+            // People who came to see the robot do not shy away from it.
+            if let Some((c, rr)) = robot
+                && !me.activity.with_robot()
+            {
                 let n = me.position - c;
                 let d = norm(n);
                 if d > 1e-12 && d < r + rr + 4.0 * p.person_range_m {
@@ -907,6 +1119,231 @@ mod tests {
             .unwrap();
         let mut c0 = Crowd::new(&w0, 7, &[robot]).unwrap();
         assert_eq!(c0.ask_to_step_aside(&w0, robot.0, 1.2, 0.0), 0);
+    }
+
+    /// FNV-1a over the bits of every person's position, velocity and
+    /// target after each of 600 steps: scenario `exhibits` (40 people
+    /// between three exhibits, a robot standing by) or `wanderers` (30
+    /// people wandering around a robot driving a circle, who ask the people
+    /// near it to step aside at 20 s).
+    fn trajectory_hash(scenario: &str) -> u64 {
+        let exhibits = scenario == "exhibits";
+        let w = room()
+            .with_crowd(CrowdParams {
+                size: CrowdSize::Count {
+                    people: if exhibits { 40 } else { 30 },
+                },
+                waypoints: if exhibits {
+                    vec![Vec2::new(2.0, 2.0), Vec2::new(8.0, 4.0), Vec2::new(5.0, 5.0)]
+                } else {
+                    Vec::new()
+                },
+                linger_mean_s: 3.0,
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let robot_at = |t: f64| {
+            if exhibits {
+                Vec2::new(1.0, 1.0)
+            } else {
+                Vec2::new(2.5 + (0.2 * t).cos(), 3.0 + (0.2 * t).sin())
+            }
+        };
+        let mut c = Crowd::new(&w, 2, &[(robot_at(0.0), 0.2)]).unwrap();
+        let mut hash = 0xcbf2_9ce4_8422_2325_u64;
+        let mut eat = |x: f64| {
+            for b in x.to_bits().to_le_bytes() {
+                hash = (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        for t in 1..=600 {
+            let time_s = t as f64 * 0.1;
+            if !exhibits && t == 200 {
+                let asked = c.ask_to_step_aside(&w, robot_at(time_s), 1.5, time_s);
+                assert!(asked > 0, "nobody near the robot to ask");
+            }
+            c.step(&w, Some((robot_at(time_s), 0.2)), time_s, 0.1);
+            for q in c.people() {
+                for x in [q.position, q.velocity, q.target] {
+                    eat(x.x);
+                    eat(x.y);
+                }
+            }
+        }
+        hash
+    }
+
+    /// Golden values recorded on the code before the robot could draw
+    /// visitors (x86_64 Linux, glibc 2.36: `exp`, `sin`, `cos`, `atan2`
+    /// and `ln` come from the platform's maths library, so other platforms
+    /// may round differently). With the interest rate at its default 0
+    /// the crowd must move exactly as it did.
+    #[test]
+    #[cfg(all(target_arch = "x86_64", target_os = "linux"))]
+    fn crowd_trajectories_are_those_recorded_before_visitors() {
+        assert_eq!(trajectory_hash("exhibits"), 7_435_467_198_821_824_746, "exhibits");
+        assert_eq!(
+            trajectory_hash("wanderers"),
+            8_967_712_204_152_860_570,
+            "wanderers"
+        );
+    }
+
+    /// The room with `people` people (and the people at `positions`)
+    /// walking between two exhibits, who take an interest in a robot
+    /// within `range_m` at `rate_per_s` and stand by it for
+    /// `linger_mean_s` on average.
+    fn visitors(
+        people: usize,
+        positions: Vec<Vec2>,
+        rate_per_s: f64,
+        range_m: f64,
+        linger_mean_s: f64,
+    ) -> World {
+        room()
+            .with_crowd(CrowdParams {
+                size: CrowdSize::Count { people },
+                positions,
+                waypoints: vec![Vec2::new(8.5, 1.0), Vec2::new(8.5, 5.0)],
+                robot_interest_rate_per_s: rate_per_s,
+                robot_interest_range_m: range_m,
+                robot_linger_mean_s: linger_mean_s,
+                ..CrowdParams::default()
+            })
+            .unwrap()
+    }
+
+    #[test]
+    fn visitors_come_from_within_range_and_lose_interest_out_of_it() {
+        let w = visitors(20, Vec::new(), 1.0, 3.0, 1e9);
+        let a = (Vec2::new(2.5, 3.0), 0.3);
+        let mut c = Crowd::new(&w, 5, &[a]).unwrap();
+        let mut came = 0;
+        for t in 1..=300 {
+            let before: Vec<Person> = c.people().to_vec();
+            c.step(&w, Some(a), t as f64 * 0.1, 0.1);
+            for (q, was) in c.people().iter().zip(&before) {
+                if q.activity.with_robot() && !was.activity.with_robot() {
+                    came += 1;
+                    assert!(dist(was.position, a.0) <= 3.0, "came from {:?}", was.position);
+                }
+            }
+        }
+        let with = |c: &Crowd| c.people().iter().filter(|q| q.activity.with_robot()).count();
+        assert!(
+            came >= 5 && with(&c) >= 5,
+            "{came} came, {} with the robot",
+            with(&c)
+        );
+        // The robot moves 6 m away: out of everybody's range, they go about
+        // their business (a new exhibit).
+        let b = (Vec2::new(8.5, 3.0), 0.3);
+        let mut away = c.clone();
+        away.step(&w, Some(b), 30.1, 0.1);
+        for (q, was) in away.people().iter().zip(c.people()) {
+            if was.activity.with_robot() && dist(q.position, b.0) > 3.0 {
+                assert!(matches!(q.activity, Activity::Walking { .. }) && q.waypoint.is_some());
+            }
+        }
+        // Without a robot, nobody is with it.
+        c.step(&w, None, 30.1, 0.1);
+        assert_eq!(with(&c), 0);
+    }
+
+    #[test]
+    fn visitors_of_a_big_robot_stand_just_outside_its_clearance() {
+        // 0.9 m from the centre of a robot of radius 0.8 m would be inside
+        // it: they stand at 0.25 + 0.8 + 0.1 + 0.05 = 1.2 m.
+        let w = visitors(10, Vec::new(), 1.0, 8.0, 1e9);
+        let robot = (Vec2::new(2.5, 3.0), 0.8);
+        let mut c = Crowd::new(&w, 6, &[robot]).unwrap();
+        for t in 1..=300 {
+            c.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        let standing: Vec<f64> = c
+            .people()
+            .iter()
+            .filter(|q| matches!(q.activity, Activity::AtRobot { .. }))
+            .map(|q| dist(q.position, robot.0))
+            .collect();
+        assert!(standing.len() >= 4, "{standing:?}");
+        assert!(
+            standing.iter().all(|&d| (1.15 - 1e-9..1.5).contains(&d)),
+            "{standing:?}"
+        );
+    }
+
+    #[test]
+    fn a_visitor_leaves_for_an_exhibit_when_their_time_is_up() {
+        let w = visitors(0, vec![Vec2::new(1.0, 1.0)], 5.0, 8.0, 2.0);
+        let robot = (Vec2::new(2.5, 3.0), 0.3);
+        let mut c = Crowd::new(&w, 8, &[robot]).unwrap();
+        let mut t = 0;
+        let until_s = loop {
+            t += 1;
+            assert!(t < 100, "never came");
+            c.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+            if let Activity::AtRobot { until_s } = c.people()[0].activity {
+                break until_s;
+            }
+        };
+        assert!(dist(c.people()[0].position, robot.0) <= 1.0);
+        // From now on nobody takes an interest: they leave when due, for
+        // an exhibit, and walk away.
+        let off = w
+            .clone()
+            .with_crowd(CrowdParams {
+                robot_interest_rate_per_s: 0.0,
+                ..w.crowd().clone()
+            })
+            .unwrap();
+        while c.people()[0].activity.with_robot() {
+            t += 1;
+            c.step(&off, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        let left_s = t as f64 * 0.1;
+        assert!(
+            left_s >= until_s && left_s < until_s + 0.1,
+            "left at {left_s} s, due at {until_s} s"
+        );
+        assert!(c.people()[0].waypoint.is_some());
+        for k in 1..=100 {
+            c.step(&off, Some(robot), (t + k) as f64 * 0.1, 0.1);
+        }
+        assert!(dist(c.people()[0].position, robot.0) > 3.0);
+    }
+
+    #[test]
+    fn bad_visitor_parameters_are_errors_naming_them() {
+        let set = |field: &str, v: f64| {
+            let mut p = CrowdParams::default();
+            match field {
+                "robot_interest_rate_per_s" => p.robot_interest_rate_per_s = v,
+                "robot_interest_range_m" => p.robot_interest_range_m = v,
+                "robot_gather_distance_m" => p.robot_gather_distance_m = v,
+                _ => p.robot_linger_mean_s = v,
+            }
+            p
+        };
+        for field in [
+            "robot_interest_rate_per_s",
+            "robot_interest_range_m",
+            "robot_gather_distance_m",
+            "robot_linger_mean_s",
+        ] {
+            for v in [-1.0, f64::NAN, f64::INFINITY] {
+                match set(field, v).validate() {
+                    Err(Error::InvalidValue { what, .. }) => assert_eq!(what, format!("crowd.{field}")),
+                    other => panic!("{field} = {v}: {other:?}"),
+                }
+            }
+            assert!(set(field, 0.0).validate().is_ok());
+        }
+        assert_eq!(
+            CrowdParams::default().robot_interest_rate_per_s,
+            0.0,
+            "off by default"
+        );
     }
 
     #[test]

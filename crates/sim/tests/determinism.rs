@@ -40,11 +40,18 @@ impl Controller for Wander {
 }
 
 fn office_world() -> World {
+    office_world_with_visitors(0.0)
+}
+
+/// The office, its people taking an interest in the robot at `rate_per_s`.
+fn office_world_with_visitors(rate_per_s: f64) -> World {
     World::new(generators::building_31_like())
         .with_crowd(CrowdParams {
             size: CrowdSize::Count { people: 30 },
             waypoints: vec![Vec2::new(5.0, 10.8), Vec2::new(18.0, 16.0), Vec2::new(30.0, 21.6)],
             linger_mean_s: 5.0,
+            robot_interest_rate_per_s: rate_per_s,
+            robot_linger_mean_s: 5.0,
             ..CrowdParams::default()
         })
         .unwrap()
@@ -99,6 +106,35 @@ fn same_seed_same_trace_on_any_thread_count() {
             assert_ne!(alone[0], alone[k]);
         }
     }
+}
+
+#[test]
+fn same_seed_same_trace_with_visitors_on_any_thread_count() {
+    // People come to see the robot (and follow it while it wanders).
+    let world = office_world_with_visitors(0.5);
+    let seeds: Vec<u64> = (1..=4).collect();
+    let robot = RobotParams::jinny();
+    let alone: Vec<String> = seeds.iter().map(|&s| run(&world, &robot, s)).collect();
+    assert!(
+        alone.iter().any(|r| r.contains("AtRobot")),
+        "nobody came to the robot"
+    );
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let pooled: Vec<String> =
+            pool.install(|| seeds.par_iter().map(|&s| run(&world, &robot, s)).collect());
+        for (k, (a, b)) in alone.iter().zip(&pooled).enumerate() {
+            assert!(a == b, "seed {} differs with {threads} threads", seeds[k]);
+        }
+    }
+    for k in 1..alone.len() {
+        assert_ne!(alone[0], alone[k]);
+    }
+    // The visitors change the run.
+    assert_ne!(alone[0], run(&office_world(), &robot, seeds[0]));
 }
 
 #[test]
