@@ -11,8 +11,9 @@ use crate::outln;
 
 #[derive(Subcommand, Debug)]
 pub enum LabCommand {
-    /// Runs a suite (`voting`, `deadlock`; `lab list` shows them all) or scenario files as a
-    /// batch, then writes the report (tables, pictures, index.html) next to the results.
+    /// Runs a suite (`voting`, `deadlock`, `maps`, `tourguide`, …; `lab list`
+    /// shows them all) or scenario files as a batch, then writes the report
+    /// (tables, pictures, index.html) next to the results.
     ///
     /// Every run is reproducible from (scenario, run index, seed); results
     /// are appended one JSON line per run, so an interrupted batch continues
@@ -23,6 +24,8 @@ pub enum LabCommand {
     ///   petrinav lab run my_scenario.toml --out out/mine
     ///
     ///   petrinav lab run voting --shard 3/8 --out out/part3
+    ///
+    ///   petrinav lab run tourguide --runs 2   (2 campaigns per density and strategy)
     Run(RunArgs),
     /// Lists the suites.
     List,
@@ -66,7 +69,8 @@ pub enum LabCommand {
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// A suite (`voting`, `deadlock`; see `lab list`), or scenario files (.toml).
+    /// A suite (`voting`, `deadlock`, `maps`, `tourguide`, …; see `lab
+    /// list`), or scenario files (.toml).
     #[arg(required = true)]
     what: Vec<String>,
     /// Runs per scenario (default: the suite's or the file's, 50).

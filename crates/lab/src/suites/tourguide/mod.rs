@@ -103,6 +103,10 @@ pub const MISSIONS: u32 = 24;
 /// Campaigns per density and strategy by default.
 pub const DEFAULT_CAMPAIGNS: u32 = 20;
 
+/// How often a visitor in sight and within 8 m comes to see the robot, per
+/// second (the crowd model's `robot_interest_rate_per_s`).
+pub const ROBOT_INTEREST_RATE_PER_S: f64 = 0.003;
+
 /// Base seed.
 pub const SEED: u64 = 7;
 
@@ -167,6 +171,11 @@ pub fn museum() -> Result<World> {
         gather_radius_m: 1.2,
         linger_probability: 0.7,
         linger_mean_s: 30.0,
+        // "Visitors … sometimes surround the robot": a visitor in sight and
+        // within 8 m comes over with probability 1 − e^(−0.3) ≈ 26 % during
+        // 100 s, stands 0.9 m from it for 20 s on average (or until asked
+        // aside); a few per mission at moderate density.
+        robot_interest_rate_per_s: ROBOT_INTEREST_RATE_PER_S,
         ..CrowdParams::default()
     })?)
 }
