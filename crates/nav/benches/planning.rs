@@ -17,6 +17,10 @@
 //!
 //! * `local_cycle`: scan → endpoints → cost map → `N` → descent (the
 //!   direction and the whole path to the goal) with [`LocalPlanner::plan`];
+//! * `local_cycle_unexplained`: the same with only the echoes the static
+//!   map does not explain, as AutoMove passes them (`guide/automove.rs`:
+//!   an echo within 0.15 m of a blocked map cell is that wall seen and
+//!   dropped) — the two people, about 15 points a cycle instead of 181;
 //! * `local_cost_map`, `local_navigation_function`, `local_direction`: the
 //!   three stages alone (the direction is one gradient step).
 //!
@@ -32,11 +36,12 @@
 use std::f64::consts::PI;
 
 use divan::Bencher;
+use nav::planning::distance_transform::{BEYOND, DistanceTransform};
 use nav::planning::{
     CostMap, GlobalPlanner, GradientParams, LocalPlanner, LocalPlannerParams, NavigationFunction,
     RouteParams, Window, direction, laser_endpoints,
 };
-use robot::{GridMap, LaserScan, Pose, Vec2};
+use robot::{Cell, GridMap, LaserScan, Pose, Vec2};
 use sim::{OccupancyGrid, cast_many, map_server};
 
 #[global_allocator]
@@ -181,6 +186,45 @@ fn local_cycle(b: Bencher) {
         k += 1;
         points.clear();
         laser_endpoints(c.pose, &c.scan, &mut points);
+        let plan = planner
+            .plan(&map, c.pose.position(), c.goal, &points)
+            .expect("a plan");
+        divan::black_box(plan.direction);
+    });
+}
+
+/// Map cells within 0.15 m of a blocked cell (AutoMove's default
+/// `echo_tolerance_m`), computed as `AutoMove::new` does.
+fn near_wall(map: &GridMap) -> Vec<bool> {
+    let blocked: Vec<u8> = map.cells().iter().map(|&c| u8::from(c != Cell::Free)).collect();
+    let cap = (0.15 / map.resolution_m()).round() as u32;
+    let mut d2 = Vec::new();
+    DistanceTransform::new().compute(&blocked, map.width(), map.height(), cap, &mut d2);
+    d2.iter().map(|&d| d != BEYOND && d <= cap * cap).collect()
+}
+
+/// Keeps the endpoints the map does not explain (AutoMove's filter).
+fn unexplained(map: &GridMap, near_wall: &[bool], points: &mut Vec<Vec2>) {
+    points.retain(|&q| {
+        let c = map.cell_of(q);
+        map.contains(c) && !near_wall[c.j as usize * map.width() + c.i as usize]
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cycle_unexplained(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let near = near_wall(&map);
+    let mut planner = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+    let mut points = Vec::with_capacity(BEAMS);
+    let mut k = 0;
+    b.bench_local(|| {
+        let c = &cycles[k % cycles.len()];
+        k += 1;
+        points.clear();
+        laser_endpoints(c.pose, &c.scan, &mut points);
+        unexplained(&map, &near, &mut points);
         let plan = planner
             .plan(&map, c.pose.position(), c.goal, &points)
             .expect("a plan");
