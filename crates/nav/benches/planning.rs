@@ -22,7 +22,12 @@
 //!   an echo within 0.15 m of a blocked map cell is that wall seen and
 //!   dropped) — the two people, about 15 points a cycle instead of 181;
 //! * `local_cost_map`, `local_navigation_function`, `local_direction`: the
-//!   three stages alone (the direction is one gradient step).
+//!   three stages alone (the direction is one gradient step); the cost map
+//!   on the map's [`StaticCostLayer`], as the planner builds it, and
+//!   `local_cost_map_from_map` the same cost map built from the map alone
+//!   (the distance transform over the window and its margin);
+//! * `static_layer`: the one-off static layer of a whole map (the first
+//!   cycle on a map makes it).
 //!
 //! **Global route** (`global_*`, one-off): the whole-map cost map
 //! ([`GlobalPlanner::new`]), and a route between corridor points with its
@@ -34,12 +39,13 @@
 //! `building_31` and 150 ms on `levine`) in `crates/nav/BENCHMARKS.md`.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use divan::Bencher;
 use nav::planning::distance_transform::{BEYOND, DistanceTransform};
 use nav::planning::{
     CostMap, GlobalPlanner, GradientParams, LocalPlanner, LocalPlannerParams, NavigationFunction,
-    RouteParams, Window, direction, laser_endpoints,
+    RouteParams, StaticCostLayer, Window, direction, laser_endpoints,
 };
 use robot::{Cell, GridMap, LaserScan, Pose, Vec2};
 use sim::{OccupancyGrid, cast_many, map_server};
@@ -252,6 +258,25 @@ fn local_cost_map(b: Bencher) {
     let (grid, map) = load("building_31");
     let cycles = cycles(&grid, &map);
     let params = LocalPlannerParams::default();
+    let layer = Arc::new(StaticCostLayer::new(params.cost, &map).unwrap());
+    let mut cost_map = cost_maps(&map, &cycles[..1]).pop().unwrap();
+    let mut points = Vec::with_capacity(BEAMS);
+    let mut k = 0;
+    b.bench_local(|| {
+        let c = &cycles[k % cycles.len()];
+        k += 1;
+        points.clear();
+        laser_endpoints(c.pose, &c.scan, &mut points);
+        let window = Window::centred(&map, c.pose.position(), params.window_size_m).unwrap();
+        divan::black_box(cost_map.rebuild_on(&layer, window, &points).unwrap());
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cost_map_from_map(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let params = LocalPlannerParams::default();
     let mut cost_map = cost_maps(&map, &cycles[..1]).pop().unwrap();
     let mut points = Vec::with_capacity(BEAMS);
     let mut k = 0;
@@ -300,6 +325,13 @@ fn local_direction(b: Bencher) {
         k += 1;
         divan::black_box(direction(&functions[i], cycles[i].pose.position(), &params).unwrap());
     });
+}
+
+#[divan::bench(args = ["building_31", "levine"], sample_count = 10)]
+fn static_layer(b: Bencher, name: &str) {
+    let (_, map) = load(name);
+    let params = LocalPlannerParams::default();
+    b.bench_local(|| divan::black_box(StaticCostLayer::new(params.cost, &map).unwrap()));
 }
 
 #[divan::bench(args = ["building_31", "levine"], sample_count = 10)]

@@ -7,10 +7,14 @@
 //! * from every cell with a finite `N`, the gradient descent reaches the
 //!   goal without entering a lethal cell and without its segments crossing
 //!   one;
-//! * the same input gives the same output, bit for bit.
+//! * the same input gives the same output, bit for bit;
+//! * a cost map built on the map's static layer plus the obstacle points
+//!   equals the one built from the map, bit for bit.
+
+use std::sync::Arc;
 
 use nav::planning::{
-    CostMap, CostParams, GradientParams, NavigationFunction, PlanningError, Window, descend,
+    CostMap, CostParams, GradientParams, NavigationFunction, PlanningError, StaticCostLayer, Window, descend,
     global_route::segment_clear,
 };
 use proptest::prelude::*;
@@ -267,6 +271,88 @@ proptest! {
         };
         prop_assert_eq!(run(), run());
     }
+}
+
+/// Everything a cost map answers, for every cell of its window and a ring
+/// around it, is the same in both.
+fn assert_same_cost_maps(a: &CostMap, b: &CostMap) -> Result<(), TestCaseError> {
+    prop_assert_eq!(a.window(), b.window());
+    prop_assert_eq!(a.info(), b.info());
+    let w = a.window();
+    for j in w.min().j - 1..=w.min().j + w.height() as i64 {
+        for i in w.min().i - 1..=w.min().i + w.width() as i64 {
+            let c = CellIndex { i, j };
+            prop_assert_eq!(a.cost(c).to_bits(), b.cost(c).to_bits(), "cost of {:?}", c);
+            prop_assert_eq!(a.why_lethal(c), b.why_lethal(c), "why {:?} is lethal", c);
+            prop_assert_eq!(a.clearance_m(c), b.clearance_m(c), "clearance of {:?}", c);
+        }
+    }
+    Ok(())
+}
+
+/// Obstacle points of a case plus points around and outside the window
+/// (in its margin, off the map, not finite), several in one cell.
+fn more_points(case: &Case, extra: &[(f64, f64)]) -> Vec<Vec2> {
+    let w = case.window;
+    let mut points = case.obstacles.clone();
+    for &(fx, fy) in extra {
+        // From 1.5 window sides left/below to 1.5 right/above.
+        let x = (fx * 4.0 - 1.5) * w.width() as f64;
+        let y = (fy * 4.0 - 1.5) * w.height() as f64;
+        points.push(w.from_window(x, y));
+        points.push(w.from_window(x.floor() + 0.5, y.floor() + 0.5));
+    }
+    points.push(Vec2::new(f64::NAN, 0.0));
+    points
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn a_cost_map_on_the_static_layer_equals_one_built_from_the_map(
+        case in case(true),
+        extra in proptest::collection::vec((0.0f64..1.0, 0.0f64..1.0), 0..12),
+    ) {
+        let points = more_points(&case, &extra);
+        let built = CostMap::build(case.params, &case.map, case.window, &points).expect("cost map");
+        let layer = Arc::new(StaticCostLayer::new(case.params, &case.map).expect("layer"));
+        prop_assert!(layer.matches(&case.map, &case.window));
+        let on_layer = CostMap::build_on(&layer, case.window, &points).expect("cost map on the layer");
+        assert_same_cost_maps(&built, &on_layer)?;
+        // Rebuilt in place, from a cost map of another window and points.
+        let mut reused = CostMap::build_on(&layer, Window::whole(&case.map).unwrap(), &case.obstacles)
+            .expect("whole map");
+        reused.rebuild_on(&layer, case.window, &points).expect("rebuild");
+        assert_same_cost_maps(&built, &reused)?;
+    }
+}
+
+/// A map that differs from the layer's in the window or its margin does not
+/// match; one that differs farther away does.
+#[test]
+fn the_static_layer_matches_only_its_own_map_near_the_window() {
+    use robot::{Cell, GridMap, Pose};
+    let (w, h) = (60, 50);
+    let map = GridMap::new(w, h, 0.1, Pose::default(), vec![Cell::Free; w * h]).unwrap();
+    let params = CostParams::default(); // 1 m of inflation: 10 cells
+    let layer = StaticCostLayer::new(params, &map).unwrap();
+    let window = Window::new(&map, CellIndex { i: 20, j: 15 }, 20, 20).unwrap();
+    assert!(layer.matches(&map, &window));
+    let with = |i: usize, j: usize| {
+        let mut cells = map.cells().to_vec();
+        cells[j * w + i] = Cell::Occupied;
+        GridMap::new(w, h, 0.1, Pose::default(), cells).unwrap()
+    };
+    assert!(!layer.matches(&with(25, 20), &window), "in the window");
+    assert!(!layer.matches(&with(10, 15), &window), "in the margin");
+    assert!(layer.matches(&with(9, 15), &window), "beyond the margin");
+    assert!(layer.matches(&with(50, 45), &window), "beyond the margin");
+    let moved = GridMap::new(w, h, 0.1, Pose::new(0.1, 0.0, 0.0), map.cells().to_vec()).unwrap();
+    assert!(!layer.matches(
+        &moved,
+        &Window::new(&moved, CellIndex { i: 20, j: 15 }, 20, 20).unwrap()
+    ));
 }
 
 /// A cost map rebuilt in place equals one built afresh (the planner reuses

@@ -9,6 +9,14 @@
 //! [`LocalPlanner`] keeps every buffer between cycles, so a cycle allocates
 //! nothing once warm.
 //!
+//! The map's part of the cost map is computed once, on the first cycle on a
+//! map: a [`StaticCostLayer`] of the whole map, kept. Each cycle copies the
+//! window from it and adds the obstacle points ([`CostMap::rebuild_on`]:
+//! the same costs as building the window from the map, bit for bit). A
+//! cycle checks that the map it is given has, over the window and its
+//! inflation margin, the cells the layer was made from; if not (another
+//! map), it makes the layer again.
+//!
 //! The spec's exceptions map to errors: *goal occupation* is
 //! [`PlanningError::GoalBlocked`] with [`Blocked::Sensed`] (or
 //! [`Blocked::Inflated`] next to a sensed obstacle); *path blocking* is
@@ -17,11 +25,14 @@
 //! [`Blocked::Sensed`]: super::Blocked::Sensed
 //! [`Blocked::Inflated`]: super::Blocked::Inflated
 
+use std::sync::Arc;
+
 use robot::{GridMap, Vec2};
 
 use super::gradient::{DescentInfo, GradientParams, descend};
 use super::{
-    CostMap, CostMapInfo, CostParams, NavigationFunction, NavigationInfo, PlanningError, Window, check_start,
+    CostMap, CostMapInfo, CostParams, NavigationFunction, NavigationInfo, PlanningError, StaticCostLayer,
+    Window, check_start,
 };
 
 /// Parameters of the local planner.
@@ -94,6 +105,8 @@ pub struct LocalPlan {
 #[derive(Debug, Clone)]
 pub struct LocalPlanner {
     params: LocalPlannerParams,
+    /// The static layer of the map of the last cycles.
+    layer: Option<Arc<StaticCostLayer>>,
     cost_map: Option<CostMap>,
     nf: NavigationFunction,
     path: Vec<Vec2>,
@@ -105,6 +118,7 @@ impl LocalPlanner {
         params.validate()?;
         Ok(LocalPlanner {
             params,
+            layer: None,
             cost_map: None,
             nf: NavigationFunction::new(),
             path: Vec::new(),
@@ -120,6 +134,9 @@ impl LocalPlanner {
     /// (world points, e.g. [`super::laser_endpoints`]) added, the navigation
     /// function towards `goal`, and the descent from `robot` (kept in
     /// [`LocalPlanner::path`]).
+    ///
+    /// The first cycle on a map makes its [`StaticCostLayer`] (one distance
+    /// transform of the whole map, module docs).
     ///
     /// Errors: a non-finite point ([`PlanningError::BadPoint`]),
     /// [`PlanningError::StartBlocked`] (the robot's cell is lethal — in an
@@ -137,14 +154,18 @@ impl LocalPlanner {
     ) -> Result<LocalPlan, PlanningError> {
         self.path.clear();
         let window = Window::centred(map, robot, self.params.window_size_m)?;
+        let layer = match &self.layer {
+            Some(l) if l.matches(map, &window) => l,
+            _ => self
+                .layer
+                .insert(Arc::new(StaticCostLayer::new(self.params.cost, map)?)),
+        };
         let cost_map = match &mut self.cost_map {
             Some(c) => {
-                c.rebuild(map, window, obstacles)?;
+                c.rebuild_on(layer, window, obstacles)?;
                 c
             }
-            None => self
-                .cost_map
-                .insert(CostMap::build(self.params.cost, map, window, obstacles)?),
+            None => self.cost_map.insert(CostMap::build_on(layer, window, obstacles)?),
         };
         if cost_map.info().free_cells == 0 {
             return Err(PlanningError::NoFreeCell { window });
@@ -279,6 +300,24 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn another_map_makes_the_static_layer_again() {
+        let m = map();
+        let mut lp = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        let (robot, goal) = (Vec2::new(9.0, 10.0), Vec2::new(13.5, 10.0));
+        lp.plan(&m, robot, goal, &[]).unwrap();
+        // The same frame, the wall gone: a straight path now.
+        let open = GridMap::new(400, 400, 0.05, Pose::default(), vec![Cell::Free; 400 * 400]).unwrap();
+        lp.plan(&open, robot, goal, &[]).unwrap();
+        assert!(lp.path().iter().all(|p| (p.y - 10.0).abs() < 0.1));
+        let mut fresh = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        fresh.plan(&open, robot, goal, &[]).unwrap();
+        assert_eq!(lp.path(), fresh.path());
+        // And back: round the wall again.
+        lp.plan(&m, robot, goal, &[]).unwrap();
+        assert!(lp.path().iter().any(|p| p.y > 12.3 || p.y < 7.7));
     }
 
     #[test]

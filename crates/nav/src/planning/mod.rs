@@ -12,6 +12,7 @@
 //! | [`window`] | the rectangle of map cells planned over (10 m × 10 m around the robot, or the whole map) |
 //! | [`distance_transform`] | exact Euclidean distance to the nearest obstacle cell (Felzenszwalb–Huttenlocher) |
 //! | [`cost_map`] | lethal cells (obstacles, unknown, laser endpoints, within the inscribed radius) and the intrinsic cost near obstacles |
+//! | [`static_layer`] | the map's part of every cost map, once per map; a window's cost map is then a copy plus the sensed obstacles |
 //! | [`navigation_function`] | `N`: Dijkstra from the goal on the 8-connected grid, edge cost `ℓ · (1 + mean intrinsic cost)` |
 //! | [`gradient`] | the interpolated `−∇N` and the path down it, never through a lethal cell |
 //! | [`global_route`] | the whole-map route and its intermediate goals (at corners, ≤ 4 m apart) |
@@ -45,6 +46,7 @@ pub mod global_route;
 pub mod gradient;
 pub mod local_planner;
 pub mod navigation_function;
+pub mod static_layer;
 pub mod window;
 
 pub use cost_map::{Blocked, CostMap, CostMapInfo, CostParams, laser_endpoints};
@@ -52,6 +54,7 @@ pub use global_route::{GlobalPlanner, Route, RouteParams, intermediate_goals};
 pub use gradient::{DescentInfo, GradientParams, descend, descent_direction_at, direction};
 pub use local_planner::{LocalPlan, LocalPlanner, LocalPlannerParams};
 pub use navigation_function::{NavigationFunction, NavigationInfo};
+pub use static_layer::StaticCostLayer;
 pub use window::Window;
 
 use robot::{CellIndex, Vec2};
