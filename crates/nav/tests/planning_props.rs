@@ -9,13 +9,17 @@
 //!   one;
 //! * the same input gives the same output, bit for bit;
 //! * a cost map built on the map's static layer plus the obstacle points
-//!   equals the one built from the map, bit for bit.
+//!   equals the one built from the map, bit for bit;
+//! * computed towards a start, the navigation function's settled values are
+//!   those of the whole computation and the descent from that start (which
+//!   settles what it reads) is the same path, bit for bit, from every cell;
+//!   completed, the function is the whole computation's.
 
 use std::sync::Arc;
 
 use nav::planning::{
     CostMap, CostParams, GradientParams, NavigationFunction, PlanningError, StaticCostLayer, Window, descend,
-    global_route::segment_clear,
+    descend_settling, global_route::segment_clear,
 };
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
@@ -325,6 +329,79 @@ proptest! {
             .expect("whole map");
         reused.rebuild_on(&layer, case.window, &points).expect("rebuild");
         assert_same_cost_maps(&built, &reused)?;
+    }
+}
+
+/// The bits of a descent's outcome.
+fn bits(r: &Result<nav::planning::DescentInfo, PlanningError>, path: &[Vec2]) -> (String, Vec<(u64, u64)>) {
+    let outcome = match r {
+        Ok(i) => format!(
+            "ok {:x} {:x} {} {}",
+            i.start_value.to_bits(),
+            i.length_m.to_bits(),
+            i.gradient_steps,
+            i.fallback_steps
+        ),
+        Err(e) => format!("{e:?}"),
+    };
+    (
+        outcome,
+        path.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect(),
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn computed_towards_a_start_the_descent_is_the_same(
+        case in case(true),
+        frac in (0.0f64..1.0, 0.0f64..1.0),
+    ) {
+        let (cost, goal) = setup(&case);
+        let Some(goal) = goal else { return Ok(()) };
+        let window = cost.window();
+        let goal_point = window.cell_center(goal);
+        let mut whole = NavigationFunction::new();
+        whole.compute(&cost, goal_point).expect("goal is free");
+        let params = GradientParams::default();
+        let (mut expected, mut got) = (Vec::new(), Vec::new());
+        let mut towards = NavigationFunction::new();
+        for k in 0..window.len() {
+            let c = window.cell_at(k);
+            // From a point off the centre: lethal, unreachable and free
+            // cells alike.
+            let start = window.from_window(
+                (c.i - window.min().i) as f64 + frac.0,
+                (c.j - window.min().j) as f64 + frac.1,
+            );
+            if window.cell_of("start", start).expect("finite") != c {
+                continue; // rounding put the point in the next cell
+            }
+            let r_whole = descend(&whole, start, &params, &mut expected);
+            towards.compute_towards(&cost, goal_point, start).expect("goal is free");
+            prop_assert!(towards.is_settled(c));
+            prop_assert_eq!(towards.value(c).to_bits(), whole.value(c).to_bits());
+            let r_towards = descend_settling(&mut towards, &cost, start, &params, &mut got);
+            prop_assert_eq!(bits(&r_whole, &expected), bits(&r_towards, &got), "from {:?}", c);
+            // Whatever is settled is final.
+            for q in 0..window.len() {
+                let q = window.cell_at(q);
+                if towards.is_settled(q) {
+                    prop_assert_eq!(towards.value(q).to_bits(), whole.value(q).to_bits(), "{:?}", q);
+                } else {
+                    prop_assert_eq!(towards.value(q), f64::INFINITY);
+                }
+            }
+        }
+        // Completed, it is the whole computation.
+        towards.complete(&cost).expect("same cost map");
+        prop_assert!(towards.is_complete());
+        for q in 0..window.len() {
+            let q = window.cell_at(q);
+            prop_assert_eq!(towards.value(q).to_bits(), whole.value(q).to_bits(), "{:?}", q);
+        }
+        prop_assert_eq!(towards.info().reached_cells, whole.info().reached_cells);
     }
 }
 

@@ -9,6 +9,14 @@
 //! [`LocalPlanner`] keeps every buffer between cycles, so a cycle allocates
 //! nothing once warm.
 //!
+//! The wavefront is aimed at the robot and settles only what the descent
+//! reads ([`NavigationFunction::compute_towards`], [`descend_settling`]):
+//! the same direction and path as with `N` over the whole window, bit for
+//! bit (see [`super::navigation_function`]), for about a twentieth of the
+//! cells. [`LocalPlanner::navigation_function`] completes `N` on demand.
+//!
+//! [`descend`]: super::descend
+//!
 //! The map's part of the cost map is computed once, on the first cycle on a
 //! map: a [`StaticCostLayer`] of the whole map, kept. Each cycle copies the
 //! window from it and adds the obstacle points ([`CostMap::rebuild_on`]:
@@ -29,7 +37,7 @@ use std::sync::Arc;
 
 use robot::{GridMap, Vec2};
 
-use super::gradient::{DescentInfo, GradientParams, descend};
+use super::gradient::{DescentInfo, GradientParams, descend_settling};
 use super::{
     CostMap, CostMapInfo, CostParams, NavigationFunction, NavigationInfo, PlanningError, StaticCostLayer,
     Window, check_start,
@@ -153,6 +161,8 @@ impl LocalPlanner {
         obstacles: &[Vec2],
     ) -> Result<LocalPlan, PlanningError> {
         self.path.clear();
+        // Until computed on this cycle's cost map, no navigation function.
+        self.nf.forget();
         let window = Window::centred(map, robot, self.params.window_size_m)?;
         let layer = match &self.layer {
             Some(l) if l.matches(map, &window) => l,
@@ -183,8 +193,17 @@ impl LocalPlanner {
             ) => super::nearest_free(cost_map, robot, self.params.escape_radius_m).ok_or(e)?,
             Err(e) => return Err(e),
         };
-        let navigation = self.nf.compute(cost_map, goal)?;
-        let descent = descend(&self.nf, start, &self.params.gradient, &mut self.path)?;
+        // N towards the start: only what the descent reads is settled, and
+        // the descent is the one on the whole window's N (module docs).
+        self.nf.compute_towards(cost_map, goal, start)?;
+        let descent = descend_settling(
+            &mut self.nf,
+            cost_map,
+            start,
+            &self.params.gradient,
+            &mut self.path,
+        )?;
+        let navigation = self.nf.info();
         if start != robot {
             self.path.insert(0, robot);
         }
@@ -212,8 +231,15 @@ impl LocalPlanner {
         self.cost_map.as_ref()
     }
 
-    /// The navigation function of the last cycle.
-    pub fn navigation_function(&self) -> &NavigationFunction {
+    /// The navigation function of the last cycle, over the whole window:
+    /// the cycle settled only what the descent needed, this settles the rest
+    /// first (the same values as [`NavigationFunction::compute`]). Empty
+    /// (no goal) if the last cycle failed before computing it.
+    pub fn navigation_function(&mut self) -> &NavigationFunction {
+        if let Some(cost_map) = &self.cost_map {
+            // The function was computed on this cost map: it cannot fail.
+            let _ = self.nf.complete(cost_map);
+        }
         &self.nf
     }
 }
@@ -300,6 +326,31 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn the_navigation_function_of_a_cycle_is_the_whole_windows() {
+        let m = map();
+        let mut lp = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        let (robot, goal) = (Vec2::new(9.0, 10.0), Vec2::new(13.5, 10.0));
+        let plan = lp.plan(&m, robot, goal, &[Vec2::new(10.0, 11.0)]).unwrap();
+        let mut whole = NavigationFunction::new();
+        let cost_map = lp.cost_map().unwrap().clone();
+        let info = whole.compute(&cost_map, goal).unwrap();
+        // The cycle settled a small part of the window.
+        assert!(plan.navigation.reached_cells * 4 < info.reached_cells, "{plan:?}");
+        let mut path = Vec::new();
+        crate::planning::descend(&whole, robot, &LocalPlannerParams::default().gradient, &mut path).unwrap();
+        assert_eq!(lp.path(), path.as_slice());
+        let nf = lp.navigation_function();
+        assert!(nf.is_complete());
+        for k in 0..plan.window.len() {
+            let c = plan.window.cell_at(k);
+            assert_eq!(nf.value(c).to_bits(), whole.value(c).to_bits(), "{c:?}");
+        }
+        // After a cycle that failed before computing it: none.
+        assert!(lp.plan(&m, Vec2::new(12.02, 10.0), goal, &[]).is_err());
+        assert!(lp.navigation_function().goal_cells().is_empty());
     }
 
     #[test]
