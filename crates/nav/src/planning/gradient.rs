@@ -227,6 +227,11 @@ struct Field<V> {
     values: V,
     pw: usize,
     ph: usize,
+    /// The cell gradients last computed, by `(u mod 8, v mod 8)`: a step
+    /// of the descent reads the gradients of four cells, the next steps
+    /// mostly the same ones (the values they come from are final, so a
+    /// gradient never changes).
+    cache: [((usize, usize), (f64, f64)); 64],
 }
 
 impl<V: Values> Field<V> {
@@ -235,6 +240,7 @@ impl<V: Values> Field<V> {
             values,
             pw: window.width() + 2,
             ph: window.height() + 2,
+            cache: [((usize::MAX, usize::MAX), (0.0, 0.0)); 64],
         }
     }
 
@@ -247,6 +253,17 @@ impl<V: Values> Field<V> {
     /// Normalised gradient of `N` at padded cell `(pu, pv)` (module docs);
     /// zero on the padding ring.
     fn cell_gradient(&mut self, pu: usize, pv: usize) -> Result<(f64, f64), PlanningError> {
+        let slot = (pu & 7) | (pv & 7) << 3;
+        if self.cache[slot].0 == (pu, pv) {
+            return Ok(self.cache[slot].1);
+        }
+        let g = self.compute_cell_gradient(pu, pv)?;
+        self.cache[slot] = ((pu, pv), g);
+        Ok(g)
+    }
+
+    /// [`Field::cell_gradient`], computed.
+    fn compute_cell_gradient(&mut self, pu: usize, pv: usize) -> Result<(f64, f64), PlanningError> {
         if pu == 0 || pv == 0 || pu + 1 >= self.pw || pv + 1 >= self.ph {
             return Ok((0.0, 0.0));
         }
