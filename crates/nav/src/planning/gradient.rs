@@ -227,11 +227,11 @@ struct Field<V> {
     values: V,
     pw: usize,
     ph: usize,
-    /// The cell gradients last computed, by `(u mod 8, v mod 8)`: a step
+    /// The cell gradients last computed, by `(u mod 4, v mod 4)`: a step
     /// of the descent reads the gradients of four cells, the next steps
     /// mostly the same ones (the values they come from are final, so a
     /// gradient never changes).
-    cache: [((usize, usize), (f64, f64)); 64],
+    cache: [((usize, usize), (f64, f64)); 16],
 }
 
 impl<V: Values> Field<V> {
@@ -240,7 +240,7 @@ impl<V: Values> Field<V> {
             values,
             pw: window.width() + 2,
             ph: window.height() + 2,
-            cache: [((usize::MAX, usize::MAX), (0.0, 0.0)); 64],
+            cache: [((usize::MAX, usize::MAX), (0.0, 0.0)); 16],
         }
     }
 
@@ -253,7 +253,7 @@ impl<V: Values> Field<V> {
     /// Normalised gradient of `N` at padded cell `(pu, pv)` (module docs);
     /// zero on the padding ring.
     fn cell_gradient(&mut self, pu: usize, pv: usize) -> Result<(f64, f64), PlanningError> {
-        let slot = (pu & 7) | (pv & 7) << 3;
+        let slot = (pu & 3) | (pv & 3) << 2;
         if self.cache[slot].0 == (pu, pv) {
             return Ok(self.cache[slot].1);
         }

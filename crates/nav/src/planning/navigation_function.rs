@@ -378,8 +378,8 @@ impl NavigationFunction {
     }
 
     /// Dijkstra (`A*` with `HEURISTIC`, keys `N + h`) from the seeded
-    /// goals, until the queue is empty or, for `until = Some((k, h))`, the
-    /// value of padded cell `k` (heuristic `h`) is final.
+    /// goals, until the queue is empty or, with `HEURISTIC` and `until =
+    /// Some((k, h))`, the value of padded cell `k` (heuristic `h`) is final.
     fn run<const HEURISTIC: bool>(&mut self, costs: &[f64], until: Option<(usize, f64)>) {
         let Some(window) = self.window else { return };
         let pw = window.width() + 2;
@@ -397,7 +397,8 @@ impl NavigationFunction {
             mut max_value,
         } = self.info;
         loop {
-            if let Some((k, h)) = until
+            if HEURISTIC
+                && let Some((k, h)) = until
                 && values[k] + h < (queue.current() as f64 - 1.0) * bucket_m
             {
                 break;
