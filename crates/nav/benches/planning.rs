@@ -23,6 +23,11 @@
 //!   map does not explain, as AutoMove passes them (`guide/automove.rs`:
 //!   an echo within 0.15 m of a blocked map cell is that wall seen and
 //!   dropped) — the two people, about 15 points a cycle instead of 181;
+//! * `local_cycle_blocked`: path blocking, the worst case — a ring of
+//!   points 1 m around the robot (people all round it), the goal outside
+//!   (the cycles whose goal is more than 1.5 m away, 43 of the 53): the
+//!   planner must explore everything the goal reaches before it can say
+//!   `Unreachable`;
 //! * `local_cost_map`, `local_navigation_function`, `local_direction`: the
 //!   three stages alone (the direction is one gradient step); the cost map
 //!   on the map's [`StaticCostLayer`], as the planner builds it, and
@@ -252,6 +257,38 @@ fn local_cycle_unexplained(b: Bencher) {
             .plan(&map, c.pose.position(), c.goal, &points)
             .expect("a plan");
         divan::black_box(plan.direction);
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cycle_blocked(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let mut cycles = cycles(&grid, &map);
+    cycles.retain(|c| c.pose.position().dist(c.goal) > 1.5);
+    assert_eq!(cycles.len(), 43, "the cycles of the module docs");
+    let mut planner = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+    let ring = |at: Vec2| -> Vec<Vec2> {
+        (0..360)
+            .map(|k| {
+                let a = (k as f64).to_radians();
+                at + Vec2::new(a.cos(), a.sin())
+            })
+            .collect()
+    };
+    // Warm: the map's static layer made.
+    let c = &cycles[0];
+    let _ = planner.plan(&map, c.pose.position(), c.goal, &ring(c.pose.position()));
+    let rings: Vec<Vec<Vec2>> = cycles.iter().map(|c| ring(c.pose.position())).collect();
+    let mut k = 0;
+    b.bench_local(|| {
+        let i = k % cycles.len();
+        k += 1;
+        let c = &cycles[i];
+        let r = planner.plan(&map, c.pose.position(), c.goal, &rings[i]);
+        assert!(
+            matches!(r, Err(nav::planning::PlanningError::Unreachable { .. })),
+            "{r:?}"
+        );
     });
 }
 

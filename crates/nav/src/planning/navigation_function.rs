@@ -84,6 +84,20 @@
 //! with buckets one resolution wide (1.34 for the whole window's Dijkstra).
 //! The descent then settles 44 800 cells over the 53 cycles where the whole
 //! windows hold 1 006 000 (22× fewer), for the same paths.
+//!
+//! **Path blocking.** When the start is cut off from the goal (people all
+//! round the robot, or across a corridor), `A*` finds out only once it has
+//! settled everything the goal reaches. So the computation towards a start
+//! also floods from the start over the passable cells, with the wavefront's
+//! moves (8 neighbours, no corner cutting): 4 cells every time the wavefront
+//! has popped 16 entries. As soon as the flood meets a cell the wavefront
+//! reached, it stops: the two are connected. If it runs out of cells first,
+//! the start's component does not hold the goal (the goal's cell is reached
+//! from the start, the flood would have met it): each of its cells has
+//! `N = ∞` in the whole computation too, final, and the descent says
+//! [`PlanningError::Unreachable`] at once. With a ring of people 1 m round
+//! the robot, a cycle of the planning benchmark costs 3.2× fewer
+//! instructions for it; an ordinary cycle about 5 % more.
 
 use robot::{CellIndex, Vec2};
 
@@ -107,6 +121,12 @@ pub struct NavigationInfo {
 
 /// Buckets per resolution towards a start.
 const BUCKETS_PER_CELL: f64 = 8.0;
+
+/// The flood from the start (module docs, *Path blocking*) visits
+/// `FLOOD_CELLS` cells every time the wavefront has popped `FLOOD_POPS`
+/// entries.
+const FLOOD_POPS: usize = 16;
+const FLOOD_CELLS: usize = 4;
 
 /// The value of a cell that is not lethal and not reached (yet): larger
 /// than any path's cost, and unlike `∞` telling it from a lethal cell.
@@ -133,6 +153,11 @@ pub struct NavigationFunction {
     partial: bool,
     /// Width of the queue's buckets, cost-weighted metres.
     bucket_m: f64,
+    /// The flood from the start (padded cells, in the order visited), and
+    /// per padded cell whether it has been visited (all false between
+    /// computations).
+    flood: Vec<u32>,
+    flooded: Vec<bool>,
     /// Tests only: a ring of buckets too small, so that entries land too
     /// early and the re-opening of cells has to correct them.
     #[cfg(test)]
@@ -158,7 +183,7 @@ impl NavigationFunction {
         let cell = self.check(cost, goal)?;
         self.goal = Some(goal);
         self.begin(cost, &[cell], None)?;
-        self.run::<false>(cost.padded_costs(), None);
+        self.run::<false>(cost.padded_costs(), None, usize::MAX);
         Ok(self.info)
     }
 
@@ -188,7 +213,7 @@ impl NavigationFunction {
         self.goal = Some(goal);
         let (u, v) = (k % window.width() + 1, k / window.width() + 1);
         self.begin(cost, &[cell], Some((u, v)))?;
-        self.settle(cost.padded_costs(), u, v);
+        self.settle_start(cost.padded_costs(), u, v);
         Ok(self.info)
     }
 
@@ -212,7 +237,7 @@ impl NavigationFunction {
             check_goal(cost, window.cell_center(c), c)?;
         }
         self.begin(cost, goals, None)?;
-        self.run::<false>(cost.padded_costs(), None);
+        self.run::<false>(cost.padded_costs(), None, usize::MAX);
         Ok(self.info)
     }
 
@@ -228,7 +253,7 @@ impl NavigationFunction {
             if self.window != Some(cost.window()) {
                 return Err(PlanningError::OtherCostMap);
             }
-            self.run::<true>(cost.padded_costs(), None);
+            self.run::<true>(cost.padded_costs(), None, usize::MAX);
         }
         Ok(self.info)
     }
@@ -373,14 +398,79 @@ impl NavigationFunction {
     fn settle(&mut self, costs: &[f64], u: usize, v: usize) {
         if !self.settled(u, v) {
             let until = (self.index(u, v), self.heuristic(u, v));
-            self.run::<true>(costs, Some(until));
+            self.run::<true>(costs, Some(until), usize::MAX);
         }
+    }
+
+    /// [`NavigationFunction::settle`] for the start, padded cell `(u, v)`,
+    /// with a flood from it interleaved (module docs, *Path blocking*):
+    /// [`FLOOD_CELLS`] cells of the flood every [`FLOOD_POPS`] entries the
+    /// wavefront pops. If the flood runs out of cells without meeting one the
+    /// wavefront reached, the start is cut off from the goal, and so is
+    /// everything the flood visited: `∞`, final.
+    fn settle_start(&mut self, costs: &[f64], u: usize, v: usize) {
+        let start = self.index(u, v);
+        let until = (start, self.heuristic(u, v));
+        // `flooded` is all false between calls: the marks of the cells
+        // visited are taken back at the end.
+        self.flood.clear();
+        self.flooded.resize(costs.len(), false);
+        if costs[start].is_finite() {
+            self.flood.push(start as u32);
+            self.flooded[start] = true;
+        }
+        let pw = self.window.map_or(0, |w| w.width() + 2);
+        let mut next = 0;
+        'flood: while !self.settled(u, v) {
+            self.run::<true>(costs, Some(until), FLOOD_POPS);
+            for _ in 0..FLOOD_CELLS {
+                // One cell of the flood: its passable neighbours not flooded
+                // yet (the wavefront's moves), unless it has been reached.
+                let Some(&a) = self.flood.get(next) else {
+                    // Out of cells without meeting the goal's (reached from
+                    // the start): cut off.
+                    for &c in &self.flood {
+                        self.values[c as usize] = f64::INFINITY;
+                        self.flooded[c as usize] = false;
+                    }
+                    return;
+                };
+                next += 1;
+                let a = a as usize;
+                if self.values[a] != UNREACHED {
+                    break 'flood; // met the wavefront
+                }
+                let ok = |b: usize| costs[b].is_finite();
+                let (r, l, up, d) = (ok(a + 1), ok(a - 1), ok(a + pw), ok(a - pw));
+                let neighbours = [
+                    (a + 1, r),
+                    (a - 1, l),
+                    (a + pw, up),
+                    (a - pw, d),
+                    (a + pw + 1, r && up && ok(a + pw + 1)),
+                    (a + pw - 1, l && up && ok(a + pw - 1)),
+                    (a - pw + 1, r && d && ok(a - pw + 1)),
+                    (a - pw - 1, l && d && ok(a - pw - 1)),
+                ];
+                for (b, passable) in neighbours {
+                    if passable && !self.flooded[b] {
+                        self.flooded[b] = true;
+                        self.flood.push(b as u32);
+                    }
+                }
+            }
+        }
+        for &c in &self.flood {
+            self.flooded[c as usize] = false;
+        }
+        self.settle(costs, u, v);
     }
 
     /// Dijkstra (`A*` with `HEURISTIC`, keys `N + h`) from the seeded
     /// goals, until the queue is empty or, with `HEURISTIC` and `until =
     /// Some((k, h))`, the value of padded cell `k` (heuristic `h`) is final.
-    fn run<const HEURISTIC: bool>(&mut self, costs: &[f64], until: Option<(usize, f64)>) {
+    /// At most `budget` entries are popped.
+    fn run<const HEURISTIC: bool>(&mut self, costs: &[f64], until: Option<(usize, f64)>, mut budget: usize) {
         let Some(window) = self.window else { return };
         let pw = window.width() + 2;
         let res = window.resolution_m();
@@ -403,6 +493,10 @@ impl NavigationFunction {
             {
                 break;
             }
+            if budget == 0 {
+                break;
+            }
+            budget -= 1;
             let Some(a) = queue.pop() else {
                 self.partial = false;
                 break;
@@ -714,6 +808,49 @@ mod tests {
                 assert_eq!(exact.value(c).to_bits(), towards.value(c).to_bits(), "{c:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_start_walled_in_is_found_cut_off_early() {
+        // A 200 × 200 room, the start in a 5 × 5 pocket walled in.
+        let (w, h) = (200, 200);
+        let mut cells = vec![Cell::Free; w * h];
+        for k in 0..7 {
+            for (i, j) in [(150 + k, 150), (150 + k, 156), (150, 150 + k), (156, 150 + k)] {
+                cells[j * w + i] = Cell::Occupied;
+            }
+        }
+        let m = GridMap::new(w, h, 0.05, Pose::default(), cells).unwrap();
+        let cm = CostMap::build(free_params(), &m, Window::whole(&m).unwrap(), &[]).unwrap();
+        let (goal, start) = (m.cell_center(ci(20, 20)), m.cell_center(ci(153, 153)));
+        let mut nf = NavigationFunction::new();
+        let info = nf.compute_towards(&cm, goal, start).unwrap();
+        assert!(info.reached_cells < 1000, "{info:?}");
+        assert!(nf.is_settled(ci(153, 153)));
+        assert_eq!(nf.value(ci(153, 153)), f64::INFINITY);
+        let mut path = Vec::new();
+        assert!(matches!(
+            crate::planning::descend_settling(&mut nf, &cm, start, &Default::default(), &mut path),
+            Err(PlanningError::Unreachable { .. })
+        ));
+        assert!(nf.info().reached_cells < 1000);
+        // Completed, the pocket stays at ∞ and the rest is the whole
+        // computation.
+        let mut whole = NavigationFunction::new();
+        whole.compute(&cm, goal).unwrap();
+        nf.complete(&cm).unwrap();
+        for k in 0..w * h {
+            let c = ci((k % w) as i64, (k / w) as i64);
+            assert_eq!(whole.value(c).to_bits(), nf.value(c).to_bits(), "{c:?}");
+        }
+        // From outside the pocket, towards it: the flood from a start that
+        // reaches the goal stops when it meets the wavefront.
+        nf.compute_towards(&cm, goal, m.cell_center(ci(100, 100)))
+            .unwrap();
+        assert_eq!(
+            nf.value(ci(100, 100)).to_bits(),
+            whole.value(ci(100, 100)).to_bits()
+        );
     }
 
     #[test]
