@@ -23,7 +23,8 @@
 //! the same costs as building the window from the map, bit for bit). A
 //! cycle checks that the map it is given has, over the window and its
 //! inflation margin, the cells the layer was made from; if not (another
-//! map), it makes the layer again.
+//! map), it makes the layer again. Planners on the same map can share one
+//! ([`LocalPlanner::with_static_layer`]).
 //!
 //! The spec's exceptions map to errors: *goal occupation* is
 //! [`PlanningError::GoalBlocked`] with [`Blocked::Sensed`] (or
@@ -133,9 +134,28 @@ impl LocalPlanner {
         })
     }
 
+    /// A planner starting with a static layer made beforehand (to share one
+    /// between planners on the same map: it is immutable). A cycle on a map
+    /// the layer does not match, or with another cost model, makes its own.
+    /// Errors: invalid parameters.
+    pub fn with_static_layer(
+        params: LocalPlannerParams,
+        layer: Arc<StaticCostLayer>,
+    ) -> Result<LocalPlanner, PlanningError> {
+        let mut planner = LocalPlanner::new(params)?;
+        planner.layer = Some(layer);
+        Ok(planner)
+    }
+
     /// The parameters.
     pub fn params(&self) -> &LocalPlannerParams {
         &self.params
+    }
+
+    /// The static layer of the map of the last cycles (`None` before the
+    /// first).
+    pub fn static_layer(&self) -> Option<&Arc<StaticCostLayer>> {
+        self.layer.as_ref()
     }
 
     /// One cycle: the window of `map` centred on `robot`, `obstacles`
@@ -165,7 +185,7 @@ impl LocalPlanner {
         self.nf.forget();
         let window = Window::centred(map, robot, self.params.window_size_m)?;
         let layer = match &self.layer {
-            Some(l) if l.matches(map, &window) => l,
+            Some(l) if l.params() == &self.params.cost && l.matches(map, &window) => l,
             _ => self
                 .layer
                 .insert(Arc::new(StaticCostLayer::new(self.params.cost, map)?)),
@@ -369,6 +389,20 @@ mod tests {
         // And back: round the wall again.
         lp.plan(&m, robot, goal, &[]).unwrap();
         assert!(lp.path().iter().any(|p| p.y > 12.3 || p.y < 7.7));
+        // A layer shared with another planner: used as it is.
+        let layer = Arc::clone(lp.static_layer().unwrap());
+        let mut shared =
+            LocalPlanner::with_static_layer(LocalPlannerParams::default(), Arc::clone(&layer)).unwrap();
+        shared.plan(&m, robot, goal, &[]).unwrap();
+        assert!(Arc::ptr_eq(shared.static_layer().unwrap(), &layer));
+        assert_eq!(shared.path(), lp.path());
+        // With another cost model, the planner makes its own.
+        let mut other = LocalPlannerParams::default();
+        other.cost.inscribed_radius_m = 0.42;
+        let mut own = LocalPlanner::with_static_layer(other, Arc::clone(&layer)).unwrap();
+        own.plan(&m, robot, goal, &[]).unwrap();
+        assert!(!Arc::ptr_eq(own.static_layer().unwrap(), &layer));
+        assert_eq!(own.static_layer().unwrap().params(), &other.cost);
     }
 
     #[test]

@@ -34,7 +34,8 @@
 //! Cost: building the layer is one distance transform of the map,
 //! `O(w · h)` (about 3 ms for `building_31`'s 693 × 648 cells); it keeps
 //! 17 bytes per map cell (the cells, squared distances, costs, prefix
-//! counts). A cost map of a `w × h` window then costs a copy of `w · h`
+//! counts: 7.6 MB for `building_31`, 71 MB for `levine`'s 2048 × 2048
+//! cells, which takes about 45 ms to build). A cost map of a `w × h` window then costs a copy of `w · h`
 //! costs and `O(s · r²)` for `s` sensed cells and a stamp of radius `r`
 //! cells (the inflation radius), instead of the transform over
 //! `(w + 2r)(h + 2r)` cells.
