@@ -468,8 +468,8 @@ impl NavigationFunction {
 
     /// Dijkstra (`A*` with `HEURISTIC`, keys `N + h`) from the seeded
     /// goals, until the queue is empty or, with `HEURISTIC` and `until =
-    /// Some((k, h))`, the value of padded cell `k` (heuristic `h`) is final.
-    /// At most `budget` entries are popped.
+    /// Some((k, h))`, the value of padded cell `k` (heuristic `h`) is final;
+    /// with `HEURISTIC`, at most `budget` entries are popped.
     fn run<const HEURISTIC: bool>(&mut self, costs: &[f64], until: Option<(usize, f64)>, mut budget: usize) {
         let Some(window) = self.window else { return };
         let pw = window.width() + 2;
@@ -493,10 +493,12 @@ impl NavigationFunction {
             {
                 break;
             }
-            if budget == 0 {
-                break;
+            if HEURISTIC {
+                if budget == 0 {
+                    break;
+                }
+                budget -= 1;
             }
-            budget -= 1;
             let Some(a) = queue.pop() else {
                 self.partial = false;
                 break;
