@@ -329,6 +329,17 @@ proptest! {
             .expect("whole map");
         reused.rebuild_on(&layer, case.window, &points).expect("rebuild");
         assert_same_cost_maps(&built, &reused)?;
+        // From the map again, after a layer of another cost model: the
+        // first model's table must not linger.
+        let mut other = case.params;
+        other.max_cost = case.params.max_cost / 2.0 + 0.5;
+        let other_layer = Arc::new(StaticCostLayer::new(other, &case.map).expect("layer"));
+        let mut switched = CostMap::build(case.params, &case.map, case.window, &points).expect("cost map");
+        switched.rebuild_on(&other_layer, case.window, &points).expect("rebuild on the other");
+        prop_assert_eq!(switched.params(), &other);
+        switched.rebuild(&case.map, case.window, &points).expect("rebuild from the map");
+        let other_built = CostMap::build(other, &case.map, case.window, &points).expect("cost map");
+        assert_same_cost_maps(&other_built, &switched)?;
     }
 }
 

@@ -440,7 +440,12 @@ impl CostMap {
         }
         let m = layer.margin_cells();
         check_grown(&window, m)?;
-        self.params = *layer.params();
+        if self.params != *layer.params() {
+            // The table of a build from the map was for the old model.
+            self.params = *layer.params();
+            self.table.clear();
+            self.table_res = f64::NAN;
+        }
         self.window = window;
         self.layer = Some(Arc::clone(layer));
         self.class.clear();

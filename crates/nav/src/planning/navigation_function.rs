@@ -112,10 +112,11 @@ pub struct NavigationInfo {
     pub reached_cells: usize,
     /// Entries pushed on the queue.
     pub pushes: usize,
-    /// Largest finite value a cell was settled with. (Computed towards a
-    /// start, a cell may be settled before its value is final, with a value
-    /// less than one resolution above it: this is then an upper bound, that
-    /// close.)
+    /// Largest finite value a cell was processed with: the largest finite
+    /// `N` of the whole window. (Computed towards a start, a cell may be
+    /// processed before its value is final, with a value less than one
+    /// resolution above it: this is then an upper bound, that close, of the
+    /// largest `N` reached.)
     pub max_value: f64,
 }
 
