@@ -32,6 +32,13 @@
 //!
 //! The path ends at the goal point (or the goal cell's centre). Each step is
 //! `O(1)`.
+//!
+//! [`descend_settling`] follows the same path on a navigation function
+//! computed towards the start
+//! ([`NavigationFunction::compute_towards`]): every value it reads, it first
+//! has the wavefront settle, so it reads the very values of the whole
+//! computation. The descent keeps the last cell gradients it computed (a
+//! step reads four, the next steps mostly the same ones).
 
 use robot::{CellIndex, Vec2};
 

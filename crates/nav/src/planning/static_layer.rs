@@ -32,12 +32,12 @@
 //! [`CostMap::build`] on random maps, windows and obstacle points.
 //!
 //! Cost: building the layer is one distance transform of the map,
-//! `O(w · h)` (about 3 ms for `building_31`'s 693 × 648 cells); it keeps
-//! 17 bytes per map cell (the cells, squared distances, costs, prefix
-//! counts: 7.6 MB for `building_31`, 71 MB for `levine`'s 2048 × 2048
-//! cells, which takes about 45 ms to build). A cost map of a `w × h` window then costs a copy of `w · h`
-//! costs and `O(s · r²)` for `s` sensed cells and a stamp of radius `r`
-//! cells (the inflation radius), instead of the transform over
+//! `O(w · h)` (about 3 ms for `building_31`'s 693 × 648 cells, 45 ms for
+//! `levine`'s 2048 × 2048); it keeps 17 bytes per map cell (the cells,
+//! squared distances, costs, prefix counts: 7.6 MB for `building_31`,
+//! 71 MB for `levine`). A cost map of a `w × h` window then costs a copy of
+//! `w · h` costs and `O(s · r²)` for `s` sensed cells and a stamp of radius
+//! `r` cells (the inflation radius), instead of the transform over
 //! `(w + 2r)(h + 2r)` cells.
 //!
 //! [`CostMap`]: super::CostMap
