@@ -55,7 +55,7 @@ use super::distance_transform::{BEYOND, DistanceTransform};
 use super::{CostParams, PlanningError, Window};
 
 /// The map's part of every cost map on it (module docs).
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct StaticCostLayer {
     params: CostParams,
     width: usize,
@@ -78,6 +78,21 @@ pub struct StaticCostLayer {
     /// half-widths of the lethal part and of the part with a positive cost,
     /// and the costs of the latter.
     stamp: Vec<StampRow>,
+}
+
+impl std::fmt::Debug for StaticCostLayer {
+    /// The map's size and frame and the cost model, not the millions of
+    /// cells.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StaticCostLayer")
+            .field("params", &self.params)
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("resolution_m", &self.resolution_m)
+            .field("origin", &self.origin)
+            .field("margin_cells", &self.cap)
+            .finish_non_exhaustive()
+    }
 }
 
 /// One row of a sensed cell's stamp.
