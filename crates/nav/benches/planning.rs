@@ -13,12 +13,31 @@
 //! wall — thicken a door's jambs by a cell and close it to the 0.7 m robot
 //! (the planner reports `Unreachable`, path blocking). Each iteration is
 //! one cycle, the cycles taken in turn. Target: ≤ 2 ms for `local_cycle`.
-//! The allocation counter shows that a warm cycle allocates nothing.
+//! The allocation counter shows that a warm cycle allocates nothing (the
+//! planners are warmed up by one cycle, which makes the map's static
+//! layer).
 //!
 //! * `local_cycle`: scan → endpoints → cost map → `N` → descent (the
 //!   direction and the whole path to the goal) with [`LocalPlanner::plan`];
+//! * `local_cycle_unexplained`: the same with only the echoes the static
+//!   map does not explain, as AutoMove passes them (`guide/automove.rs`:
+//!   an echo within 0.15 m of a blocked map cell is that wall seen and
+//!   dropped) — the two people, about 15 points a cycle instead of 181;
+//! * `local_cycle_blocked`: path blocking, the worst case — a ring of
+//!   points 1 m around the robot (people all round it), the goal outside
+//!   (the cycles whose goal is more than 1.5 m away, 43 of the 53): the
+//!   planner must explore everything the goal reaches before it can say
+//!   `Unreachable`;
 //! * `local_cost_map`, `local_navigation_function`, `local_direction`: the
-//!   three stages alone (the direction is one gradient step).
+//!   three stages alone (the direction is one gradient step); the cost map
+//!   on the map's [`StaticCostLayer`], as the planner builds it, and
+//!   `local_cost_map_from_map` the same cost map built from the map alone
+//!   (the distance transform over the window and its margin); `N` over the
+//!   whole window, and `local_navigation_towards_robot` `N` towards the
+//!   robot with the descent to the goal that settles what it reads, as the
+//!   planner computes them (the same path);
+//! * `static_layer`: the one-off static layer of a whole map (the first
+//!   cycle on a map makes it).
 //!
 //! **Global route** (`global_*`, one-off): the whole-map cost map
 //! ([`GlobalPlanner::new`]), and a route between corridor points with its
@@ -26,17 +45,20 @@
 //! `levine` (2048 × 2048 cells).
 //!
 //! Run with `cargo bench -p nav --bench planning`. Figures (medians on the
-//! shared 2-core machine: `local_cycle` ≈ 1.0 ms, `global_route` 12 ms on
+//! shared 2-core machine: `local_cycle` ≈ 0.1 ms, 1.0 ms before the static
+//! layer and the wavefront aimed at the robot; `global_route` 12 ms on
 //! `building_31` and 150 ms on `levine`) in `crates/nav/BENCHMARKS.md`.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use divan::Bencher;
+use nav::planning::distance_transform::{BEYOND, DistanceTransform};
 use nav::planning::{
     CostMap, GlobalPlanner, GradientParams, LocalPlanner, LocalPlannerParams, NavigationFunction,
-    RouteParams, Window, direction, laser_endpoints,
+    RouteParams, StaticCostLayer, Window, descend_settling, direction, laser_endpoints,
 };
-use robot::{GridMap, LaserScan, Pose, Vec2};
+use robot::{Cell, GridMap, LaserScan, Pose, Vec2};
 use sim::{OccupancyGrid, cast_many, map_server};
 
 #[global_allocator]
@@ -169,11 +191,23 @@ fn cycles(grid: &OccupancyGrid, map: &GridMap) -> Vec<Cycle> {
     out
 }
 
+/// A local planner that has planned one cycle (and so made the map's
+/// static layer).
+fn warm_planner(map: &GridMap, c: &Cycle) -> LocalPlanner {
+    let mut planner = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+    let mut points = Vec::new();
+    laser_endpoints(c.pose, &c.scan, &mut points);
+    planner
+        .plan(map, c.pose.position(), c.goal, &points)
+        .expect("a plan");
+    planner
+}
+
 #[divan::bench(sample_count = 200)]
 fn local_cycle(b: Bencher) {
     let (grid, map) = load("building_31");
     let cycles = cycles(&grid, &map);
-    let mut planner = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+    let mut planner = warm_planner(&map, &cycles[0]);
     let mut points = Vec::with_capacity(BEAMS);
     let mut k = 0;
     b.bench_local(|| {
@@ -185,6 +219,77 @@ fn local_cycle(b: Bencher) {
             .plan(&map, c.pose.position(), c.goal, &points)
             .expect("a plan");
         divan::black_box(plan.direction);
+    });
+}
+
+/// Map cells within 0.15 m of a blocked cell (AutoMove's default
+/// `echo_tolerance_m`), computed as `AutoMove::new` does.
+fn near_wall(map: &GridMap) -> Vec<bool> {
+    let blocked: Vec<u8> = map.cells().iter().map(|&c| u8::from(c != Cell::Free)).collect();
+    let cap = (0.15 / map.resolution_m()).round() as u32;
+    let mut d2 = Vec::new();
+    DistanceTransform::new().compute(&blocked, map.width(), map.height(), cap, &mut d2);
+    d2.iter().map(|&d| d != BEYOND && d <= cap * cap).collect()
+}
+
+/// Keeps the endpoints the map does not explain (AutoMove's filter).
+fn unexplained(map: &GridMap, near_wall: &[bool], points: &mut Vec<Vec2>) {
+    points.retain(|&q| {
+        let c = map.cell_of(q);
+        map.contains(c) && !near_wall[c.j as usize * map.width() + c.i as usize]
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cycle_unexplained(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let near = near_wall(&map);
+    let mut planner = warm_planner(&map, &cycles[0]);
+    let mut points = Vec::with_capacity(BEAMS);
+    let mut k = 0;
+    b.bench_local(|| {
+        let c = &cycles[k % cycles.len()];
+        k += 1;
+        points.clear();
+        laser_endpoints(c.pose, &c.scan, &mut points);
+        unexplained(&map, &near, &mut points);
+        let plan = planner
+            .plan(&map, c.pose.position(), c.goal, &points)
+            .expect("a plan");
+        divan::black_box(plan.direction);
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cycle_blocked(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let mut cycles = cycles(&grid, &map);
+    cycles.retain(|c| c.pose.position().dist(c.goal) > 1.5);
+    assert_eq!(cycles.len(), 43, "the cycles of the module docs");
+    let mut planner = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+    let ring = |at: Vec2| -> Vec<Vec2> {
+        (0..360)
+            .map(|k| {
+                let a = (k as f64).to_radians();
+                at + Vec2::new(a.cos(), a.sin())
+            })
+            .collect()
+    };
+    // Warm: the map's static layer made.
+    let c = &cycles[0];
+    let _ = planner.plan(&map, c.pose.position(), c.goal, &ring(c.pose.position()));
+    let rings: Vec<Vec<Vec2>> = cycles.iter().map(|c| ring(c.pose.position())).collect();
+    let mut k = 0;
+    b.bench_local(|| {
+        let i = k % cycles.len();
+        k += 1;
+        let c = &cycles[i];
+        let r = planner.plan(&map, c.pose.position(), c.goal, &rings[i]);
+        assert!(
+            matches!(r, Err(nav::planning::PlanningError::Unreachable { .. })),
+            "{r:?}"
+        );
     });
 }
 
@@ -205,6 +310,25 @@ fn cost_maps(map: &GridMap, cycles: &[Cycle]) -> Vec<CostMap> {
 
 #[divan::bench(sample_count = 200)]
 fn local_cost_map(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let params = LocalPlannerParams::default();
+    let layer = Arc::new(StaticCostLayer::new(params.cost, &map).unwrap());
+    let mut cost_map = cost_maps(&map, &cycles[..1]).pop().unwrap();
+    let mut points = Vec::with_capacity(BEAMS);
+    let mut k = 0;
+    b.bench_local(|| {
+        let c = &cycles[k % cycles.len()];
+        k += 1;
+        points.clear();
+        laser_endpoints(c.pose, &c.scan, &mut points);
+        let window = Window::centred(&map, c.pose.position(), params.window_size_m).unwrap();
+        divan::black_box(cost_map.rebuild_on(&layer, window, &points).unwrap());
+    });
+}
+
+#[divan::bench(sample_count = 200)]
+fn local_cost_map_from_map(b: Bencher) {
     let (grid, map) = load("building_31");
     let cycles = cycles(&grid, &map);
     let params = LocalPlannerParams::default();
@@ -236,6 +360,26 @@ fn local_navigation_function(b: Bencher) {
 }
 
 #[divan::bench(sample_count = 200)]
+fn local_navigation_towards_robot(b: Bencher) {
+    let (grid, map) = load("building_31");
+    let cycles = cycles(&grid, &map);
+    let cost_maps = cost_maps(&map, &cycles);
+    let params = LocalPlannerParams::default();
+    let mut nf = NavigationFunction::new();
+    let mut path = Vec::new();
+    let mut k = 0;
+    b.bench_local(|| {
+        let i = k % cycles.len();
+        k += 1;
+        let robot = cycles[i].pose.position();
+        nf.compute_towards(&cost_maps[i], cycles[i].goal, robot).unwrap();
+        divan::black_box(
+            descend_settling(&mut nf, &cost_maps[i], robot, &params.gradient, &mut path).unwrap(),
+        );
+    });
+}
+
+#[divan::bench(sample_count = 200)]
 fn local_direction(b: Bencher) {
     let (grid, map) = load("building_31");
     let cycles = cycles(&grid, &map);
@@ -256,6 +400,13 @@ fn local_direction(b: Bencher) {
         k += 1;
         divan::black_box(direction(&functions[i], cycles[i].pose.position(), &params).unwrap());
     });
+}
+
+#[divan::bench(args = ["building_31", "levine"], sample_count = 10)]
+fn static_layer(b: Bencher, name: &str) {
+    let (_, map) = load(name);
+    let params = LocalPlannerParams::default();
+    b.bench_local(|| divan::black_box(StaticCostLayer::new(params.cost, &map).unwrap()));
 }
 
 #[divan::bench(args = ["building_31", "levine"], sample_count = 10)]

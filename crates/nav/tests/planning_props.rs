@@ -7,11 +7,19 @@
 //! * from every cell with a finite `N`, the gradient descent reaches the
 //!   goal without entering a lethal cell and without its segments crossing
 //!   one;
-//! * the same input gives the same output, bit for bit.
+//! * the same input gives the same output, bit for bit;
+//! * a cost map built on the map's static layer plus the obstacle points
+//!   equals the one built from the map, bit for bit;
+//! * computed towards a start, the navigation function's settled values are
+//!   those of the whole computation and the descent from that start (which
+//!   settles what it reads) is the same path, bit for bit, from every cell;
+//!   completed, the function is the whole computation's.
+
+use std::sync::Arc;
 
 use nav::planning::{
-    CostMap, CostParams, GradientParams, NavigationFunction, PlanningError, Window, descend,
-    global_route::segment_clear,
+    CostMap, CostParams, GradientParams, NavigationFunction, PlanningError, StaticCostLayer, Window, descend,
+    descend_settling, global_route::segment_clear,
 };
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
@@ -267,6 +275,172 @@ proptest! {
         };
         prop_assert_eq!(run(), run());
     }
+}
+
+/// Everything a cost map answers, for every cell of its window and a ring
+/// around it, is the same in both.
+fn assert_same_cost_maps(a: &CostMap, b: &CostMap) -> Result<(), TestCaseError> {
+    prop_assert_eq!(a.window(), b.window());
+    prop_assert_eq!(a.info(), b.info());
+    let w = a.window();
+    for j in w.min().j - 1..=w.min().j + w.height() as i64 {
+        for i in w.min().i - 1..=w.min().i + w.width() as i64 {
+            let c = CellIndex { i, j };
+            prop_assert_eq!(a.cost(c).to_bits(), b.cost(c).to_bits(), "cost of {:?}", c);
+            prop_assert_eq!(a.why_lethal(c), b.why_lethal(c), "why {:?} is lethal", c);
+            prop_assert_eq!(a.clearance_m(c), b.clearance_m(c), "clearance of {:?}", c);
+        }
+    }
+    Ok(())
+}
+
+/// Obstacle points of a case plus points around and outside the window
+/// (in its margin, off the map, not finite), several in one cell.
+fn more_points(case: &Case, extra: &[(f64, f64)]) -> Vec<Vec2> {
+    let w = case.window;
+    let mut points = case.obstacles.clone();
+    for &(fx, fy) in extra {
+        // From 1.5 window sides left/below to 1.5 right/above.
+        let x = (fx * 4.0 - 1.5) * w.width() as f64;
+        let y = (fy * 4.0 - 1.5) * w.height() as f64;
+        points.push(w.from_window(x, y));
+        points.push(w.from_window(x.floor() + 0.5, y.floor() + 0.5));
+    }
+    points.push(Vec2::new(f64::NAN, 0.0));
+    points
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn a_cost_map_on_the_static_layer_equals_one_built_from_the_map(
+        case in case(true),
+        extra in proptest::collection::vec((0.0f64..1.0, 0.0f64..1.0), 0..12),
+    ) {
+        let points = more_points(&case, &extra);
+        let built = CostMap::build(case.params, &case.map, case.window, &points).expect("cost map");
+        let layer = Arc::new(StaticCostLayer::new(case.params, &case.map).expect("layer"));
+        prop_assert!(layer.matches(&case.map, &case.window));
+        let on_layer = CostMap::build_on(&layer, case.window, &points).expect("cost map on the layer");
+        assert_same_cost_maps(&built, &on_layer)?;
+        // Rebuilt in place, from a cost map of another window and points.
+        let mut reused = CostMap::build_on(&layer, Window::whole(&case.map).unwrap(), &case.obstacles)
+            .expect("whole map");
+        reused.rebuild_on(&layer, case.window, &points).expect("rebuild");
+        assert_same_cost_maps(&built, &reused)?;
+        // From the map again, after a layer of another cost model: the
+        // first model's table must not linger.
+        let mut other = case.params;
+        other.max_cost = case.params.max_cost / 2.0 + 0.5;
+        let other_layer = Arc::new(StaticCostLayer::new(other, &case.map).expect("layer"));
+        let mut switched = CostMap::build(case.params, &case.map, case.window, &points).expect("cost map");
+        switched.rebuild_on(&other_layer, case.window, &points).expect("rebuild on the other");
+        prop_assert_eq!(switched.params(), &other);
+        switched.rebuild(&case.map, case.window, &points).expect("rebuild from the map");
+        let other_built = CostMap::build(other, &case.map, case.window, &points).expect("cost map");
+        assert_same_cost_maps(&other_built, &switched)?;
+    }
+}
+
+/// The bits of a descent's outcome.
+fn bits(r: &Result<nav::planning::DescentInfo, PlanningError>, path: &[Vec2]) -> (String, Vec<(u64, u64)>) {
+    let outcome = match r {
+        Ok(i) => format!(
+            "ok {:x} {:x} {} {}",
+            i.start_value.to_bits(),
+            i.length_m.to_bits(),
+            i.gradient_steps,
+            i.fallback_steps
+        ),
+        Err(e) => format!("{e:?}"),
+    };
+    (
+        outcome,
+        path.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect(),
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn computed_towards_a_start_the_descent_is_the_same(
+        case in case(true),
+        frac in (0.0f64..1.0, 0.0f64..1.0),
+    ) {
+        let (cost, goal) = setup(&case);
+        let Some(goal) = goal else { return Ok(()) };
+        let window = cost.window();
+        let goal_point = window.cell_center(goal);
+        let mut whole = NavigationFunction::new();
+        whole.compute(&cost, goal_point).expect("goal is free");
+        let params = GradientParams::default();
+        let (mut expected, mut got) = (Vec::new(), Vec::new());
+        let mut towards = NavigationFunction::new();
+        for k in 0..window.len() {
+            let c = window.cell_at(k);
+            // From a point off the centre: lethal, unreachable and free
+            // cells alike.
+            let start = window.from_window(
+                (c.i - window.min().i) as f64 + frac.0,
+                (c.j - window.min().j) as f64 + frac.1,
+            );
+            if window.cell_of("start", start).expect("finite") != c {
+                continue; // rounding put the point in the next cell
+            }
+            let r_whole = descend(&whole, start, &params, &mut expected);
+            towards.compute_towards(&cost, goal_point, start).expect("goal is free");
+            prop_assert!(towards.is_settled(c));
+            prop_assert_eq!(towards.value(c).to_bits(), whole.value(c).to_bits());
+            let r_towards = descend_settling(&mut towards, &cost, start, &params, &mut got);
+            prop_assert_eq!(bits(&r_whole, &expected), bits(&r_towards, &got), "from {:?}", c);
+            // Whatever is settled is final.
+            for q in 0..window.len() {
+                let q = window.cell_at(q);
+                if towards.is_settled(q) {
+                    prop_assert_eq!(towards.value(q).to_bits(), whole.value(q).to_bits(), "{:?}", q);
+                } else {
+                    prop_assert_eq!(towards.value(q), f64::INFINITY);
+                }
+            }
+        }
+        // Completed, it is the whole computation.
+        towards.complete(&cost).expect("same cost map");
+        prop_assert!(towards.is_complete());
+        for q in 0..window.len() {
+            let q = window.cell_at(q);
+            prop_assert_eq!(towards.value(q).to_bits(), whole.value(q).to_bits(), "{:?}", q);
+        }
+        prop_assert_eq!(towards.info().reached_cells, whole.info().reached_cells);
+    }
+}
+
+/// A map that differs from the layer's in the window or its margin does not
+/// match; one that differs farther away does.
+#[test]
+fn the_static_layer_matches_only_its_own_map_near_the_window() {
+    use robot::{Cell, GridMap, Pose};
+    let (w, h) = (60, 50);
+    let map = GridMap::new(w, h, 0.1, Pose::default(), vec![Cell::Free; w * h]).unwrap();
+    let params = CostParams::default(); // 1 m of inflation: 10 cells
+    let layer = StaticCostLayer::new(params, &map).unwrap();
+    let window = Window::new(&map, CellIndex { i: 20, j: 15 }, 20, 20).unwrap();
+    assert!(layer.matches(&map, &window));
+    let with = |i: usize, j: usize| {
+        let mut cells = map.cells().to_vec();
+        cells[j * w + i] = Cell::Occupied;
+        GridMap::new(w, h, 0.1, Pose::default(), cells).unwrap()
+    };
+    assert!(!layer.matches(&with(25, 20), &window), "in the window");
+    assert!(!layer.matches(&with(10, 15), &window), "in the margin");
+    assert!(layer.matches(&with(9, 15), &window), "beyond the margin");
+    assert!(layer.matches(&with(50, 45), &window), "beyond the margin");
+    let moved = GridMap::new(w, h, 0.1, Pose::new(0.1, 0.0, 0.0), map.cells().to_vec()).unwrap();
+    assert!(!layer.matches(
+        &moved,
+        &Window::new(&moved, CellIndex { i: 20, j: 15 }, 20, 20).unwrap()
+    ));
 }
 
 /// A cost map rebuilt in place equals one built afresh (the planner reuses

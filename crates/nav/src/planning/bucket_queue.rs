@@ -51,6 +51,13 @@ impl BucketQueue {
         self.len += 1;
     }
 
+    /// Number of the bucket being emptied: every entry of a lower bucket
+    /// has been popped, and no later push goes below it.
+    #[inline]
+    pub(crate) fn current(&self) -> u64 {
+        self.current
+    }
+
     /// Removes an item of the lowest non-empty bucket.
     #[inline]
     pub(crate) fn pop(&mut self) -> Option<u32> {

@@ -37,11 +37,19 @@
 //! outside the window still inflates the cells inside it. Building costs
 //! `O((w + 2m)(h + 2m) + points)` time for a `w × h` window and margin `m`;
 //! the buffers are kept for the next build ([`CostMap::rebuild`]).
+//!
+//! Built on a [`StaticCostLayer`] instead ([`CostMap::build_on`],
+//! [`CostMap::rebuild_on`]), the map's part comes precomputed and only the
+//! obstacle points are added: the same cost map, bit for bit (see
+//! [`super::static_layer`]), for a copy of the window and a little work per
+//! sensed cell.
+
+use std::sync::Arc;
 
 use robot::{Cell, CellIndex, GridMap, LaserScan, Pose, Vec2};
 
 use super::distance_transform::{BEYOND, DistanceTransform, MAX_CAP};
-use super::{PlanningError, Window};
+use super::{PlanningError, StaticCostLayer, Window};
 
 /// Parameters of the cost map.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -119,7 +127,10 @@ impl CostParams {
     /// (module docs): `∞` within the inscribed radius. (The cost map
     /// compares distances with the radii in cells with a tolerance of 1e-9
     /// cell, so that a radius of exactly `k` cells includes distance `k`
-    /// despite rounding.)
+    /// despite rounding; and it makes its table of costs by distance
+    /// non-increasing — a running minimum, which leaves the formula's values
+    /// as they are as long as `exp` is monotone — so that the nearest
+    /// obstacle always gives the largest cost.)
     pub fn cost_at(&self, d_m: f64) -> f64 {
         if d_m <= self.inscribed_radius_m {
             f64::INFINITY
@@ -188,12 +199,57 @@ const UNKNOWN: u8 = 2;
 const OUTSIDE: u8 = 3;
 const SENSED: u8 = 4;
 
+/// The inflation margin in cells, `⌈inflation_radius_m / res⌉`: the cap of
+/// the distances (errors beyond [`MAX_CAP`]).
+pub(crate) fn margin_cells(params: &CostParams, res: f64) -> Result<u32, PlanningError> {
+    let cap_f = (params.inflation_radius_m / res).ceil();
+    if cap_f > MAX_CAP as f64 {
+        return Err(PlanningError::BadParam {
+            name: "inflation_radius_m",
+            value: params.inflation_radius_m,
+            expected: "at most 30 000 cells of the map",
+        });
+    }
+    Ok(cap_f as u32)
+}
+
+/// Costs by squared distance in cells, `0..=cap²`, non-increasing.
+pub(crate) fn cost_table(p: &CostParams, res: f64, cap: u32) -> Vec<f64> {
+    let n = (cap as usize + 1).pow(2);
+    // Both radii are inclusive, compared in cells with a tolerance of
+    // 1e-9 cell: 0.35 m at 0.05 m (7 cells, 6.999… in floating point)
+    // stays lethal.
+    let inscribed_cells = p.inscribed_radius_m / res + 1e-9;
+    let inflation_cells = p.inflation_radius_m / res + 1e-9;
+    let mut lowest = f64::INFINITY;
+    (0..n)
+        .map(|d2| {
+            let d = (d2 as f64).sqrt();
+            let c = if d <= inscribed_cells {
+                f64::INFINITY
+            } else if d <= inflation_cells {
+                p.max_cost * (-p.decay_per_m * (d * res - p.inscribed_radius_m)).exp()
+            } else {
+                0.0
+            };
+            // Non-increasing, so that min(d₁, d₂) costs max(c(d₁), c(d₂)).
+            lowest = lowest.min(c);
+            lowest
+        })
+        .collect()
+}
+
 /// Intrinsic costs of a window (module docs).
 #[derive(Debug, Clone)]
 pub struct CostMap {
     params: CostParams,
     window: Window,
     info: CostMapInfo,
+    /// Built on a static layer: the layer, and the distinct free map cells
+    /// hit by obstacle points within the margin, sorted. `None`: built from
+    /// the map, with the grown grid below.
+    layer: Option<Arc<StaticCostLayer>>,
+    sensed: Vec<CellIndex>,
     /// Margin `m` in cells and the grown grid's width and height.
     margin: usize,
     grown_w: usize,
@@ -229,6 +285,8 @@ impl CostMap {
             params,
             window,
             info: CostMapInfo::default(),
+            layer: None,
+            sensed: Vec::new(),
             margin: 0,
             grown_w: 0,
             grown_h: 0,
@@ -255,34 +313,20 @@ impl CostMap {
             return Err(PlanningError::WindowMapMismatch);
         }
         let res = map.resolution_m();
-        let cap_f = (self.params.inflation_radius_m / res).ceil();
-        if cap_f > MAX_CAP as f64 {
-            return Err(PlanningError::BadParam {
-                name: "inflation_radius_m",
-                value: self.params.inflation_radius_m,
-                expected: "at most 30 000 cells of the map",
-            });
-        }
-        let cap = cap_f as u32;
+        let cap = margin_cells(&self.params, res)?;
         let m = cap as usize;
         let (w, h) = (window.width(), window.height());
+        check_grown(&window, m)?;
         let (gw, gh) = (w + 2 * m, h + 2 * m);
-        if gw
-            .checked_mul(gh)
-            .is_none_or(|n| n > 2 * super::window::MAX_WINDOW_CELLS)
-        {
-            return Err(PlanningError::BadWindow {
-                width: w,
-                height: h,
-                reason: "the window and its inflation margin exceed 2^31 cells",
-            });
-        }
+        self.layer = None;
+        self.sensed.clear();
         self.window = window;
         self.margin = m;
         self.grown_w = gw;
         self.grown_h = gh;
         if self.table_res != res || self.table.len() != (cap as usize + 1).pow(2) {
-            self.fill_table(res, cap);
+            self.table = cost_table(&self.params, res, cap);
+            self.table_res = res;
         }
 
         // Classes of the grown grid: the map's cells, outside is OUTSIDE.
@@ -352,27 +396,99 @@ impl CostMap {
         Ok(self.info)
     }
 
-    /// Costs by squared distance in cells, `0..=cap²`.
-    fn fill_table(&mut self, res: f64, cap: u32) {
-        let n = (cap as usize + 1).pow(2);
-        // Both radii are inclusive, compared in cells with a tolerance of
-        // 1e-9 cell: 0.35 m at 0.05 m (7 cells, 6.999… in floating point)
-        // stays lethal.
-        let p = self.params;
-        let inscribed_cells = p.inscribed_radius_m / res + 1e-9;
-        let inflation_cells = p.inflation_radius_m / res + 1e-9;
-        self.table.clear();
-        self.table.extend((0..n).map(|d2| {
-            let d = (d2 as f64).sqrt();
-            if d <= inscribed_cells {
-                f64::INFINITY
-            } else if d <= inflation_cells {
-                p.max_cost * (-p.decay_per_m * (d * res - p.inscribed_radius_m)).exp()
-            } else {
-                0.0
+    /// Builds the cost map of `window` on a static layer (of the window's
+    /// map) with obstacle points: equal to [`CostMap::build`] with the
+    /// layer's map and parameters, bit for bit ([`super::static_layer`]).
+    ///
+    /// Errors: a window of another map (other resolution or origin), or a
+    /// window too large (as [`CostMap::build`]).
+    pub fn build_on(
+        layer: &Arc<StaticCostLayer>,
+        window: Window,
+        obstacles: &[Vec2],
+    ) -> Result<CostMap, PlanningError> {
+        let mut c = CostMap {
+            params: *layer.params(),
+            window,
+            info: CostMapInfo::default(),
+            layer: None,
+            sensed: Vec::new(),
+            margin: 0,
+            grown_w: 0,
+            grown_h: 0,
+            class: Vec::new(),
+            dist_sq: Vec::new(),
+            cost: Vec::new(),
+            table: Vec::new(),
+            table_res: f64::NAN,
+            transform: DistanceTransform::new(),
+        };
+        c.rebuild_on(layer, window, obstacles)?;
+        Ok(c)
+    }
+
+    /// [`CostMap::build_on`] reusing the memory (the cost model becomes the
+    /// layer's). On error the cost map is left as it was.
+    pub fn rebuild_on(
+        &mut self,
+        layer: &Arc<StaticCostLayer>,
+        window: Window,
+        obstacles: &[Vec2],
+    ) -> Result<CostMapInfo, PlanningError> {
+        if (window.resolution_m(), window.origin()) != layer.frame() {
+            return Err(PlanningError::WindowMapMismatch);
+        }
+        let m = layer.margin_cells();
+        check_grown(&window, m)?;
+        if self.params != *layer.params() {
+            // The table of a build from the map was for the old model.
+            self.params = *layer.params();
+            self.table.clear();
+            self.table_res = f64::NAN;
+        }
+        self.window = window;
+        self.layer = Some(Arc::clone(layer));
+        self.class.clear();
+        self.dist_sq.clear();
+        self.margin = m;
+        let (w, h) = (window.width() as i64, window.height() as i64);
+        self.grown_w = window.width() + 2 * m;
+        self.grown_h = window.height() + 2 * m;
+        let free = layer.copy_window(&window, &mut self.cost);
+
+        // The distinct free map cells hit within the grown window.
+        self.sensed.clear();
+        let mut ignored = 0;
+        let (i0, j0) = (window.min().i - m as i64, window.min().j - m as i64);
+        for &p in obstacles {
+            let Ok(c) = window.cell_of("obstacle point", p) else {
+                ignored += 1;
+                continue;
+            };
+            let (gi, gj) = (c.i - i0, c.j - j0);
+            if gi >= 0
+                && gj >= 0
+                && gi < w + 2 * m as i64
+                && gj < h + 2 * m as i64
+                && layer.cell(c) == Some(Cell::Free)
+            {
+                self.sensed.push(c);
             }
-        }));
-        self.table_res = res;
+        }
+        self.sensed.sort_unstable_by_key(|c| (c.j, c.i));
+        self.sensed.dedup();
+        let mut lost = 0;
+        for &s in &self.sensed {
+            lost += layer.stamp(&window, s, &mut self.cost);
+        }
+        self.info = CostMapInfo {
+            cells: window.len(),
+            free_cells: free - lost,
+            sensed_cells: self.sensed.len(),
+            ignored_points: ignored,
+            margin_cells: m,
+        };
+        Ok(self.info)
     }
 
     /// The parameters.
@@ -411,6 +527,24 @@ impl CostMap {
         if self.cost[self.padded(k)].is_finite() {
             return None;
         }
+        if let Some(layer) = &self.layer {
+            return Some(match layer.cell(c) {
+                None => Blocked::OutsideMap,
+                Some(Cell::Occupied) => Blocked::Occupied,
+                Some(Cell::Unknown) => Blocked::Unknown,
+                Some(Cell::Free)
+                    if self
+                        .sensed
+                        .binary_search_by_key(&(c.j, c.i), |s| (s.j, s.i))
+                        .is_ok() =>
+                {
+                    Blocked::Sensed
+                }
+                Some(Cell::Free) => Blocked::Inflated {
+                    clearance_m: (self.layered_dist_sq(layer, c) as f64).sqrt() * self.window.resolution_m(),
+                },
+            });
+        }
         let g = self.grown(k);
         Some(match self.class[g] {
             OCCUPIED => Blocked::Occupied,
@@ -428,8 +562,29 @@ impl CostMap {
     /// cells); `None` beyond it or outside the window.
     pub fn clearance_m(&self, c: CellIndex) -> Option<f64> {
         let k = self.window.index_of(c)?;
-        let d2 = self.dist_sq[self.grown(k)];
+        let d2 = match &self.layer {
+            Some(layer) => self.layered_dist_sq(layer, c),
+            None => self.dist_sq[self.grown(k)],
+        };
         (d2 != BEYOND).then(|| (d2 as f64).sqrt() * self.window.resolution_m())
+    }
+
+    /// On a static layer: the squared distance from a map cell to the
+    /// nearest obstacle, the map's or a sensed cell, cells², `BEYOND` past
+    /// the margin. `O(sensed cells)`.
+    fn layered_dist_sq(&self, layer: &StaticCostLayer, c: CellIndex) -> u32 {
+        let cap = self.margin as u64;
+        self.sensed
+            .iter()
+            .map(|s| {
+                let (dx, dy) = (s.i.abs_diff(c.i), s.j.abs_diff(c.j));
+                if dx > cap || dy > cap || dx * dx + dy * dy > cap * cap {
+                    BEYOND
+                } else {
+                    (dx * dx + dy * dy) as u32
+                }
+            })
+            .fold(layer.dist_sq(c), u32::min)
     }
 
     /// Costs of the window with a ring of lethal cells around it: row-major,
@@ -452,6 +607,22 @@ impl CostMap {
         let w = self.window.width();
         (k / w + self.margin) * self.grown_w + k % w + self.margin
     }
+}
+
+/// The window grown by `m` cells on each side must stay within 2³¹ cells.
+fn check_grown(window: &Window, m: usize) -> Result<(), PlanningError> {
+    let (w, h) = (window.width(), window.height());
+    if (w + 2 * m)
+        .checked_mul(h + 2 * m)
+        .is_none_or(|n| n > 2 * super::window::MAX_WINDOW_CELLS)
+    {
+        return Err(PlanningError::BadWindow {
+            width: w,
+            height: h,
+            reason: "the window and its inflation margin exceed 2^31 cells",
+        });
+    }
+    Ok(())
 }
 
 /// Appends the world positions of a scan's echoes to `out`: beam `k` at
@@ -529,6 +700,40 @@ mod tests {
         assert_eq!(cm.why_lethal(ci(19, 15)), None);
         assert!((cm.clearance_m(ci(19, 15)).unwrap() - 0.4).abs() < 1e-12);
         assert_eq!(cm.clearance_m(ci(22, 22)), None);
+    }
+
+    #[test]
+    fn the_cost_table_is_the_formula_and_non_increasing() {
+        // The running minimum must change nothing for the formula (exp is
+        // monotone), only guarantee the order the static layer relies on.
+        for (p, res) in [
+            (CostParams::default(), 0.05),
+            (CostParams::default(), 0.1),
+            (
+                CostParams {
+                    inscribed_radius_m: 0.0,
+                    inflation_radius_m: 2.0,
+                    max_cost: 1000.0,
+                    decay_per_m: 0.3,
+                },
+                0.025,
+            ),
+        ] {
+            let cap = margin_cells(&p, res).unwrap();
+            let table = cost_table(&p, res, cap);
+            for (d2, &c) in table.iter().enumerate() {
+                let d = (d2 as f64).sqrt();
+                let formula = if d <= p.inscribed_radius_m / res + 1e-9 {
+                    f64::INFINITY
+                } else if d <= p.inflation_radius_m / res + 1e-9 {
+                    p.max_cost * (-p.decay_per_m * (d * res - p.inscribed_radius_m)).exp()
+                } else {
+                    0.0
+                };
+                assert_eq!(c.to_bits(), formula.to_bits(), "{p:?} at d² = {d2}");
+            }
+            assert!(table.windows(2).all(|t| t[1] <= t[0]));
+        }
     }
 
     #[test]

@@ -32,10 +32,17 @@
 //!
 //! The path ends at the goal point (or the goal cell's centre). Each step is
 //! `O(1)`.
+//!
+//! [`descend_settling`] follows the same path on a navigation function
+//! computed towards the start
+//! ([`NavigationFunction::compute_towards`]): every value it reads, it first
+//! has the wavefront settle, so it reads the very values of the whole
+//! computation. The descent keeps the last cell gradients it computed (a
+//! step reads four, the next steps mostly the same ones).
 
 use robot::{CellIndex, Vec2};
 
-use super::{NavigationFunction, PlanningError, Window};
+use super::{CostMap, NavigationFunction, PlanningError, Window};
 
 /// Steps allowed inside one cell before moving to its best neighbour.
 pub const MAX_STEPS_IN_CELL: usize = 4;
@@ -91,15 +98,43 @@ pub struct DescentInfo {
 /// start, [`PlanningError::StartOutsideWindow`],
 /// [`PlanningError::Unreachable`] (the start's cell has `N = ∞`: it is
 /// lethal or cut off from the goal; the planners tell the two apart with the
-/// cost map), and [`PlanningError::NoDescent`] if rounding left a cell
-/// without a lower neighbour (only with extreme intrinsic costs).
+/// cost map), [`PlanningError::NoDescent`] if rounding left a cell without a
+/// lower neighbour (only with extreme intrinsic costs), and
+/// [`PlanningError::Unsettled`] if the descent needs a value a function
+/// computed towards a start has not settled ([`descend_settling`] settles
+/// it).
 pub fn descend(
     nf: &NavigationFunction,
     start: Vec2,
     params: &GradientParams,
     path: &mut Vec<Vec2>,
 ) -> Result<DescentInfo, PlanningError> {
-    descend_up_to(nf, start, params, path, usize::MAX)
+    descend_up_to(&mut Settled(nf), start, params, path, usize::MAX)
+}
+
+/// [`descend`] on a function computed towards a start
+/// ([`NavigationFunction::compute_towards`]), settling the values it reads
+/// as it goes: every value it reads is final, so the path is the one
+/// [`descend`] gives on the complete function, bit for bit. `cost` must be
+/// the cost map the function was computed on, unchanged.
+///
+/// Errors: those of [`descend`] but [`PlanningError::Unsettled`], and
+/// [`PlanningError::OtherCostMap`] for a cost map of another window.
+pub fn descend_settling(
+    nf: &mut NavigationFunction,
+    cost: &CostMap,
+    start: Vec2,
+    params: &GradientParams,
+    path: &mut Vec<Vec2>,
+) -> Result<DescentInfo, PlanningError> {
+    if nf.window().is_some_and(|w| w != cost.window()) {
+        return Err(PlanningError::OtherCostMap);
+    }
+    let mut values = Settling {
+        nf,
+        costs: cost.padded_costs(),
+    };
+    descend_up_to(&mut values, start, params, path, usize::MAX)
 }
 
 /// The direction to drive from `start`: the unit vector (world frame) of the
@@ -111,7 +146,7 @@ pub fn direction(
     params: &GradientParams,
 ) -> Result<Vec2, PlanningError> {
     let mut path = Vec::with_capacity(2);
-    descend_up_to(nf, start, params, &mut path, 2)?;
+    descend_up_to(&mut Settled(nf), start, params, &mut path, 2)?;
     Ok(match path.as_slice() {
         [a, b, ..] if a.dist(*b) > 0.0 => (*b - *a).scale(1.0 / a.dist(*b)),
         _ => Vec2::default(),
@@ -119,44 +154,126 @@ pub fn direction(
 }
 
 /// The interpolated `−∇N` at a point, normalised (world frame): `None`
-/// outside the window, without a goal, or where the interpolated gradient
-/// vanishes.
+/// outside the window, without a goal, where the interpolated gradient
+/// vanishes, or where it needs a value not settled yet (a function computed
+/// towards a start).
 pub fn descent_direction_at(nf: &NavigationFunction, p: Vec2) -> Option<Vec2> {
     let window = nf.window()?;
     let (x, y) = window.to_window(p);
     if !(x >= 0.0 && y >= 0.0 && x < window.width() as f64 && y < window.height() as f64) {
         return None;
     }
-    let g = Field::new(nf, window).descent(x, y)?;
+    let g = Field::new(Settled(nf), window).descent(x, y).ok()??;
     let a = window.from_window(x, y);
     let b = window.from_window(x + g.0, y + g.1);
     Some((b - a).scale(1.0 / window.resolution_m()))
 }
 
-/// The values of a navigation function and their geometry, in padded
-/// coordinates (window cell `(u, v)` is padded cell `(u + 1, v + 1)`).
-struct Field<'a> {
-    values: &'a [f64],
-    pw: usize,
+/// Where the descent reads `N`, by padded cell `(u, v)` (window cell
+/// `(u − 1, v − 1)`); every value given is final.
+trait Values {
+    /// The navigation function.
+    fn nf(&self) -> &NavigationFunction;
+    /// `N` at padded cell `(u, v)`.
+    fn at(&mut self, u: usize, v: usize) -> Result<f64, PlanningError>;
 }
 
-impl<'a> Field<'a> {
-    fn new(nf: &'a NavigationFunction, window: Window) -> Field<'a> {
+impl<V: Values> Values for &mut V {
+    fn nf(&self) -> &NavigationFunction {
+        (**self).nf()
+    }
+
+    #[inline]
+    fn at(&mut self, u: usize, v: usize) -> Result<f64, PlanningError> {
+        (**self).at(u, v)
+    }
+}
+
+/// The values already settled; an error for any other.
+struct Settled<'a>(&'a NavigationFunction);
+
+impl Values for Settled<'_> {
+    fn nf(&self) -> &NavigationFunction {
+        self.0
+    }
+
+    #[inline]
+    fn at(&mut self, u: usize, v: usize) -> Result<f64, PlanningError> {
+        self.0.settled_value(u, v).ok_or_else(|| {
+            let min = self.0.window().map_or(CellIndex { i: 0, j: 0 }, |w| w.min());
+            PlanningError::Unsettled {
+                cell: CellIndex {
+                    i: min.i + u as i64 - 1,
+                    j: min.j + v as i64 - 1,
+                },
+            }
+        })
+    }
+}
+
+/// Every value, settled on demand.
+struct Settling<'a> {
+    nf: &'a mut NavigationFunction,
+    costs: &'a [f64],
+}
+
+impl Values for Settling<'_> {
+    fn nf(&self) -> &NavigationFunction {
+        self.nf
+    }
+
+    #[inline]
+    fn at(&mut self, u: usize, v: usize) -> Result<f64, PlanningError> {
+        Ok(self.nf.settled_value_with(self.costs, u, v))
+    }
+}
+
+/// The values of a navigation function and their geometry, in padded
+/// coordinates (window cell `(u, v)` is padded cell `(u + 1, v + 1)`).
+struct Field<V> {
+    values: V,
+    pw: usize,
+    ph: usize,
+    /// The cell gradients last computed, by `(u mod 4, v mod 4)`: a step
+    /// of the descent reads the gradients of four cells, the next steps
+    /// mostly the same ones (the values they come from are final, so a
+    /// gradient never changes).
+    cache: [((usize, usize), (f64, f64)); 16],
+}
+
+impl<V: Values> Field<V> {
+    fn new(values: V, window: Window) -> Field<V> {
         Field {
-            values: nf.padded_values(),
+            values,
             pw: window.width() + 2,
+            ph: window.height() + 2,
+            cache: [((usize::MAX, usize::MAX), (0.0, 0.0)); 16],
         }
+    }
+
+    /// `N` at padded cell `(u, v)`.
+    #[inline]
+    fn at(&mut self, u: usize, v: usize) -> Result<f64, PlanningError> {
+        self.values.at(u, v)
     }
 
     /// Normalised gradient of `N` at padded cell `(pu, pv)` (module docs);
     /// zero on the padding ring.
-    fn cell_gradient(&self, pu: usize, pv: usize) -> (f64, f64) {
-        let ph = self.values.len() / self.pw;
-        if pu == 0 || pv == 0 || pu + 1 >= self.pw || pv + 1 >= ph {
-            return (0.0, 0.0);
+    fn cell_gradient(&mut self, pu: usize, pv: usize) -> Result<(f64, f64), PlanningError> {
+        let slot = (pu & 3) | (pv & 3) << 2;
+        if self.cache[slot].0 == (pu, pv) {
+            return Ok(self.cache[slot].1);
         }
-        let k = pv * self.pw + pu;
-        let v = self.values;
+        let g = self.compute_cell_gradient(pu, pv)?;
+        self.cache[slot] = ((pu, pv), g);
+        Ok(g)
+    }
+
+    /// [`Field::cell_gradient`], computed.
+    fn compute_cell_gradient(&mut self, pu: usize, pv: usize) -> Result<(f64, f64), PlanningError> {
+        if pu == 0 || pv == 0 || pu + 1 >= self.pw || pv + 1 >= self.ph {
+            return Ok((0.0, 0.0));
+        }
         let axis = |lo: f64, c: f64, hi: f64| -> f64 {
             if c.is_finite() {
                 match (lo.is_finite(), hi.is_finite()) {
@@ -169,28 +286,39 @@ impl<'a> Field<'a> {
                 f64::from(u8::from(lo.is_finite())) - f64::from(u8::from(hi.is_finite()))
             }
         };
-        let gx = axis(v[k - 1], v[k], v[k + 1]);
-        let gy = axis(v[k - self.pw], v[k], v[k + self.pw]);
+        let c = self.at(pu, pv)?;
+        let gx = axis(self.at(pu - 1, pv)?, c, self.at(pu + 1, pv)?);
+        let gy = axis(self.at(pu, pv - 1)?, c, self.at(pu, pv + 1)?);
         let n = gx.hypot(gy);
-        if n > 0.0 { (gx / n, gy / n) } else { (0.0, 0.0) }
+        Ok(if n > 0.0 { (gx / n, gy / n) } else { (0.0, 0.0) })
     }
 
     /// Unit `−∇N` at window point `(x, y)` by bilinear interpolation of the
     /// four surrounding cell-centre gradients; `None` where it vanishes.
-    fn descent(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+    fn descent(&mut self, x: f64, y: f64) -> Result<Option<(f64, f64)>, PlanningError> {
         // Padded coordinates; centres at (pu + 0.5, pv + 0.5).
         let (px, py) = (x + 1.0 - 0.5, y + 1.0 - 0.5);
         let (u0, v0) = (px.floor(), py.floor());
         let (fx, fy) = (px - u0, py - v0);
         let (u0, v0) = (u0 as usize, v0 as usize);
-        let g00 = self.cell_gradient(u0, v0);
-        let g10 = self.cell_gradient(u0 + 1, v0);
-        let g01 = self.cell_gradient(u0, v0 + 1);
-        let g11 = self.cell_gradient(u0 + 1, v0 + 1);
+        let g00 = self.cell_gradient(u0, v0)?;
+        let g10 = self.cell_gradient(u0 + 1, v0)?;
+        let g01 = self.cell_gradient(u0, v0 + 1)?;
+        let g11 = self.cell_gradient(u0 + 1, v0 + 1)?;
         let gx = (1.0 - fy) * ((1.0 - fx) * g00.0 + fx * g10.0) + fy * ((1.0 - fx) * g01.0 + fx * g11.0);
         let gy = (1.0 - fy) * ((1.0 - fx) * g00.1 + fx * g10.1) + fy * ((1.0 - fx) * g01.1 + fx * g11.1);
         let n = gx.hypot(gy);
-        (n > 1e-9).then(|| (-gx / n, -gy / n))
+        Ok((n > 1e-9).then(|| (-gx / n, -gy / n)))
+    }
+
+    /// Whether the path may move from padded cell `a` to its neighbour
+    /// `b`: `N` strictly decreases, and a diagonal move does not cut past
+    /// a cell with `N = ∞`.
+    fn allowed(&mut self, a: (usize, usize), b: (usize, usize)) -> Result<bool, PlanningError> {
+        if self.at(b.0, b.1)? >= self.at(a.0, a.1)? {
+            return Ok(false);
+        }
+        Ok(a.0 == b.0 || a.1 == b.1 || (self.at(b.0, a.1)?.is_finite() && self.at(a.0, b.1)?.is_finite()))
     }
 }
 
@@ -204,8 +332,8 @@ fn inset(t: f64) -> f64 {
 }
 
 /// [`descend`], stopping after `max_points` points (at least 1).
-fn descend_up_to(
-    nf: &NavigationFunction,
+fn descend_up_to<V: Values>(
+    values: &mut V,
     start: Vec2,
     params: &GradientParams,
     path: &mut Vec<Vec2>,
@@ -213,20 +341,23 @@ fn descend_up_to(
 ) -> Result<DescentInfo, PlanningError> {
     params.validate()?;
     path.clear();
+    let nf = values.nf();
     let window = match nf.window() {
         Some(w) if !nf.goal_cells().is_empty() => w,
         _ => return Err(PlanningError::NoGoal),
     };
+    let goal = nf.goal();
     let cell = window.cell_of("start", start)?;
     if !window.contains(cell) {
         return Err(PlanningError::StartOutsideWindow { start, cell });
     }
-    let field = Field::new(nf, window);
-    let (pw, values) = (field.pw, field.values);
-    let padded_of =
-        |c: CellIndex| ((c.j - window.min().j + 1) as usize) * pw + (c.i - window.min().i + 1) as usize;
-    let mut a = padded_of(cell);
-    let start_value = values[a];
+    let mut field = Field::new(values, window);
+    // The current cell, in padded coordinates.
+    let mut a = (
+        (cell.i - window.min().i + 1) as usize,
+        (cell.j - window.min().j + 1) as usize,
+    );
+    let start_value = field.at(a.0, a.1)?;
     if !start_value.is_finite() {
         return Err(PlanningError::Unreachable { start, cell });
     }
@@ -246,30 +377,19 @@ fn descend_up_to(
         last = p;
         path.push(p);
     };
-    // Whether the path may move from padded cell `a` to its neighbour `b`.
-    let allowed = |a: usize, b: usize| -> bool {
-        if values[b] >= values[a] {
-            return false;
-        }
-        let (au, av, bu, bv) = (a % pw, a / pw, b % pw, b / pw);
-        // A diagonal move: both cells cut past must be finite.
-        au == bu || av == bv || (values[av * pw + bu].is_finite() && values[bv * pw + au].is_finite())
-    };
     let step = params.step_cells;
     let mut in_cell = 0usize;
     while path.len() < max_points {
-        if values[a] == 0.0 {
+        if field.at(a.0, a.1)? == 0.0 {
             // A goal cell: end at the goal point (or the cell's centre).
-            let end = nf
-                .goal()
-                .unwrap_or_else(|| window.from_window((a % pw) as f64 - 0.5, (a / pw) as f64 - 0.5));
+            let end = goal.unwrap_or_else(|| window.from_window(a.0 as f64 - 0.5, a.1 as f64 - 0.5));
             if end != *path.last().unwrap_or(&start) {
                 push(end, &mut info, path);
             }
             break;
         }
         let gradient = if in_cell < MAX_STEPS_IN_CELL {
-            field.descent(x, y)
+            field.descent(x, y)?
         } else {
             None
         };
@@ -278,11 +398,11 @@ fn descend_up_to(
             let (nx, ny) = (x + step * dx, y + step * dy);
             // Window point (nx, ny) lies in padded cell (⌊nx⌋ + 1, ⌊ny⌋ + 1);
             // a step of at most one cell stays within the padding ring.
-            let b = ((ny.floor() + 1.0) as usize) * pw + (nx.floor() + 1.0) as usize;
+            let b = ((nx.floor() + 1.0) as usize, (ny.floor() + 1.0) as usize);
             if b == a {
                 in_cell += 1;
                 moved = true;
-            } else if allowed(a, b) {
+            } else if field.allowed(a, b)? {
                 a = b;
                 in_cell = 0;
                 moved = true;
@@ -300,35 +420,39 @@ fn descend_up_to(
         if !moved {
             // The allowed neighbour with the smallest N (first in this order
             // on ties).
+            let (u, v) = a;
             let neighbours = [
-                a + 1,
-                a - 1,
-                a + pw,
-                a - pw,
-                a + pw + 1,
-                a + pw - 1,
-                a - pw + 1,
-                a - pw - 1,
+                (u + 1, v),
+                (u - 1, v),
+                (u, v + 1),
+                (u, v - 1),
+                (u + 1, v + 1),
+                (u - 1, v + 1),
+                (u + 1, v - 1),
+                (u - 1, v - 1),
             ];
-            let mut best: Option<usize> = None;
+            let mut best: Option<((usize, usize), f64)> = None;
             for b in neighbours {
-                if allowed(a, b) && best.is_none_or(|o| values[b] < values[o]) {
-                    best = Some(b);
+                if field.allowed(a, b)? {
+                    let nb = field.at(b.0, b.1)?;
+                    if best.is_none_or(|(_, o)| nb < o) {
+                        best = Some((b, nb));
+                    }
                 }
             }
-            let Some(b) = best else {
+            let Some((b, _)) = best else {
                 let min = window.min();
                 return Err(PlanningError::NoDescent {
                     cell: CellIndex {
-                        i: min.i + (a % pw) as i64 - 1,
-                        j: min.j + (a / pw) as i64 - 1,
+                        i: min.i + a.0 as i64 - 1,
+                        j: min.j + a.1 as i64 - 1,
                     },
                 });
             };
             a = b;
             in_cell = 0;
-            x = (a % pw) as f64 - 0.5;
-            y = (a / pw) as f64 - 0.5;
+            x = a.0 as f64 - 0.5;
+            y = a.1 as f64 - 0.5;
             info.fallback_steps += 1;
             push(window.from_window(x, y), &mut info, path);
         }

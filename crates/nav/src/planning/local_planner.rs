@@ -9,6 +9,23 @@
 //! [`LocalPlanner`] keeps every buffer between cycles, so a cycle allocates
 //! nothing once warm.
 //!
+//! The wavefront is aimed at the robot and settles only what the descent
+//! reads ([`NavigationFunction::compute_towards`], [`descend_settling`]):
+//! the same direction and path as with `N` over the whole window, bit for
+//! bit (see [`super::navigation_function`]), for about a twentieth of the
+//! cells. [`LocalPlanner::navigation_function`] completes `N` on demand.
+//!
+//! [`descend`]: super::descend
+//!
+//! The map's part of the cost map is computed once, on the first cycle on a
+//! map: a [`StaticCostLayer`] of the whole map, kept. Each cycle copies the
+//! window from it and adds the obstacle points ([`CostMap::rebuild_on`]:
+//! the same costs as building the window from the map, bit for bit). A
+//! cycle checks that the map it is given has, over the window and its
+//! inflation margin, the cells the layer was made from; if not (another
+//! map), it makes the layer again. Planners on the same map can share one
+//! ([`LocalPlanner::with_static_layer`]).
+//!
 //! The spec's exceptions map to errors: *goal occupation* is
 //! [`PlanningError::GoalBlocked`] with [`Blocked::Sensed`] (or
 //! [`Blocked::Inflated`] next to a sensed obstacle); *path blocking* is
@@ -17,11 +34,14 @@
 //! [`Blocked::Sensed`]: super::Blocked::Sensed
 //! [`Blocked::Inflated`]: super::Blocked::Inflated
 
+use std::sync::Arc;
+
 use robot::{GridMap, Vec2};
 
-use super::gradient::{DescentInfo, GradientParams, descend};
+use super::gradient::{DescentInfo, GradientParams, descend_settling};
 use super::{
-    CostMap, CostMapInfo, CostParams, NavigationFunction, NavigationInfo, PlanningError, Window, check_start,
+    CostMap, CostMapInfo, CostParams, NavigationFunction, NavigationInfo, PlanningError, StaticCostLayer,
+    Window, check_start,
 };
 
 /// Parameters of the local planner.
@@ -94,6 +114,8 @@ pub struct LocalPlan {
 #[derive(Debug, Clone)]
 pub struct LocalPlanner {
     params: LocalPlannerParams,
+    /// The static layer of the map of the last cycles.
+    layer: Option<Arc<StaticCostLayer>>,
     cost_map: Option<CostMap>,
     nf: NavigationFunction,
     path: Vec<Vec2>,
@@ -105,10 +127,24 @@ impl LocalPlanner {
         params.validate()?;
         Ok(LocalPlanner {
             params,
+            layer: None,
             cost_map: None,
             nf: NavigationFunction::new(),
             path: Vec::new(),
         })
+    }
+
+    /// A planner starting with a static layer made beforehand (to share one
+    /// between planners on the same map: it is immutable). A cycle on a map
+    /// the layer does not match, or with another cost model, makes its own.
+    /// Errors: invalid parameters.
+    pub fn with_static_layer(
+        params: LocalPlannerParams,
+        layer: Arc<StaticCostLayer>,
+    ) -> Result<LocalPlanner, PlanningError> {
+        let mut planner = LocalPlanner::new(params)?;
+        planner.layer = Some(layer);
+        Ok(planner)
     }
 
     /// The parameters.
@@ -116,10 +152,19 @@ impl LocalPlanner {
         &self.params
     }
 
+    /// The static layer of the map of the last cycles (`None` before the
+    /// first).
+    pub fn static_layer(&self) -> Option<&Arc<StaticCostLayer>> {
+        self.layer.as_ref()
+    }
+
     /// One cycle: the window of `map` centred on `robot`, `obstacles`
     /// (world points, e.g. [`super::laser_endpoints`]) added, the navigation
     /// function towards `goal`, and the descent from `robot` (kept in
     /// [`LocalPlanner::path`]).
+    ///
+    /// The first cycle on a map makes its [`StaticCostLayer`] (one distance
+    /// transform of the whole map, module docs).
     ///
     /// Errors: a non-finite point ([`PlanningError::BadPoint`]),
     /// [`PlanningError::StartBlocked`] (the robot's cell is lethal — in an
@@ -136,15 +181,21 @@ impl LocalPlanner {
         obstacles: &[Vec2],
     ) -> Result<LocalPlan, PlanningError> {
         self.path.clear();
+        // Until computed on this cycle's cost map, no navigation function.
+        self.nf.forget();
         let window = Window::centred(map, robot, self.params.window_size_m)?;
+        let layer = match &self.layer {
+            Some(l) if l.params() == &self.params.cost && l.matches(map, &window) => l,
+            _ => self
+                .layer
+                .insert(Arc::new(StaticCostLayer::new(self.params.cost, map)?)),
+        };
         let cost_map = match &mut self.cost_map {
             Some(c) => {
-                c.rebuild(map, window, obstacles)?;
+                c.rebuild_on(layer, window, obstacles)?;
                 c
             }
-            None => self
-                .cost_map
-                .insert(CostMap::build(self.params.cost, map, window, obstacles)?),
+            None => self.cost_map.insert(CostMap::build_on(layer, window, obstacles)?),
         };
         if cost_map.info().free_cells == 0 {
             return Err(PlanningError::NoFreeCell { window });
@@ -162,8 +213,17 @@ impl LocalPlanner {
             ) => super::nearest_free(cost_map, robot, self.params.escape_radius_m).ok_or(e)?,
             Err(e) => return Err(e),
         };
-        let navigation = self.nf.compute(cost_map, goal)?;
-        let descent = descend(&self.nf, start, &self.params.gradient, &mut self.path)?;
+        // N towards the start: only what the descent reads is settled, and
+        // the descent is the one on the whole window's N (module docs).
+        self.nf.compute_towards(cost_map, goal, start)?;
+        let descent = descend_settling(
+            &mut self.nf,
+            cost_map,
+            start,
+            &self.params.gradient,
+            &mut self.path,
+        )?;
+        let navigation = self.nf.info();
         if start != robot {
             self.path.insert(0, robot);
         }
@@ -191,8 +251,15 @@ impl LocalPlanner {
         self.cost_map.as_ref()
     }
 
-    /// The navigation function of the last cycle.
-    pub fn navigation_function(&self) -> &NavigationFunction {
+    /// The navigation function of the last cycle, over the whole window:
+    /// the cycle settled only what the descent needed, this settles the rest
+    /// first (the same values as [`NavigationFunction::compute`]). Empty
+    /// (no goal) if the last cycle failed before computing it.
+    pub fn navigation_function(&mut self) -> &NavigationFunction {
+        if let Some(cost_map) = &self.cost_map {
+            // The function was computed on this cost map: it cannot fail.
+            let _ = self.nf.complete(cost_map);
+        }
         &self.nf
     }
 }
@@ -279,6 +346,63 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn the_navigation_function_of_a_cycle_is_the_whole_windows() {
+        let m = map();
+        let mut lp = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        let (robot, goal) = (Vec2::new(9.0, 10.0), Vec2::new(13.5, 10.0));
+        let plan = lp.plan(&m, robot, goal, &[Vec2::new(10.0, 11.0)]).unwrap();
+        let mut whole = NavigationFunction::new();
+        let cost_map = lp.cost_map().unwrap().clone();
+        let info = whole.compute(&cost_map, goal).unwrap();
+        // The cycle settled a small part of the window.
+        assert!(plan.navigation.reached_cells * 4 < info.reached_cells, "{plan:?}");
+        let mut path = Vec::new();
+        crate::planning::descend(&whole, robot, &LocalPlannerParams::default().gradient, &mut path).unwrap();
+        assert_eq!(lp.path(), path.as_slice());
+        let nf = lp.navigation_function();
+        assert!(nf.is_complete());
+        for k in 0..plan.window.len() {
+            let c = plan.window.cell_at(k);
+            assert_eq!(nf.value(c).to_bits(), whole.value(c).to_bits(), "{c:?}");
+        }
+        // After a cycle that failed before computing it: none.
+        assert!(lp.plan(&m, Vec2::new(12.02, 10.0), goal, &[]).is_err());
+        assert!(lp.navigation_function().goal_cells().is_empty());
+    }
+
+    #[test]
+    fn another_map_makes_the_static_layer_again() {
+        let m = map();
+        let mut lp = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        let (robot, goal) = (Vec2::new(9.0, 10.0), Vec2::new(13.5, 10.0));
+        lp.plan(&m, robot, goal, &[]).unwrap();
+        // The same frame, the wall gone: a straight path now.
+        let open = GridMap::new(400, 400, 0.05, Pose::default(), vec![Cell::Free; 400 * 400]).unwrap();
+        lp.plan(&open, robot, goal, &[]).unwrap();
+        assert!(lp.path().iter().all(|p| (p.y - 10.0).abs() < 0.1));
+        let mut fresh = LocalPlanner::new(LocalPlannerParams::default()).unwrap();
+        fresh.plan(&open, robot, goal, &[]).unwrap();
+        assert_eq!(lp.path(), fresh.path());
+        // And back: round the wall again.
+        lp.plan(&m, robot, goal, &[]).unwrap();
+        assert!(lp.path().iter().any(|p| p.y > 12.3 || p.y < 7.7));
+        // A layer shared with another planner: used as it is.
+        let layer = Arc::clone(lp.static_layer().unwrap());
+        let mut shared =
+            LocalPlanner::with_static_layer(LocalPlannerParams::default(), Arc::clone(&layer)).unwrap();
+        shared.plan(&m, robot, goal, &[]).unwrap();
+        assert!(Arc::ptr_eq(shared.static_layer().unwrap(), &layer));
+        assert_eq!(shared.path(), lp.path());
+        // With another cost model, the planner makes its own.
+        let mut other = LocalPlannerParams::default();
+        other.cost.inscribed_radius_m = 0.42;
+        let mut own = LocalPlanner::with_static_layer(other, Arc::clone(&layer)).unwrap();
+        own.plan(&m, robot, goal, &[]).unwrap();
+        assert!(!Arc::ptr_eq(own.static_layer().unwrap(), &layer));
+        assert_eq!(own.static_layer().unwrap().params(), &other.cost);
     }
 
     #[test]

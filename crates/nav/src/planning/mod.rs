@@ -12,10 +12,11 @@
 //! | [`window`] | the rectangle of map cells planned over (10 m × 10 m around the robot, or the whole map) |
 //! | [`distance_transform`] | exact Euclidean distance to the nearest obstacle cell (Felzenszwalb–Huttenlocher) |
 //! | [`cost_map`] | lethal cells (obstacles, unknown, laser endpoints, within the inscribed radius) and the intrinsic cost near obstacles |
-//! | [`navigation_function`] | `N`: Dijkstra from the goal on the 8-connected grid, edge cost `ℓ · (1 + mean intrinsic cost)` |
-//! | [`gradient`] | the interpolated `−∇N` and the path down it, never through a lethal cell |
+//! | [`static_layer`] | the map's part of every cost map, once per map; a window's cost map is then a copy plus the sensed obstacles |
+//! | [`navigation_function`] | `N`: Dijkstra from the goal on the 8-connected grid, edge cost `ℓ · (1 + mean intrinsic cost)`; or `A*` aimed at the robot, the same values where settled |
+//! | [`gradient`] | the interpolated `−∇N` and the path down it, never through a lethal cell (settling `N` as it reads it) |
 //! | [`global_route`] | the whole-map route and its intermediate goals (at corners, ≤ 4 m apart) |
-//! | [`local_planner`] | one control cycle: cost map, `N` and direction in the window around the robot |
+//! | [`local_planner`] | one control cycle: cost map (on the static layer), `N` towards the robot and the path in the window around it |
 //!
 //! ```
 //! use nav::planning::{LocalPlanner, LocalPlannerParams};
@@ -45,13 +46,15 @@ pub mod global_route;
 pub mod gradient;
 pub mod local_planner;
 pub mod navigation_function;
+pub mod static_layer;
 pub mod window;
 
 pub use cost_map::{Blocked, CostMap, CostMapInfo, CostParams, laser_endpoints};
 pub use global_route::{GlobalPlanner, Route, RouteParams, intermediate_goals};
-pub use gradient::{DescentInfo, GradientParams, descend, descent_direction_at, direction};
+pub use gradient::{DescentInfo, GradientParams, descend, descend_settling, descent_direction_at, direction};
 pub use local_planner::{LocalPlan, LocalPlanner, LocalPlannerParams};
 pub use navigation_function::{NavigationFunction, NavigationInfo};
+pub use static_layer::StaticCostLayer;
 pub use window::Window;
 
 use robot::{CellIndex, Vec2};
@@ -143,6 +146,18 @@ pub enum PlanningError {
         /// The start.
         start: Vec2,
         /// Its cell.
+        cell: CellIndex,
+    },
+    /// A cost map other than the one a navigation function computed towards
+    /// a start was computed on (another window).
+    #[error("the cost map is not the one the navigation function was computed on (another window)")]
+    OtherCostMap,
+    /// A descent needs the value of a cell that a navigation function
+    /// computed towards a start has not settled (complete it, or descend
+    /// with `descend_settling`).
+    #[error("the navigation function has not settled cell ({}, {}) yet: it was computed towards another start", .cell.i, .cell.j)]
+    Unsettled {
+        /// The cell.
         cell: CellIndex,
     },
     /// Rounding left a cell with a finite value but no lower neighbour
