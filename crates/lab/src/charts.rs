@@ -160,8 +160,16 @@ pub fn bars(
         .flat_map(|b| [b.value, b.high])
         .filter(|v| v.is_finite())
         .fold(0.0f64, f64::max);
-    let top = if top > 0.0 { top * 1.1 } else { 1.0 };
     let n = series.len().max(1) as f64;
+    // Headroom for the legend (about 20 px a row in the upper right) above
+    // the tallest bar, so that it never hides one.
+    let plot_px = f64::from(size.1.saturating_sub(36 + 24 + 30)).max(60.0);
+    let legend = ((20.0 * n + 16.0) / plot_px).min(0.6);
+    let top = if top > 0.0 {
+        top * 1.05 / (1.0 - legend)
+    } else {
+        1.0
+    };
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();

@@ -481,7 +481,10 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     ));
     let mut text = String::new();
     for (d, (density, _)) in DENSITIES.iter().enumerate() {
+        // The first of the best (ties go to the earlier strategy, not to the
+        // supervisor, which comes last).
         let best_success = (0..STRATEGIES.len())
+            .rev()
             .max_by(|&a, &b| {
                 cells[&(d, a)]
                     .success
@@ -497,27 +500,28 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         let bs = &cells[&(d, best_success)];
         let bt = &cells[&(d, best_time)];
         let overlap = |a: &Proportion, b: &Proportion| a.low <= b.high && b.low <= a.high;
+        let close_in_time =
+            |a: &Mean, b: &Mean| a.n > 0 && b.n > 0 && (a.mean - b.mean).abs() <= a.half_width + b.half_width;
+        let tied = |best: usize, same: &dyn Fn(&Cell) -> bool| -> String {
+            let names: Vec<&str> = (0..STRATEGIES.len())
+                .filter(|&s| s != best && same(&cells[&(d, s)]))
+                .map(|s| STRATEGIES[s])
+                .collect();
+            if names.is_empty() {
+                String::new()
+            } else {
+                format!("; within its interval: {}", names.join(", "))
+            }
+        };
         let _ = write!(
             text,
-            "**{density}.** Most successful: {} ({}){}. Fastest: {} ({} s){}. The supervisor: {} success, {} s, {} of its driving in contour tracking, {:.1} s in Warning per mission. Mission by mission against the supervisor: ",
+            "**{density}.** Most successful: {} ({}{}). Fastest: {} ({} s{}). The supervisor: {} success, {} s, {} of its driving in contour tracking, {:.1} s in Warning per mission. Mission by mission against the supervisor: ",
             STRATEGIES[best_success],
             pct(&bs.success),
-            if best_success != 4 && overlap(&bs.success, &sup.success) {
-                ", within the supervisor's interval"
-            } else {
-                ""
-            },
+            tied(best_success, &|c: &Cell| overlap(&c.success, &bs.success)),
             STRATEGIES[best_time],
             secs(&bt.time),
-            if best_time != 4
-                && bt.time.n > 0
-                && sup.time.n > 0
-                && (bt.time.mean - sup.time.mean).abs() <= bt.time.half_width + sup.time.half_width
-            {
-                ", within the supervisor's interval"
-            } else {
-                ""
-            },
+            tied(best_time, &|c: &Cell| close_in_time(&c.time, &bt.time)),
             pct(&sup.success),
             secs(&sup.time),
             if sup.contour_share.is_finite() {
@@ -556,7 +560,13 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         let _ = writeln!(text, "{}.\n", parts.join("; "));
     }
     text.push_str(
-        "Why, from the traces: the supervisor chooses AutoMove whenever `f_auto > f_cont`, and `f_auto` falls as the learnt rates say the localizer warns often and recovers slowly, or the planner goes Abnormal often; under the rule every Warning hands the robot to contour tracking, which is slower in this hall (its reference runs take longer than AutoMove's), so time in Warning costs time; and a decision taken on a return to Success uses the remaining part of each reference trajectory, so late in a mission the shorter remaining AutoMove path favours it. Where the supervisor loses, replay its missions: `petrinav lab replay out/tourguide 'DENSITY/supervisor#K' --trace t.jsonl` lists its decisions and switches with the rates it used.\n",
+        "“+a −b” counts the missions (same campaign, same visitors) that only the supervisor reached (a) and that only the other strategy reached (b); the time difference is the supervisor's minus the other's on the missions both reached.\n\n",
+    );
+    for (d, (density, _)) in DENSITIES.iter().enumerate() {
+        let _ = writeln!(text, "{}\n", why(runs, density, d, &cells));
+    }
+    text.push_str(
+        "Any mission can be replayed with its decisions and switches and the rates it used: `petrinav lab replay out/tourguide 'DENSITY/supervisor#K' --trace t.jsonl`.\n",
     );
     blocks.push(Block::Text(text));
     blocks.push(Block::Heading("All scenarios".into()));
@@ -575,6 +585,151 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         blocks,
         files,
     })
+}
+
+/// The behaviour driving when a mission ended: the last switch's target,
+/// or the choice at the start.
+fn final_behaviour(r: &RunRecord) -> Option<&str> {
+    r.events.iter().rev().find_map(|e| match e.kind.as_str() {
+        "switch" => e.text("to"),
+        "decision" if e.text("reason") == Some("start") => e.text("choice"),
+        _ => None,
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Why the supervisor did as it did at a density, from its records: what
+/// it decided and on which values, how its failed missions ended, whether
+/// the net's premise (a warning localizer hurts AutoMove) held for AutoMove
+/// alone, and what the contour hypothesis was learnt from.
+fn why(runs: &Runs, density: &str, d: usize, cells: &BTreeMap<(usize, usize), Cell>) -> String {
+    let records = |strategy: &str| -> Vec<&RunRecord> {
+        runs.get(&format!("{density}/{strategy}"))
+            .map(|v| v.iter().map(|(_, r)| r).collect())
+            .unwrap_or_default()
+    };
+    let index = |name: &str| STRATEGIES.iter().position(|s| *s == name).unwrap_or(0);
+    let sup = records("supervisor");
+    if sup.is_empty() {
+        return format!("**{density}, why.** No supervisor missions in the results.");
+    }
+    let decisions: Vec<&Event> = sup
+        .iter()
+        .flat_map(|r| r.events.iter().filter(|e| e.kind == "decision"))
+        .collect();
+    let starts: Vec<&Event> = decisions
+        .iter()
+        .copied()
+        .filter(|e| e.text("reason") == Some("start"))
+        .collect();
+    let contour_choices = decisions
+        .iter()
+        .filter(|e| e.text("choice") == Some("contour"))
+        .count();
+    let contour_starts = starts
+        .iter()
+        .filter(|e| e.text("choice") == Some("contour"))
+        .count();
+    let at_start = |key: &str| median(starts.iter().map(|e| num(Some(e), key)).collect());
+    let failed: Vec<&RunRecord> = sup.iter().copied().filter(|r| !r.success).collect();
+    let failed_in_contour = failed
+        .iter()
+        .filter(|r| final_behaviour(r) == Some("contour"))
+        .count();
+    let timeouts = failed.iter().filter(|r| r.outcome == "time_limit").count();
+    let collisions = failed.iter().filter(|r| r.outcome == "collision").count();
+    let mut out = format!(
+        "**{density}, why.** The supervisor took {} decisions ({} at mission starts, {} on returns to Success) and chose contour tracking in {} of them ({} of the starts). At the starts the median `f_auto` was {:.5} against `f_cont` {:.5}, with the learnt `P_loc,warn` at {:.2}. ",
+        decisions.len(),
+        starts.len(),
+        decisions.len() - starts.len(),
+        contour_choices,
+        contour_starts,
+        at_start("f_auto"),
+        at_start("f_cont"),
+        at_start("p_loc_warn"),
+    );
+    if failed.is_empty() {
+        out.push_str("It failed no mission. ");
+    } else {
+        let _ = write!(
+            out,
+            "Of its {} failed missions {} ran out of time and {} ended in a collision; {} of them were in contour tracking when they ended. ",
+            failed.len(),
+            timeouts,
+            collisions,
+            failed_in_contour,
+        );
+    }
+    // The net's premise, tested on AutoMove alone.
+    let auto = records("automove");
+    let auto_cell = &cells[&(d, index("automove"))];
+    let contour_cell = &cells[&(d, index("contour"))];
+    let rule_cell = &cells[&(d, index("rule"))];
+    let sup_cell = &cells[&(d, index("supervisor"))];
+    let loc_mean = mean_of(&auto, |r| r.metric(metric::LOC_MEAN));
+    let loc_max = auto
+        .iter()
+        .filter_map(|r| r.metric(metric::LOC_MAX))
+        .fold(f64::NEG_INFINITY, f64::max);
+    if auto_cell.warning.n > 0 && auto_cell.warning.mean > 1.0 {
+        let _ = write!(
+            out,
+            "AutoMove alone spent {:.1} s per mission with the localizer in Warning, yet its true error stayed at {:.3} m on average ({:.2} m at most) and it reached {}. ",
+            auto_cell.warning.mean,
+            loc_mean.mean,
+            loc_max,
+            pct(&auto_cell.success),
+        );
+        if loc_max < 0.5 && auto_cell.success.low > rule_cell.success.high.min(sup_cell.success.high) {
+            out.push_str(
+                "Here a Warning means that visitors hide the walls from the laser, not that the estimate is wrong: the net's AutoMove hypothesis hands the robot to contour tracking at every Warning (t3), so the more the localizer warns, the lower `f_auto` — a premise this localizer does not bear out, and the supervisor pays for trusting it. ",
+            );
+        }
+    }
+    // What the contour hypothesis was learnt from.
+    let contour_calibration: Vec<&RunRecord> = runs
+        .get(&format!("{density}/calibration"))
+        .map(|v| {
+            v.iter()
+                .filter(|(k, _)| k % (2 * CALIBRATION_RUNS) >= CALIBRATION_RUNS)
+                .map(|(_, r)| r)
+                .collect()
+        })
+        .unwrap_or_default();
+    if !contour_calibration.is_empty() {
+        let ok = contour_calibration.iter().filter(|r| r.success).count();
+        let _ = write!(
+            out,
+            "The contour hypothesis rests on the calibration runs that reached the goal ({} of {} contour runs here: λ8 is one over their mean time) and fails only while the localizer warns (t12, λ10 from the share of failed missions). Contour tracking alone reached {} of its missions at this density ({} time limits, {} collisions): ",
+            ok,
+            contour_calibration.len(),
+            pct(&contour_cell.success),
+            contour_cell.timeouts,
+            contour_cell.collisions,
+        );
+        out.push_str(
+            if contour_cell.success.value < 0.9 && contour_cell.success.high < auto_cell.success.low {
+                "it fails by being blocked (by visitors, circling them until the time runs out), a way of failing the net has no transition for, so the net overrates it."
+            } else {
+                "about as reliable as the net assumes."
+            },
+        );
+    }
+    out
 }
 
 /// The picture of the first mission of `source` with a switch.
