@@ -6,7 +6,7 @@
 //! - `step/automove_filter`: a control step in which the localizer runs a
 //!   filter iteration (500 particles, 60 of 181 beams) and AutoMove plans
 //!   its window: the worst step. The perceptions alternate between two
-//!   recorded ones whose odometry differs by 0.25 m, so that every step
+//!   recorded ones whose odometry differs by 0.45 m, so that every step
 //!   triggers an iteration. Target ≤ 3 ms.
 //! - `step/automove`: the same steps without forcing iterations (the
 //!   localizer iterates every 0.2 m of travel, about one step in four at
@@ -52,8 +52,12 @@ fn place(name: &str) -> Pose {
         .pose
 }
 
-/// A controller on its way from the entrance and two perceptions 0.25 m
-/// apart recorded on that way.
+/// A controller on its way from the entrance and two perceptions 0.45 m
+/// apart recorded on that way: more than twice `update_min_d` (0.2 m), so
+/// that wherever the last filter iteration was, one of them is far enough
+/// from it, and from then on every alternation runs an iteration (0.25 m
+/// apart, both could lie within 0.2 m of the last iteration, and then no
+/// step ever ran one).
 fn recorded() -> (GuideController, [Perception; 2]) {
     let world = world();
     let start = place("entrance");
@@ -70,7 +74,7 @@ fn recorded() -> (GuideController, [Perception; 2]) {
         sim.tick(&mut c);
     }
     let a = sim.perception().clone();
-    while sim.perception().odometry.position().dist(a.odometry.position()) < 0.25 {
+    while sim.perception().odometry.position().dist(a.odometry.position()) < 0.45 {
         sim.tick(&mut c);
     }
     let b = sim.perception().clone();
@@ -84,12 +88,21 @@ mod step {
     #[divan::bench]
     fn automove_filter(bencher: Bencher) {
         let (mut c, ps) = recorded();
+        let before = c.localizer().iterations();
         let mut k = 0;
+        let mut steps = 0u64;
         let mut notes = Notes::disabled();
         bencher.bench_local(|| {
             k ^= 1;
+            steps += 1;
             c.step(&ps[k], &mut notes)
         });
+        // Every step but perhaps the first ran a filter iteration.
+        assert!(
+            c.localizer().iterations() - before + 1 >= steps,
+            "{} filter iterations in {steps} steps",
+            c.localizer().iterations() - before
+        );
     }
 
     #[divan::bench]
