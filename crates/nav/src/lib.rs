@@ -24,4 +24,5 @@ pub mod localization;
 pub mod planning;
 pub mod sectors;
 pub mod supervisor;
+pub mod topo;
 pub mod voting;

@@ -1,0 +1,356 @@
+//! Navigating with the map: from a known reference place to one of several
+//! goal places, transition by transition (topo-fpn.md, "Navigating with the
+//! map").
+//!
+//! At the start the robot stands at the start place (its map pose is set to
+//! the place's). Then, at every place:
+//!
+//! 1. plan from here to the goals (propagation, [`PlanMode`] of the
+//!    parameters) and play the first transition of the route: its exit
+//!    turn, then its strategy until the next reference place;
+//! 2. on arrival, recognise the place. The expected destination: the
+//!    transition succeeded. Anywhere else (a known place or a new one): it
+//!    failed — its attempt is counted, its threshold `λ(t)` lowered
+//!    ([`FuzzyPetriNet::record_attempt`], rule in [`ThresholdParams`]), and
+//!    what really happened is added to the map as a transition of its own
+//!    (the map is updated as the robot goes); then plan again from here;
+//! 3. a goal place recognised: done ([`robot::Step::Done`]).
+//!
+//! No route from a place (every way rejected or unknown): play an action
+//! not yet tried from it, as the explorer would, and plan again from
+//! wherever it leads. A failed leg (timeout) counts as a failed attempt,
+//! and the robot drives straight to the next obstacle. More than
+//! [`NavigateParams::max_legs`] legs: give up.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use robot::{Command, Controller, Event, Notes, Perception, Step};
+
+use super::TopoError;
+use super::builder::MapBuilder;
+use super::explore::{TopoParams, Visit, place_event};
+use super::fpn::{FuzzyPetriNet, PlaceId, ThresholdParams, TransitionId, Turn};
+use super::propagation::{Plan, PlanMode, plan};
+use super::strategy::{Action, actions_at};
+use super::walker::{Walker, WalkerStep};
+
+/// Parameters of navigation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavigateParams {
+    /// Driving and mapping.
+    pub topo: TopoParams,
+    /// How routes are planned. Default optimal.
+    pub mode: PlanMode,
+    /// How thresholds drop after failures.
+    pub thresholds: ThresholdParams,
+    /// Legs before giving up. Default 40.
+    pub max_legs: u32,
+}
+
+impl Default for NavigateParams {
+    fn default() -> NavigateParams {
+        NavigateParams {
+            topo: TopoParams::default(),
+            mode: PlanMode::Optimal,
+            thresholds: ThresholdParams::default(),
+            max_legs: 40,
+        }
+    }
+}
+
+/// One leg of a navigation.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct NavLeg {
+    /// The stop it ended with.
+    pub visit: Visit,
+    /// The transition planned for it (`None`: no route, or after a failed
+    /// leg).
+    pub planned: Option<TransitionId>,
+    /// It ended where planned.
+    pub as_planned: bool,
+}
+
+/// Counts of a navigation.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct NavStats {
+    /// Legs played (transitions taken, planned or not).
+    pub legs: u32,
+    /// Legs that ended where planned.
+    pub as_planned: u32,
+    /// Plans made again after arriving elsewhere.
+    pub replans: u32,
+    /// Legs that failed (timeout, no way out).
+    pub failed_legs: u32,
+    /// Places with no route to the goals.
+    pub no_route: u32,
+}
+
+/// How a navigation stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NavState {
+    /// On the way.
+    Going,
+    /// A goal place recognised.
+    Arrived,
+    /// Too many legs.
+    GaveUp,
+}
+
+/// The route-following controller (module docs).
+#[derive(Debug)]
+pub struct RouteFollower {
+    walker: Walker,
+    params: NavigateParams,
+    start: PlaceId,
+    goals: Vec<PlaceId>,
+    expected: Option<TransitionId>,
+    state: NavState,
+    started: bool,
+    first_plan: Option<Plan>,
+    legs: Vec<NavLeg>,
+    stats: NavStats,
+    rng: ChaCha8Rng,
+    error: Option<TopoError>,
+}
+
+impl RouteFollower {
+    /// Navigation on `map` from `start` to any of `goals`; `seed` drives
+    /// the choices when there is no route.
+    pub fn new(
+        map: FuzzyPetriNet,
+        start: PlaceId,
+        goals: &[PlaceId],
+        params: NavigateParams,
+        seed: u64,
+    ) -> Result<RouteFollower, TopoError> {
+        params.thresholds.validate()?;
+        for &p in std::iter::once(&start).chain(goals) {
+            if map.get_place(p).is_none() {
+                return Err(TopoError::NoSuchPlace {
+                    id: p.0,
+                    places: map.num_places(),
+                });
+            }
+        }
+        if goals.is_empty() {
+            return Err(TopoError::Params(
+                "navigation needs at least one goal place".into(),
+            ));
+        }
+        let builder = MapBuilder::with_map(map, params.topo.recognition)?;
+        Ok(RouteFollower {
+            walker: Walker::new(builder, params.topo.strategy, params.topo.situation)?,
+            params,
+            start,
+            goals: goals.to_vec(),
+            expected: None,
+            state: NavState::Going,
+            started: false,
+            first_plan: None,
+            legs: Vec::new(),
+            stats: NavStats::default(),
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            error: None,
+        })
+    }
+
+    /// The map as it is now (updated on the way).
+    pub fn map(&self) -> &FuzzyPetriNet {
+        self.walker.builder().map()
+    }
+
+    /// Takes the map.
+    pub fn into_map(self) -> FuzzyPetriNet {
+        self.walker.into_builder().into_map()
+    }
+
+    /// The plan made at the start.
+    pub fn first_plan(&self) -> Option<&Plan> {
+        self.first_plan.as_ref()
+    }
+
+    /// The legs so far.
+    pub fn legs(&self) -> &[NavLeg] {
+        &self.legs
+    }
+
+    /// The counts so far.
+    pub fn stats(&self) -> NavStats {
+        self.stats
+    }
+
+    /// How it stands.
+    pub fn state(&self) -> NavState {
+        self.state
+    }
+
+    /// The place the robot believes it stands at (between legs).
+    pub fn place(&self) -> Option<PlaceId> {
+        self.walker.place()
+    }
+
+    /// The error that stopped it, if any.
+    pub fn error(&self) -> Option<&TopoError> {
+        self.error.as_ref()
+    }
+
+    /// Plans from `at` and starts the first transition (or an untried
+    /// action when there is no route).
+    fn go_from(&mut self, at: PlaceId) {
+        let map = self.walker.builder().map();
+        match plan(map, at, &self.goals, self.params.mode) {
+            Ok(p) if !p.route.is_empty() => {
+                let t = p.route[0];
+                let tr = map.transition(t);
+                let action = Action {
+                    exit_turn: tr.exit_turn,
+                    strategy: tr.strategy,
+                };
+                self.expected = Some(t);
+                let to = tr.to;
+                if self.first_plan.is_none() {
+                    self.first_plan = Some(p);
+                }
+                self.walker.start_expecting(action, Some(to));
+            }
+            _ => {
+                self.stats.no_route += 1;
+                let kind = map.place(at).kind;
+                let tried: Vec<Action> = map
+                    .leaving(at)
+                    .iter()
+                    .map(|&t| {
+                        let tr = map.transition(t);
+                        Action {
+                            exit_turn: tr.exit_turn,
+                            strategy: tr.strategy,
+                        }
+                    })
+                    .collect();
+                let all = actions_at(kind, map.place(at).concave);
+                let untried: Vec<Action> = all.iter().copied().filter(|a| !tried.contains(a)).collect();
+                let pool = if untried.is_empty() { all.to_vec() } else { untried };
+                let action = pool[self.rng.random_range(0..pool.len())];
+                self.expected = None;
+                self.walker.start(action);
+            }
+        }
+    }
+
+    fn tick(&mut self, p: &Perception, notes: &mut Notes) -> Result<Step, TopoError> {
+        match self.state {
+            NavState::Arrived => return Ok(Step::Done(Command::Stop)),
+            NavState::GaveUp => return Ok(Step::GiveUp),
+            NavState::Going => {}
+        }
+        if !self.started {
+            self.started = true;
+            self.walker.stand_at(self.start, p.odometry)?;
+            if self.goals.contains(&self.start) {
+                self.state = NavState::Arrived;
+                return Ok(Step::Done(Command::Stop));
+            }
+            self.go_from(self.start);
+        }
+        match self.walker.step(p)? {
+            WalkerStep::Drive(c) => {
+                if notes.is_enabled()
+                    && let Some(leg) = self.walker.leg()
+                {
+                    notes.behaviour(leg.action.strategy.name());
+                }
+                Ok(Step::Run(c))
+            }
+            WalkerStep::Arrived {
+                leg,
+                arrival,
+                transition,
+                ..
+            } => {
+                let planned = self.expected.take();
+                let map = self.walker.builder_mut().map_mut();
+                let as_planned = planned.is_some_and(|t| map.transition(t).to == arrival.place);
+                if let Some(t) = planned {
+                    map.record_attempt(t, as_planned, &self.params.thresholds)?;
+                }
+                let visit = Visit {
+                    time_s: p.time_s,
+                    place: arrival.place,
+                    new: arrival.new,
+                    recalibrated: arrival.recalibrated,
+                    heading_recalibrated: arrival.heading_recalibrated,
+                    tolerance_m: arrival.tolerance_m,
+                    map_pose: arrival.map_pose,
+                    odometry: p.odometry,
+                    from: leg.from,
+                    action: leg.action,
+                    transition,
+                };
+                if notes.is_enabled() {
+                    notes.event(place_event(self.map(), &visit).with("as_planned", as_planned));
+                }
+                self.legs.push(NavLeg {
+                    visit,
+                    planned,
+                    as_planned,
+                });
+                self.stats.legs += 1;
+                if as_planned {
+                    self.stats.as_planned += 1;
+                }
+                if self.goals.contains(&arrival.place) {
+                    self.state = NavState::Arrived;
+                    return Ok(Step::Done(Command::Stop));
+                }
+                if self.stats.legs >= self.params.max_legs {
+                    self.state = NavState::GaveUp;
+                    return Ok(Step::GiveUp);
+                }
+                if planned.is_some() && !as_planned {
+                    self.stats.replans += 1;
+                }
+                self.go_from(arrival.place);
+                Ok(Step::Run(Command::Stop))
+            }
+            WalkerStep::Failed { failure, .. } => {
+                self.stats.legs += 1;
+                self.stats.failed_legs += 1;
+                if let Some(t) = self.expected.take() {
+                    self.walker
+                        .builder_mut()
+                        .map_mut()
+                        .record_attempt(t, false, &self.params.thresholds)?;
+                }
+                if notes.is_enabled() {
+                    notes.event(Event::new("leg_failed", p.time_s).with("why", format!("{failure:?}")));
+                }
+                if self.stats.legs >= self.params.max_legs {
+                    self.state = NavState::GaveUp;
+                    return Ok(Step::GiveUp);
+                }
+                self.walker.start_anywhere(Turn::Left);
+                Ok(Step::Run(Command::Stop))
+            }
+            WalkerStep::Idle => {
+                self.walker.start_anywhere(Turn::Left);
+                Ok(Step::Run(Command::Stop))
+            }
+        }
+    }
+}
+
+impl Controller for RouteFollower {
+    fn step(&mut self, p: &Perception, notes: &mut Notes) -> Step {
+        if self.error.is_some() {
+            return Step::GiveUp;
+        }
+        match self.tick(p, notes) {
+            Ok(s) => s,
+            Err(e) => {
+                self.error = Some(e);
+                Step::GiveUp
+            }
+        }
+    }
+}

@@ -1,0 +1,237 @@
+//! The robot going from reference place to reference place: plays one
+//! [`Action`] at a time with an [`Executor`], and on every stop in front of
+//! an obstacle classifies the place ([`Situation`]), recognises or adds it
+//! ([`MapBuilder::arrive`]) and records the transition that led there
+//! ([`MapBuilder::record`]). The explorer and the route follower decide
+//! which action comes next; this is what they share.
+
+use robot::{Command, Perception, Pose};
+
+use super::TopoError;
+use super::builder::{Arrival, Cues, MapBuilder};
+use super::fpn::{PlaceId, Strategy, TransitionId, Turn};
+use super::ring::Ring;
+use super::situation::{Situation, SituationParams};
+use super::strategy::{Action, Executor, Failure, Progress, StrategyParams};
+
+/// Wheels slower than this (both) count as stopped, m/s.
+const STOPPED_MPS: f64 = 0.01;
+
+/// A leg: where it started (if at a known place) and what it plays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Leg {
+    /// The place it left (`None`: after a failure, from nowhere known).
+    pub from: Option<PlaceId>,
+    /// The action played.
+    pub action: Action,
+}
+
+/// What one tick of the walker gave.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WalkerStep {
+    /// Driving a leg.
+    Drive(Command),
+    /// Stopped at a reference place; the caller starts the next leg.
+    Arrived {
+        /// The leg that ended.
+        leg: Leg,
+        /// What the place looks like.
+        situation: Situation,
+        /// Which place it is.
+        arrival: Arrival,
+        /// The transition recorded for the leg (`None` for a leg from
+        /// nowhere).
+        transition: Option<TransitionId>,
+        /// The leg's duration, seconds.
+        duration_s: f64,
+    },
+    /// The leg failed; the caller starts another (the robot is at no known
+    /// place).
+    Failed {
+        /// The leg that failed.
+        leg: Leg,
+        /// Why.
+        failure: Failure,
+    },
+    /// Waiting for the caller to start a leg.
+    Idle,
+}
+
+/// Plays legs and builds the map (module docs).
+#[derive(Debug, Clone)]
+pub struct Walker {
+    builder: MapBuilder,
+    strategy: StrategyParams,
+    situation: SituationParams,
+    leg: Option<(Leg, Executor)>,
+    expected: Option<PlaceId>,
+    place: Option<PlaceId>,
+    last_time_s: Option<f64>,
+    odom: Pose,
+}
+
+impl Walker {
+    /// A walker building on `builder`'s map.
+    pub fn new(
+        builder: MapBuilder,
+        strategy: StrategyParams,
+        situation: SituationParams,
+    ) -> Result<Walker, TopoError> {
+        strategy.validate().map_err(TopoError::Params)?;
+        situation.validate().map_err(TopoError::Params)?;
+        Ok(Walker {
+            builder,
+            strategy,
+            situation,
+            leg: None,
+            expected: None,
+            place: None,
+            last_time_s: None,
+            odom: Pose::default(),
+        })
+    }
+
+    /// The map builder.
+    pub fn builder(&self) -> &MapBuilder {
+        &self.builder
+    }
+
+    /// The map builder, mutable.
+    pub fn builder_mut(&mut self) -> &mut MapBuilder {
+        &mut self.builder
+    }
+
+    /// Takes the builder.
+    pub fn into_builder(self) -> MapBuilder {
+        self.builder
+    }
+
+    /// The place the robot stands at (between legs), if known.
+    pub fn place(&self) -> Option<PlaceId> {
+        self.place
+    }
+
+    /// The leg being played.
+    pub fn leg(&self) -> Option<Leg> {
+        self.leg.as_ref().map(|(l, _)| *l)
+    }
+
+    /// The last odometry pose seen.
+    pub fn odometry(&self) -> Pose {
+        self.odom
+    }
+
+    /// The robot stands at `place` (the start of a mission): localise there.
+    pub fn stand_at(&mut self, place: PlaceId, odom: Pose) -> Result<(), TopoError> {
+        self.builder.localize_at(place, odom)?;
+        self.place = Some(place);
+        self.odom = odom;
+        Ok(())
+    }
+
+    /// Starts a leg from where the robot stands, expecting it to end at
+    /// `expected` (a planned transition's destination; see
+    /// [`super::recognition`]).
+    pub fn start_expecting(&mut self, action: Action, expected: Option<PlaceId>) {
+        self.start(action);
+        self.expected = expected;
+    }
+
+    /// Starts a leg from where the robot stands.
+    pub fn start(&mut self, action: Action) {
+        self.expected = None;
+        let leg = Leg {
+            from: self.place,
+            action,
+        };
+        let ex = Executor::new(
+            self.strategy,
+            action.strategy,
+            action.exit_turn,
+            self.odom.theta_rad,
+        );
+        self.leg = Some((leg, ex));
+    }
+
+    /// Starts a leg from nowhere known: turn left, then straight ahead to
+    /// the next obstacle (after a failure, or at the very start).
+    pub fn start_anywhere(&mut self, exit_turn: Turn) {
+        self.place = None;
+        self.start(Action {
+            exit_turn,
+            strategy: Strategy::FreeMovement,
+        });
+    }
+
+    /// One control tick.
+    pub fn step(&mut self, p: &Perception) -> Result<WalkerStep, TopoError> {
+        let dt_s = match self.last_time_s {
+            Some(t) if p.time_s > t => p.time_s - t,
+            _ => 0.1,
+        };
+        self.last_time_s = Some(p.time_s);
+        self.odom = p.odometry;
+        self.builder.track(p.odometry);
+        let Some((leg, ex)) = &mut self.leg else {
+            return Ok(WalkerStep::Idle);
+        };
+        let ring = Ring::of(p);
+        let (l, r) = p.wheel_speeds_mps;
+        let stopped = l.abs() < STOPPED_MPS && r.abs() < STOPPED_MPS;
+        match ex.step(&ring, p.odometry.theta_rad, stopped, dt_s) {
+            Progress::Drive(c) => Ok(WalkerStep::Drive(c)),
+            Progress::Arrived => {
+                let leg = *leg;
+                let duration_s = ex.elapsed_s();
+                let aligned = ex.aligned_heading(self.builder.params().align_min_run_m, p.odometry.theta_rad);
+                if std::env::var("DBGAL").is_ok() {
+                    eprintln!(
+                        "DBG {:?} run {:.2} aligned {:?} odom th {:.3}",
+                        leg.action.strategy,
+                        ex.wall_run_debug(),
+                        aligned,
+                        p.odometry.theta_rad
+                    );
+                }
+                self.leg = None;
+                let situation = Situation::classify(&ring, &self.situation);
+                // Aligned with the wall only if the wall followed is the one
+                // of the corner (the closed side).
+                let wall_closed = match leg.action.strategy {
+                    Strategy::WallFollowLeft => !situation.left_open,
+                    Strategy::WallFollowRight => !situation.right_open,
+                    _ => false,
+                };
+                let cues = Cues {
+                    aligned_heading_rad: aligned.filter(|_| wall_closed),
+                    expected: self.expected.take(),
+                };
+                let arrival = self.builder.arrive(&situation, p.odometry, cues)?;
+                let transition = match leg.from {
+                    Some(from) => Some(self.builder.record(
+                        from,
+                        arrival.place,
+                        leg.action.strategy,
+                        leg.action.exit_turn,
+                        duration_s,
+                    )?),
+                    None => None,
+                };
+                self.place = Some(arrival.place);
+                Ok(WalkerStep::Arrived {
+                    leg,
+                    situation,
+                    arrival,
+                    transition,
+                    duration_s,
+                })
+            }
+            Progress::Failed(failure) => {
+                let leg = *leg;
+                self.leg = None;
+                self.place = None;
+                Ok(WalkerStep::Failed { leg, failure })
+            }
+        }
+    }
+}
