@@ -26,4 +26,5 @@ pub mod suite;
 pub mod suites;
 pub mod summary;
 pub mod tables;
+pub mod topo;
 pub mod traps;

@@ -9,6 +9,7 @@ pub mod deadlock;
 pub mod files;
 pub mod maps;
 pub mod shared;
+pub mod topo;
 pub mod tourguide;
 pub mod voting;
 
@@ -22,6 +23,7 @@ pub const REGISTRY: &[Registration] = &[
     deadlock::REGISTRATION,
     maps::REGISTRATION,
     tourguide::REGISTRATION,
+    topo::REGISTRATION,
     files::REGISTRATION,
 ];
 

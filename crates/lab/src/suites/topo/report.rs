@@ -1,0 +1,420 @@
+//! The topological suite's report: the explorations (the nets, their size
+//! over time, place recognition against the true poses), one planned route
+//! as the source tabulates it, the routes by map against wall following and
+//! the grid's shortest path, and an explanation — every figure from the
+//! batch's records.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use anyhow::Result;
+use nav::topo::{FuzzyPetriNet, PlaceId, PlanMode, plan};
+use robot::Pose;
+
+use super::{Explored, METHODS, ROUTES, TopoSuite, WORLDS, metric};
+use crate::charts::{self, Series};
+use crate::page::{Block, Figure};
+use crate::record::{RunRecord, Runs};
+use crate::stats::{Mean, Proportion};
+use crate::suite::{ReportContext, Suite, SuiteReport};
+use crate::summary::CONFIDENCE;
+use crate::tables::{self, MetricColumn};
+use crate::topo;
+
+fn records<'a>(runs: &'a Runs, scenario: &str) -> Vec<(u32, &'a RunRecord)> {
+    runs.get(scenario)
+        .map(|v| v.iter().map(|(k, r)| (*k, r)).collect())
+        .unwrap_or_default()
+}
+
+fn metric_sum(rs: &[(u32, &RunRecord)], name: &str) -> f64 {
+    rs.iter().filter_map(|(_, r)| r.metric(name)).sum()
+}
+
+fn mean_metric(rs: &[(u32, &RunRecord)], name: &str) -> Mean {
+    let v: Vec<f64> = rs.iter().filter_map(|(_, r)| r.metric(name)).collect();
+    Mean::new(&v, CONFIDENCE)
+}
+
+fn pct(p: &Proportion) -> String {
+    if p.n == 0 {
+        return "-".into();
+    }
+    format!(
+        "{:.0} % ({:.0}–{:.0})",
+        100.0 * p.value,
+        100.0 * p.low,
+        100.0 * p.high
+    )
+}
+
+fn secs(m: &Mean) -> String {
+    if m.n == 0 {
+        "-".into()
+    } else if m.half_width.is_finite() {
+        format!("{:.1} ± {:.1}", m.mean, m.half_width)
+    } else {
+        format!("{:.1}", m.mean)
+    }
+}
+
+fn explored(r: &RunRecord) -> Option<(FuzzyPetriNet, Vec<Pose>)> {
+    let e: Explored = serde_json::from_value(r.state.clone()?).ok()?;
+    let map = FuzzyPetriNet::from_json(&e.map).ok()?;
+    Some((map, e.truth.iter().map(|p| Pose::new(p[0], p[1], p[2])).collect()))
+}
+
+/// The report (module docs).
+pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport> {
+    let runs = ctx.runs;
+    let mut blocks = Vec::new();
+    let mut files = Vec::new();
+    let columns = [
+        MetricColumn {
+            metric: metric::PLACES,
+            heading: "places",
+            short: "places",
+            decimals: 1,
+        },
+        MetricColumn {
+            metric: metric::TRANSITIONS,
+            heading: "transitions",
+            short: "trans",
+            decimals: 1,
+        },
+        MetricColumn {
+            metric: metric::LEGS,
+            heading: "legs/route",
+            short: "legs",
+            decimals: 1,
+        },
+        MetricColumn {
+            metric: metric::REPLANS,
+            heading: "replans/route",
+            short: "replans",
+            decimals: 2,
+        },
+        MetricColumn {
+            metric: metric::BOUND_S,
+            heading: "shortest path (s)",
+            short: "bound(s)",
+            decimals: 1,
+        },
+    ];
+    let (text, table) = tables::generic_table(ctx.summaries, &columns);
+    blocks.push(Block::Text(
+        "In the `explore` rows a run is an exploration and `I_R` the share whose net is strongly connected (every place can reach every other); `I_T` is the exploration time. In the `map` and `wall_following` rows a run is a route and `I_R` the share that arrived; `lost` counts routes whose follower declared arrival where the goal is not; the shortest path's time is at free movement's cruise speed (0.3 m/s).\n\n".into(),
+    ));
+    blocks.push(Block::Table(table));
+
+    // 1. Explorations.
+    blocks.push(Block::Heading("Exploring: the nets the robot built".into()));
+    let mut md = String::from(
+        "| world | explorations | connected | places | transitions | stops | recognition precision | recall | recalibrations | odometry drift at the end (m) |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    let mut explanation = String::new();
+    let mut figures = Vec::new();
+    let mut growth_series = Vec::new();
+    for (world, _, _) in WORLDS {
+        let ex = records(runs, &format!("{world}/explore"));
+        if ex.is_empty() {
+            continue;
+        }
+        let connected = Proportion::new(ex.iter().filter(|(_, r)| r.success).count(), ex.len(), CONFIDENCE);
+        let (tp, fp, fn_) = (
+            metric_sum(&ex, metric::TP),
+            metric_sum(&ex, metric::FP),
+            metric_sum(&ex, metric::FN),
+        );
+        let precision = if tp + fp > 0.0 { tp / (tp + fp) } else { f64::NAN };
+        let recall = if tp + fn_ > 0.0 { tp / (tp + fn_) } else { f64::NAN };
+        let drift: Vec<f64> = ex.iter().map(|(_, r)| r.odometry_error_m).collect();
+        let drift = Mean::new(&drift, CONFIDENCE);
+        let _ = writeln!(
+            md,
+            "| {world} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
+            ex.len(),
+            pct(&connected),
+            secs(&mean_metric(&ex, metric::PLACES)),
+            secs(&mean_metric(&ex, metric::TRANSITIONS)),
+            secs(&mean_metric(&ex, metric::STOPS)),
+            precision,
+            recall,
+            secs(&mean_metric(&ex, metric::RECALIBRATIONS)),
+            secs(&drift),
+        );
+        let _ = write!(
+            explanation,
+            "**{world}.** {} of {} explorations built a strongly connected net. Over all their stops the robot recognised a place it truly stood at {tp:.0} times, took a place for another {fp:.0} times and failed to recognise one it knew {fn_:.0} times: precision {precision:.2}, recall {recall:.2} (a stop is at a known place when the true pose is within {} m of where that place was recorded and the robot faces the same way within 45°). ",
+            connected.successes,
+            connected.n,
+            topo::SAME_PLACE_M
+        );
+        let _ = writeln!(
+            explanation,
+            "The dead-reckoned position ended {:.2} m from the truth on average, after {:.1} recalibrations at concave places per exploration: without them the map positions would drift further.\n",
+            drift.mean,
+            mean_metric(&ex, metric::RECALIBRATIONS).mean,
+        );
+        // The size of the first exploration's map over time.
+        if let Some((_, r)) = ex.first() {
+            let points: Vec<(f64, f64)> = r
+                .events
+                .iter()
+                .filter(|e| e.kind == "stop")
+                .filter_map(|e| Some((e.time_s, e.number("places")?)))
+                .collect();
+            growth_series.push(Series {
+                name: format!("{world}: places"),
+                points: points.clone(),
+            });
+            let tpoints: Vec<(f64, f64)> = r
+                .events
+                .iter()
+                .filter(|e| e.kind == "stop")
+                .filter_map(|e| Some((e.time_s, e.number("transitions")?)))
+                .collect();
+            growth_series.push(Series {
+                name: format!("{world}: transitions"),
+                points: tpoints,
+            });
+            if ctx.pictures
+                && let Some((map, truth)) = explored(r)
+            {
+                let (path, src) = ctx.picture_path(&format!("{world}-net.png"))?;
+                topo::picture(suite.world_grid(world)?, &map, Some(&truth), None, &path)?;
+                files.push(path);
+                figures.push(Figure {
+                    title: format!(
+                        "{world}: the net of exploration 0 ({} places, {} transitions)",
+                        map.num_places(),
+                        map.num_transitions()
+                    ),
+                    src,
+                });
+            }
+        }
+    }
+    blocks.push(Block::Table(md));
+    blocks.push(Block::Text(explanation));
+    if !growth_series.is_empty() {
+        let svg = charts::lines(
+            "The map's size over the first exploration",
+            "time (s)",
+            "count",
+            &growth_series,
+            false,
+            (760, 380),
+        )?;
+        let (path, src) = ctx.picture_path("growth.svg")?;
+        std::fs::write(&path, svg)?;
+        files.push(path);
+        blocks.push(Block::Charts {
+            heading: "The map as it grows".into(),
+            caption: "Places and transitions after every stop of each world's first exploration.".into(),
+            figures: vec![Figure {
+                title: "map size over time".into(),
+                src,
+            }],
+        });
+    }
+    if !figures.is_empty() {
+        blocks.push(Block::Figures {
+            heading: "The nets over the worlds".into(),
+            caption: "Places (numbered as in the map) at the positions the robot believed, transitions as lines coloured by strategy; a thin line joins each place to where it truly was recorded — the odometry's drift.".into(),
+            figures,
+        });
+    }
+
+    // 2. One route as the source tabulates it.
+    if let Some(table) = route_table(runs) {
+        blocks.push(Block::Heading(
+            "A planned route, as the source tabulates it".into(),
+        ));
+        blocks.push(Block::Text(table));
+    }
+
+    // 3. Routes.
+    blocks.push(Block::Heading("Routes between known places".into()));
+    let mut md = String::from(
+        "| world | method | routes | arrived (95 % CI) | time (s) | shortest path (s) | wrong place | time limits | gave up | replans/route |\n|---|---|---:|---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    let mut why = String::new();
+    for (world, _, _) in WORLDS {
+        let mut rates: BTreeMap<&str, Proportion> = BTreeMap::new();
+        for m in METHODS {
+            let rs = records(runs, &format!("{world}/{m}"));
+            if rs.is_empty() {
+                continue;
+            }
+            let ok: Vec<(u32, &RunRecord)> = rs.iter().copied().filter(|(_, r)| r.success).collect();
+            let p = Proportion::new(ok.len(), rs.len(), CONFIDENCE);
+            let time = Mean::new(&ok.iter().map(|(_, r)| r.time_s).collect::<Vec<_>>(), CONFIDENCE);
+            let bound = mean_metric(&ok, metric::BOUND_S);
+            let count = |o: &str| rs.iter().filter(|(_, r)| r.outcome == o).count();
+            let _ = writeln!(
+                md,
+                "| {world} | {m} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                rs.len(),
+                pct(&p),
+                secs(&time),
+                secs(&bound),
+                count("lost"),
+                count("time_limit"),
+                count("gave_up"),
+                if m == "map" {
+                    format!("{:.2}", mean_metric(&rs, metric::REPLANS).mean)
+                } else {
+                    "-".into()
+                },
+            );
+            rates.insert(m, p);
+        }
+        // Paired: the same routes by both methods.
+        let map_runs: BTreeMap<u32, &RunRecord> =
+            records(runs, &format!("{world}/map")).into_iter().collect();
+        let wall_runs: BTreeMap<u32, &RunRecord> = records(runs, &format!("{world}/wall_following"))
+            .into_iter()
+            .collect();
+        let (mut only_map, mut only_wall, mut ratios, mut over_bound) = (0, 0, Vec::new(), Vec::new());
+        for (k, a) in &map_runs {
+            let Some(b) = wall_runs.get(k) else { continue };
+            match (a.success, b.success) {
+                (true, false) => only_map += 1,
+                (false, true) => only_wall += 1,
+                (true, true) => ratios.push(a.time_s / b.time_s),
+                _ => {}
+            }
+            if a.success
+                && let Some(bound) = a.metric(metric::BOUND_S)
+                && bound > 0.0
+            {
+                over_bound.push(a.time_s / bound);
+            }
+        }
+        if let Some(p) = rates.get("map") {
+            let lost = map_runs.values().filter(|r| r.outcome == "lost").count();
+            let timeouts = map_runs.values().filter(|r| r.outcome == "time_limit").count();
+            let gave_up = map_runs.values().filter(|r| r.outcome == "gave_up").count();
+            let replans = map_runs
+                .values()
+                .filter_map(|r| r.metric(metric::REPLANS))
+                .sum::<f64>();
+            let failed_with_replans = map_runs
+                .values()
+                .filter(|r| !r.success && r.metric(metric::REPLANS).unwrap_or(0.0) > 0.0)
+                .count();
+            let _ = write!(
+                why,
+                "**{world}.** With its map the robot arrived on {} of the routes. Of the {} failures, {lost} declared arrival at a place that was not the goal (a place recognised wrongly), {timeouts} ran out of time and {gave_up} gave up; {failed_with_replans} of the failed routes had arrived somewhere the plan did not say at least once (a strategy that did not lead where it had led while exploring: a door passed or missed, a wall's end seen or not), {replans:.0} such surprises over all routes. ",
+                pct(p),
+                map_runs.values().filter(|r| !r.success).count(),
+            );
+            if let Some(w) = rates.get("wall_following") {
+                let _ = write!(
+                    why,
+                    "Wall following alone, judged by an oracle that stops it the moment it passes the goal, arrived on {}; on the same routes the map arrived where wall following did not {only_map} times and the other way round {only_wall} times. ",
+                    pct(w)
+                );
+            }
+            if !ratios.is_empty() {
+                let _ = write!(
+                    why,
+                    "Where both arrived, the map's route took {:.2}× wall following's time (median of the ratios). ",
+                    median(ratios)
+                );
+            }
+            if !over_bound.is_empty() {
+                let _ = write!(
+                    why,
+                    "Against the true grid's shortest path at cruise speed the map's successful routes took {:.1}× as long (median): the strategies follow walls and stop at every reference place, and the exit turns cost time.",
+                    median(over_bound)
+                );
+            }
+            why.push_str("\n\n");
+        }
+    }
+    blocks.push(Block::Table(md));
+    blocks.push(Block::Heading("What the numbers say".into()));
+    blocks.push(Block::Text(why));
+    Ok(SuiteReport {
+        text,
+        intro: Some(format!(
+            "{} explorations per world, each followed by {ROUTES} routes between random pairs of the places it found (pairs with a planned route), driven with the map and by wall following; base seed {}. Any run replays from its seed: `petrinav lab replay out/topo 'office/map#K' -o route.png --trace route.jsonl`.",
+            suite.info().runs,
+            suite.info().seed
+        )),
+        blocks,
+        files,
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The first route of the first campaign of the first world, on the
+/// explored map: the planned transitions with `C(t)`, `λ(t)` and `f(t)`,
+/// in both modes.
+fn route_table(runs: &Runs) -> Option<String> {
+    let world = WORLDS[0].0;
+    let ex = records(runs, &format!("{world}/explore"));
+    let (_, first) = ex.first()?;
+    let (map, _) = explored(first)?;
+    let route = records(runs, &format!("{world}/map"));
+    let (_, r0) = route.iter().find(|(k, _)| *k == 0)?;
+    let from = PlaceId(r0.metric(metric::FROM)? as u32);
+    let to = PlaceId(r0.metric(metric::TO)? as u32);
+    let mut out = String::new();
+    for mode in [PlanMode::Optimal, PlanMode::Paper] {
+        let Ok(p) = plan(&map, from, &[to], mode) else {
+            let _ = writeln!(out, "{mode:?} mode: no route.\n");
+            continue;
+        };
+        let _ = writeln!(
+            out,
+            "{} mode, from {} to {} on the map of {world}'s exploration 0: {} transitions, Σ C = {:.4} ({} {}).\n",
+            if mode == PlanMode::Optimal {
+                "Optimal"
+            } else {
+                "Paper"
+            },
+            map.place(from).name,
+            map.place(to).name,
+            p.route.len(),
+            p.cost,
+            p.iterations,
+            if mode == PlanMode::Optimal {
+                "places settled"
+            } else {
+                "rounds"
+            },
+        );
+        out.push_str("| transition | from | to | strategy | exit turn | C(t) | λ(t) | f(t) |\n|---|---|---|---|---|---:|---:|---:|\n");
+        for &t in &p.route {
+            let tr = map.transition(t);
+            let _ = writeln!(
+                out,
+                "| t{} | {} | {} | {} | {:?} | {:.4} | {:.3} | {:.4} |",
+                t.0,
+                map.place(tr.from).name,
+                map.place(tr.to).name,
+                tr.strategy.name(),
+                tr.exit_turn,
+                map.weighted_cost(t),
+                tr.lambda,
+                p.f[t.0 as usize],
+            );
+        }
+        out.push('\n');
+    }
+    Some(out)
+}
