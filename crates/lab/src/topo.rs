@@ -298,7 +298,9 @@ pub fn strongly_connected(map: &FuzzyPetriNet) -> bool {
 pub enum RouteMethod {
     /// With the map: plan, follow place by place, replan, learn.
     Map(NavigateParams),
-    /// Right-hand wall following, no map, until the robot truly arrives.
+    /// Right-hand wall following, no map, until the robot truly arrives
+    /// (a leg that times out or finds no way out starts again where it
+    /// is).
     WallFollowing(StrategyParams),
 }
 
@@ -391,8 +393,17 @@ impl Controller for WallFollower {
                 Step::Run(Command::Stop)
             }
             Progress::Failed(f) => {
-                notes.event(robot::Event::new("failed", p.time_s).with("failure", format!("{f:?}")));
-                Step::GiveUp
+                // A leg that took too long (a wall followed round and
+                // round a room) or found no way out: start again from
+                // here; only the time limit ends a wall follower.
+                notes.event(robot::Event::new("restart", p.time_s).with("failure", format!("{f:?}")));
+                self.executor = Executor::new(
+                    self.params,
+                    Strategy::WallFollowRight,
+                    Turn::Left,
+                    p.odometry.theta_rad,
+                );
+                Step::Run(Command::Stop)
             }
         }
     }

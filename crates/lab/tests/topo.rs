@@ -35,7 +35,11 @@ fn exploring_the_office_finds_places_and_every_stop_is_judged_once() {
     assert!(r.true_negatives >= 1);
     // The map's size only grows, one entry per stop.
     assert_eq!(e.growth.len(), e.visits.len());
-    assert!(e.growth.windows(2).all(|w| w[0].places <= w[1].places && w[0].time_s <= w[1].time_s));
+    assert!(
+        e.growth
+            .windows(2)
+            .all(|w| w[0].places <= w[1].places && w[0].time_s <= w[1].time_s)
+    );
     // Same seed, same map.
     let again = topo::explore(&world, &spec(3, 240.0)).unwrap();
     assert_eq!(again.map.to_json(), e.map.to_json());

@@ -231,7 +231,7 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
         blocks.push(Block::Heading(
             "A planned route, as the source tabulates it".into(),
         ));
-        blocks.push(Block::Text(table));
+        blocks.extend(table);
     }
 
     // 3. Routes.
@@ -361,60 +361,61 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// The first route of the first campaign of the first world, on the
-/// explored map: the planned transitions with `C(t)`, `λ(t)` and `f(t)`,
-/// in both modes.
-fn route_table(runs: &Runs) -> Option<String> {
+/// The longest planned route of the first campaign of the first world,
+/// on its explored map: the planned transitions with `C(t)`, `λ(t)` and
+/// `f(t)`, in both modes.
+fn route_table(runs: &Runs) -> Option<Vec<Block>> {
     let world = WORLDS[0].0;
     let ex = records(runs, &format!("{world}/explore"));
     let (_, first) = ex.first()?;
     let (map, _) = explored(first)?;
-    let route = records(runs, &format!("{world}/map"));
-    let (_, r0) = route.iter().find(|(k, _)| *k == 0)?;
-    let from = PlaceId(r0.metric(metric::FROM)? as u32);
-    let to = PlaceId(r0.metric(metric::TO)? as u32);
-    let mut out = String::new();
+    let routes = records(runs, &format!("{world}/map"));
+    let (_, longest) = routes.iter().filter(|(k, _)| *k < ROUTES).max_by(|a, b| {
+        let n = |r: &RunRecord| r.metric(metric::PLANNED).unwrap_or(0.0);
+        n(a.1).total_cmp(&n(b.1)).then(b.0.cmp(&a.0))
+    })?;
+    let from = PlaceId(longest.metric(metric::FROM)? as u32);
+    let to = PlaceId(longest.metric(metric::TO)? as u32);
+    let mut out = Vec::new();
     for mode in [PlanMode::Optimal, PlanMode::Paper] {
+        let name = if mode == PlanMode::Optimal {
+            "Optimal"
+        } else {
+            "Paper"
+        };
         let Ok(p) = plan(&map, from, &[to], mode) else {
-            let _ = writeln!(out, "{mode:?} mode: no route.\n");
+            out.push(Block::Text(format!("{name} mode: no route.\n")));
             continue;
         };
-        let _ = writeln!(
-            out,
-            "{} mode, from {} to {} on the map of {world}'s exploration 0: {} transitions, Σ C = {:.4} ({} {}).\n",
-            if mode == PlanMode::Optimal {
-                "Optimal"
-            } else {
-                "Paper"
-            },
+        out.push(Block::Text(format!(
+            "{name} mode, from {} to {} on the map of {world}'s exploration 0: {} transition{}, Σ C = {:.4} ({} {}).\n\n",
             map.place(from).name,
             map.place(to).name,
             p.route.len(),
+            if p.route.len() == 1 { "" } else { "s" },
             p.cost,
             p.iterations,
-            if mode == PlanMode::Optimal {
-                "places settled"
-            } else {
-                "rounds"
-            },
+            if mode == PlanMode::Optimal { "places settled" } else { "rounds" },
+        )));
+        let mut md = String::from(
+            "| transition | from | to | strategy | exit turn | C(t) | λ(t) | f(t) |\n|---|---|---|---|---|---:|---:|---:|\n",
         );
-        out.push_str("| transition | from | to | strategy | exit turn | C(t) | λ(t) | f(t) |\n|---|---|---|---|---|---:|---:|---:|\n");
         for &t in &p.route {
             let tr = map.transition(t);
             let _ = writeln!(
-                out,
-                "| t{} | {} | {} | {} | {:?} | {:.4} | {:.3} | {:.4} |",
+                md,
+                "| t{} | {} | {} | {} | {} | {:.4} | {:.3} | {:.4} |",
                 t.0,
                 map.place(tr.from).name,
                 map.place(tr.to).name,
                 tr.strategy.name(),
-                tr.exit_turn,
+                tr.exit_turn.name(),
                 map.weighted_cost(t),
                 tr.lambda,
                 p.f[t.0 as usize],
             );
         }
-        out.push('\n');
+        out.push(Block::Table(md));
     }
     Some(out)
 }
