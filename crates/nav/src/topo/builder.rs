@@ -170,11 +170,20 @@ impl MapBuilder {
         let tolerance_m = self.params.tolerance_m(self.since_recalibration_m);
         let heading_tol = self.params.heading_tolerance_rad;
         let expected = cues.expected.and_then(|q| {
+            // The expected place may have been classified (c) where the
+            // robot now sees (a) or (b), or the other way round: a side
+            // just at the threshold of "open" (recognition module docs).
+            let kind = self
+                .map
+                .get_place(q)
+                .map(|p| p.kind)
+                .filter(|&k| k.compatible(situation.kind))
+                .unwrap_or(situation.kind);
             matches(
                 &self.map,
                 q,
                 pose,
-                situation.kind,
+                kind,
                 tolerance_m + self.params.expected_extra_m,
                 heading_tol,
             )
@@ -405,6 +414,56 @@ mod tests {
             b.arrive(&corner(PlaceKind::C, false), far, expect).unwrap().place,
             p
         );
+    }
+
+    #[test]
+    fn the_expected_place_tolerates_a_type_flipped_to_or_from_c_but_not_a_mirror() {
+        let mut b = MapBuilder::new(RecognitionParams::default()).unwrap();
+        let p = b
+            .arrive(
+                &corner(PlaceKind::C, false),
+                Pose::new(0.0, 0.0, 0.0),
+                Cues::default(),
+            )
+            .unwrap()
+            .place;
+        let here = Pose::new(0.2, 0.0, 0.0);
+        let expect = Cues {
+            aligned_heading_rad: None,
+            expected: Some(p),
+        };
+        // Seen as (a) now: the expected (c) place still, but only when
+        // expected.
+        assert_eq!(
+            b.clone()
+                .arrive(&corner(PlaceKind::A, true), here, expect)
+                .unwrap()
+                .place,
+            p
+        );
+        assert!(
+            b.clone()
+                .arrive(&corner(PlaceKind::A, true), here, Cues::default())
+                .unwrap()
+                .new
+        );
+        // An (a) place is never taken for a (b) one.
+        let mut b = MapBuilder::new(RecognitionParams::default()).unwrap();
+        let a = b
+            .arrive(
+                &corner(PlaceKind::A, true),
+                Pose::new(0.0, 0.0, 0.0),
+                Cues::default(),
+            )
+            .unwrap()
+            .place;
+        let expect = Cues {
+            aligned_heading_rad: None,
+            expected: Some(a),
+        };
+        assert!(b.arrive(&corner(PlaceKind::B, true), here, expect).unwrap().new);
+        assert!(PlaceKind::A.compatible(PlaceKind::C) && PlaceKind::C.compatible(PlaceKind::B));
+        assert!(!PlaceKind::A.compatible(PlaceKind::B));
     }
 
     #[test]

@@ -132,6 +132,14 @@ impl PlaceKind {
         }
     }
 
+    /// Whether a stop classified `other` can be a place of this type: the
+    /// same type, or either is (c). A side whose free distance is near the
+    /// threshold of "open" flips a classification between (a) or (b) and
+    /// (c); (a) and (b) are mirror images and never one another.
+    pub fn compatible(self, other: PlaceKind) -> bool {
+        self == other || self == PlaceKind::C || other == PlaceKind::C
+    }
+
     /// Whether a transition with `strategy` may leave a place of this type:
     /// wall following may not leave a type (c) place.
     pub fn allows(self, strategy: Strategy) -> bool {

@@ -23,6 +23,14 @@
 //! The judging is [`crate::topo`]'s: recognition against true poses,
 //! arrival within 0.5 m of where the goal place was recorded.
 //!
+//! **Decision — exploration time.** 600 s in the office (about 100 m of
+//! driving, 23 stops): explored for 1,800 s instead, the net grew to 40
+//! places and 70 transitions (40 % strongly connected instead of 20 %),
+//! its routes got longer, and routes by the map arrived less often (40 %
+//! against 51 %): each place approached from another heading is another
+//! place, so the map keeps growing and every extra transition on a route
+//! is another chance of a surprise.
+//!
 //! **Decision — the odometry** is the simulator's default (slips of 1 %
 //! per wheel and step, a large slip about every 20 s): "realistic odometry
 //! noise" for a robot that is not calibrated, and enough to drift by a
