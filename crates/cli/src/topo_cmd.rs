@@ -43,8 +43,10 @@ pub enum TopoCommand {
     /// the leaving transition with the smallest f.
     ///
     /// `--mode optimal` (default) propagates to the fixed point: the cheapest route.
-    /// `--mode paper` stops, as the source does, as soon as the start has a value: the
-    /// cheapest of the routes with the fewest transitions, sometimes costlier.
+    /// `--mode paper` stops, as the source does, as soon as the start has a value (after as
+    /// many rounds as the fewest transitions of any route; α(from) is then the value of the
+    /// cheapest such route) and walks along the smallest f of that last round: often a
+    /// costlier route than optimal's, never a cheaper one.
     ///
     /// Several --to places: the route leads to the nearest. The table lists each transition
     /// of the route (C, f, λ, strategy, exit turn), then the other transitions leaving the
@@ -85,7 +87,7 @@ pub enum ModeArg {
     /// To the fixed point: the cheapest route.
     #[default]
     Optimal,
-    /// The source's rule: stop as soon as the start has a value (the fewest transitions).
+    /// The source's rule: stop as soon as the start has a value (after the fewest transitions).
     Paper,
 }
 
