@@ -278,9 +278,9 @@ fn check_optimal(c: &Case, planner: &Planner<'_>) -> Result<Option<Plan>, TestCa
     let result = planner.plan(start, &goals(c), PlanMode::Optimal);
     // The values of every place, whatever the start.
     let values = planner.label_setting(&goals(c)).unwrap();
-    for p in 0..c.n {
-        prop_assert_eq!(values.reached[p], d[p].is_finite(), "reached({})", p);
-        let expected = if d[p].is_finite() { d[p] } else { 1.0 };
+    for (p, &dp) in d.iter().enumerate() {
+        prop_assert_eq!(values.reached[p], dp.is_finite(), "reached({})", p);
+        let expected = if dp.is_finite() { dp } else { 1.0 };
         prop_assert_eq!(
             values.alpha[p].to_bits(),
             expected.to_bits(),
