@@ -8,6 +8,7 @@ mod map;
 mod nav_cmd;
 mod output;
 mod sim_cmd;
+mod topo_cmd;
 
 use std::process::ExitCode;
 
@@ -43,6 +44,9 @@ enum Command {
     /// The tour-guide robot's mission log and the supervisor's learnt rates.
     #[command(subcommand)]
     Guide(guide_cmd::GuideCommand),
+    /// Topological maps as fuzzy Petri nets: plan routes, convert, generate.
+    #[command(subcommand)]
+    Topo(topo_cmd::TopoCommand),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +58,7 @@ fn main() -> ExitCode {
         Command::Lab(cmd) => lab_cmd::run(cmd),
         Command::Nav(cmd) => nav_cmd::run(cmd),
         Command::Guide(cmd) => guide_cmd::run(cmd),
+        Command::Topo(cmd) => topo_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

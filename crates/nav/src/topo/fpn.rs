@@ -853,20 +853,36 @@ impl FuzzyPetriNet {
     }
 
     /// Reads a map from JSON, checking everything (see the module
-    /// documentation).
+    /// documentation). A byte-order mark at the start is skipped.
+    ///
+    /// Errors say what is wrong and where: [`TopoError::Empty`] for a file
+    /// without text, [`TopoError::NotAnObject`] for JSON that is not an
+    /// object, [`TopoError::Format`]/[`TopoError::Version`] for another
+    /// file, [`TopoError::Json`] (line, column and the text there) for text
+    /// that is not JSON, is cut short or holds a value of the wrong type,
+    /// and the errors of [`add_place`](Self::add_place) and
+    /// [`add_transition`](Self::add_transition) naming the place or
+    /// transition for values out of range.
     pub fn from_json(text: &str) -> Result<FuzzyPetriNet, TopoError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        if text.trim().is_empty() {
+            return Err(TopoError::Empty);
+        }
         // The header first, leniently, so that another file is reported as
         // such rather than by its first unknown field.
-        let header: Header = serde_json::from_str(text).map_err(json_error)?;
-        match header.format {
-            Some(f) if f == FORMAT => {}
+        let (format, version) = match serde_json::from_str(text).map_err(|e| json_error(text, e))? {
+            Header::Object { format, version } => (format, version),
+            Header::Other(found) => return Err(TopoError::NotAnObject { found }),
+        };
+        match format {
+            Some(serde_json::Value::String(f)) if f == FORMAT => {}
             found => {
                 return Err(TopoError::Format {
-                    found: found.unwrap_or_else(|| "(none)".into()),
+                    found: found.map_or_else(|| "(none)".into(), |v| v.to_string()),
                 });
             }
         }
-        match header.version {
+        match version {
             Some(serde_json::Value::Number(n)) if n.as_u64() == Some(FORMAT_VERSION) => {}
             found => {
                 return Err(TopoError::Version {
@@ -874,7 +890,7 @@ impl FuzzyPetriNet {
                 });
             }
         }
-        let file: FileIn = serde_json::from_str(text).map_err(json_error)?;
+        let file: FileIn = serde_json::from_str(text).map_err(|e| json_error(text, e))?;
         FuzzyPetriNet::from_file(file)
     }
 
@@ -962,15 +978,52 @@ impl FuzzyPetriNet {
     }
 }
 
-fn json_error(e: serde_json::Error) -> TopoError {
+/// A JSON reader's error as a [`TopoError::Json`]: the position, the
+/// message without serde_json's own " at line … column …", a hint when the
+/// text ends too early, and the text at the position.
+fn json_error(text: &str, e: serde_json::Error) -> TopoError {
     let message = e.to_string();
     let suffix = format!(" at line {} column {}", e.line(), e.column());
+    let mut message = message.strip_suffix(&suffix).unwrap_or(&message).to_string();
+    let near = if e.is_eof() {
+        message.push_str(": the text stops before the map is complete (a truncated file?)");
+        None
+    } else {
+        text.lines()
+            .nth(e.line().saturating_sub(1))
+            .and_then(|line| snippet(line, e.column()))
+    };
     TopoError::Json {
         line: e.line(),
         column: e.column(),
-        message: message.strip_suffix(&suffix).unwrap_or(&message).to_string(),
+        message,
+        near,
     }
 }
+
+/// At most [`SNIPPET_CHARS`] characters of `line` around byte `column` (from
+/// 1), trimmed; `None` when they hold nothing but punctuation (`},`), which
+/// says nothing.
+fn snippet(line: &str, column: usize) -> Option<String> {
+    let at = column.saturating_sub(1).min(line.len());
+    let chars: Vec<(usize, char)> = line.char_indices().collect();
+    let pos = chars.partition_point(|&(i, _)| i < at);
+    let lo = pos.saturating_sub(SNIPPET_CHARS * 3 / 4);
+    let hi = (lo + SNIPPET_CHARS).min(chars.len());
+    let piece: String = chars[lo..hi].iter().map(|&(_, c)| c).collect();
+    let piece = piece.trim();
+    if !piece.chars().any(char::is_alphanumeric) {
+        return None;
+    }
+    let (open, close) = (
+        if lo > 0 { "…" } else { "" },
+        if hi < chars.len() { "…" } else { "" },
+    );
+    Some(format!("{open}{piece}{close}"))
+}
+
+/// How much of a line [`TopoError::Json`] quotes.
+const SNIPPET_CHARS: usize = 60;
 
 impl Serialize for FuzzyPetriNet {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
@@ -983,7 +1036,9 @@ impl<'de> Deserialize<'de> for FuzzyPetriNet {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<FuzzyPetriNet, D::Error> {
         let file = FileIn::deserialize(deserializer)?;
         if file.format != FORMAT {
-            return Err(serde::de::Error::custom(TopoError::Format { found: file.format }));
+            return Err(serde::de::Error::custom(TopoError::Format {
+                found: serde_json::Value::String(file.format).to_string(),
+            }));
         }
         if file.version != FORMAT_VERSION {
             return Err(serde::de::Error::custom(TopoError::Version {
@@ -994,10 +1049,75 @@ impl<'de> Deserialize<'de> for FuzzyPetriNet {
     }
 }
 
-#[derive(Deserialize)]
-struct Header {
-    format: Option<String>,
-    version: Option<serde_json::Value>,
+/// The top of a map file: its `"format"` and `"version"`, whatever their
+/// types, or what the JSON text is when it is not an object.
+enum Header {
+    Object {
+        format: Option<serde_json::Value>,
+        version: Option<serde_json::Value>,
+    },
+    /// `array`, `string`, `number`, `boolean` or `null`.
+    Other(&'static str),
+}
+
+impl<'de> Deserialize<'de> for Header {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Header, D::Error> {
+        deserializer.deserialize_any(HeaderVisitor)
+    }
+}
+
+struct HeaderVisitor;
+
+impl<'de> serde::de::Visitor<'de> for HeaderVisitor {
+    type Value = Header;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("any JSON value")
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Header, A::Error> {
+        let (mut format, mut version) = (None, None);
+        while let Some(key) = map.next_key::<String>()? {
+            match key.as_str() {
+                // A second one is reported as a duplicate field later.
+                "format" if format.is_none() => format = Some(map.next_value()?),
+                "version" if version.is_none() => version = Some(map.next_value()?),
+                _ => {
+                    map.next_value::<serde::de::IgnoredAny>()?;
+                }
+            }
+        }
+        Ok(Header::Object { format, version })
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Header, A::Error> {
+        while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {}
+        Ok(Header::Other("array"))
+    }
+
+    fn visit_str<E>(self, _: &str) -> Result<Header, E> {
+        Ok(Header::Other("string"))
+    }
+
+    fn visit_bool<E>(self, _: bool) -> Result<Header, E> {
+        Ok(Header::Other("boolean"))
+    }
+
+    fn visit_i64<E>(self, _: i64) -> Result<Header, E> {
+        Ok(Header::Other("number"))
+    }
+
+    fn visit_u64<E>(self, _: u64) -> Result<Header, E> {
+        Ok(Header::Other("number"))
+    }
+
+    fn visit_f64<E>(self, _: f64) -> Result<Header, E> {
+        Ok(Header::Other("number"))
+    }
+
+    fn visit_unit<E>(self) -> Result<Header, E> {
+        Ok(Header::Other("null"))
+    }
 }
 
 #[derive(Serialize)]
@@ -1196,6 +1316,82 @@ mod tests {
         net.record_visit(PlaceId(1)).unwrap();
         assert_eq!(net.place(PlaceId(1)).visits, 2);
         assert!(net.record_visit(PlaceId(9)).is_err());
+    }
+
+    #[test]
+    fn bad_files_say_what_is_wrong() {
+        let err = |text: &str| FuzzyPetriNet::from_json(text).unwrap_err();
+        assert!(matches!(err(""), TopoError::Empty));
+        assert!(matches!(err(" \n\t"), TopoError::Empty));
+        for (text, found) in [
+            ("[1, 2]", "array"),
+            ("[]", "array"),
+            ("\"map\"", "string"),
+            ("3.5", "number"),
+            ("true", "boolean"),
+            ("null", "null"),
+        ] {
+            let e = err(text);
+            assert!(
+                matches!(e, TopoError::NotAnObject { found: f } if f == found),
+                "{text}: {e}"
+            );
+        }
+        let e = err(r#"{"format": 5, "version": 1}"#);
+        assert_eq!(
+            e.to_string(),
+            "not a petrinav FPN map: \"format\" is 5, expected \"petrinav-fpn\""
+        );
+        let e = err(r#"{"format": "gspn"}"#);
+        assert!(e.to_string().contains("\"format\" is \"gspn\""), "{e}");
+        let e = err(r#"{"places": []}"#);
+        assert!(e.to_string().contains("\"format\" is (none)"), "{e}");
+
+        let mut net = two_places();
+        net.add_transition(Transition::new(
+            PlaceId(0),
+            PlaceId(1),
+            Strategy::FreeMovement,
+            Turn::Right,
+            2.0,
+        ))
+        .unwrap();
+        let text = net.to_json();
+        // Cut short: said so, wherever the cut.
+        for cut in [1, text.len() / 3, text.len() / 2, text.len() - 3] {
+            let e = err(&text[..cut]);
+            assert!(
+                matches!(&e, TopoError::Json { message, near: None, .. } if message.contains("truncated")),
+                "cut at {cut}: {e}"
+            );
+        }
+        // A string, NaN or a key of another kind where a number goes: the
+        // error quotes the text there.
+        let e = err(&text.replace("\"lambda\": 1.0", "\"lambda\": \"high\""));
+        let m = e.to_string();
+        assert!(m.contains("invalid type: string \"high\", expected f64"), "{m}");
+        assert!(m.contains("near `\"lambda\": \"high\",`"), "{m}");
+        let e = err(&text.replace("\"lambda\": 1.0", "\"lambda\": NaN"));
+        assert!(e.to_string().contains("near `\"lambda\": NaN,`"), "{e}");
+        let e = err(&text.replace("\"lambda\": 1.0", "\"lambda\": 1.0, \"alpha\": 0.5"));
+        assert!(e.to_string().contains("unknown field `alpha`"), "{e}");
+        // A minified file: a window round the position, not the whole line.
+        let one_line = serde_json::to_string(&net).unwrap();
+        let e = err(&one_line.replace("\"cost\":3.0", "\"cost\":true"));
+        let TopoError::Json {
+            line: 1,
+            near: Some(near),
+            ..
+        } = &e
+        else {
+            panic!("{e}")
+        };
+        assert!(
+            near.contains("\"cost\":true") && near.chars().count() <= 62,
+            "{near}"
+        );
+        // A byte-order mark is skipped.
+        assert_eq!(FuzzyPetriNet::from_json(&format!("\u{feff}{text}")).unwrap(), net);
     }
 
     #[test]

@@ -69,6 +69,11 @@ pub use situation::{Situation, SituationParams};
 pub use strategy::{Action, Executor, Failure, Progress, StrategyParams, actions_at};
 pub use walker::{Leg, Walker, WalkerStep};
 
+/// `, near `…``, or nothing.
+fn near_text(near: &Option<String>) -> String {
+    near.as_ref().map(|n| format!(", near `{n}`")).unwrap_or_default()
+}
+
 /// What can go wrong with a map: building it, reading or writing it.
 #[derive(Debug, thiserror::Error)]
 pub enum TopoError {
@@ -93,20 +98,35 @@ pub enum TopoError {
         error: Box<TopoError>,
     },
     /// Text that is not JSON, or JSON that is not a map (a missing or
-    /// unknown field, a value of the wrong type, a number out of range).
-    #[error("line {line}, column {column}: {message}")]
+    /// unknown field, a value of the wrong type, a number out of range), or
+    /// that stops early (a truncated file: the message says so).
+    #[error("line {line}, column {column}: {message}{}", near_text(.near))]
     Json {
         /// Line, from 1.
         line: usize,
-        /// Column, from 1.
+        /// Column, from 1 (in bytes; 0 at the end of an empty line).
         column: usize,
         /// What the JSON reader said.
         message: String,
+        /// The text around the position, when it says something (at most
+        /// 60 characters of the line; none for a file that stops early).
+        near: Option<String>,
+    },
+    /// A file with no text (or only white space).
+    #[error("the file is empty: expected a petrinav FPN map (JSON)")]
+    Empty,
+    /// JSON that is not an object.
+    #[error(
+        "not a petrinav FPN map: the file holds a JSON {found}, expected an object with \"format\": \"petrinav-fpn\""
+    )]
+    NotAnObject {
+        /// `array`, `string`, `number`, `boolean` or `null`.
+        found: &'static str,
     },
     /// A JSON file of something else.
     #[error("not a petrinav FPN map: \"format\" is {found}, expected \"petrinav-fpn\"")]
     Format {
-        /// The `"format"` found (or `(none)`).
+        /// The `"format"` found, as JSON (`"gspn"`, `5`), or `(none)`.
         found: String,
     },
     /// A map file of a version this code does not read.

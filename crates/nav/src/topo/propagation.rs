@@ -18,10 +18,15 @@
 //! * [`PlanMode::Paper`]: the source's stopping rule, rounds while the start
 //!   has `α(p_s) = 1`, by the literal propagation ([`Planner::propagate_literal`]
 //!   with [`Stop::StartReached`]). After `k` rounds `α(p)` is the cheapest
-//!   cost of routes of at most `k` transitions, so the rule stops at the
-//!   fewest transitions `k*` of any route and returns the cheapest route of
-//!   at most `k*` transitions, which is not always the cheapest route. Stops
-//!   too when a round changes nothing (no route). `O(k* · (|P| + |T|))`.
+//!   value of routes of at most `k` transitions, so the rule stops after the
+//!   fewest transitions `k*` of any route, with `α(p_s)` the value of the
+//!   cheapest route of `k*` transitions. Step 3 then walks along the
+//!   smallest `f` of that last round, which at the start's successors already
+//!   counts routes of `k*` transitions from them: the route walked may take
+//!   more than `k*` transitions and cost less than `α(p_s)`, never less than
+//!   the cheapest route (the property tests check both bounds; the CLI shows
+//!   `α(p_s)` beside the route's cost). Stops too when a round changes
+//!   nothing (no route). `O(k* · (|P| + |T|))`.
 //! * [`PlanMode::Optimal`] (default): the fixed point of the same rounds, the
 //!   cheapest route. Computed by a label-setting search
 //!   ([`Planner::label_setting`]) rather than by rounds: the literal rounds
@@ -102,8 +107,9 @@ use super::fpn::{FuzzyPetriNet, PlaceId, TransitionId};
 #[serde(rename_all = "snake_case")]
 pub enum PlanMode {
     /// The source's rule: stop as soon as `α(start) < 1` (or when a round
-    /// changes nothing). The cheapest route among the shortest in
-    /// transitions.
+    /// changes nothing): `α(start)` is the value of the cheapest route
+    /// among the shortest in transitions, and the route walked along the
+    /// last round's `f` costs at most that (see the module documentation).
     Paper,
     /// To the fixed point: the cheapest route.
     #[default]
