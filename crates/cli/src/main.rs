@@ -9,6 +9,7 @@ mod nav_cmd;
 mod output;
 mod sim_cmd;
 mod topo_cmd;
+mod topo_run;
 
 use std::process::ExitCode;
 
@@ -44,7 +45,7 @@ enum Command {
     /// The tour-guide robot's mission log and the supervisor's learnt rates.
     #[command(subcommand)]
     Guide(guide_cmd::GuideCommand),
-    /// Topological maps as fuzzy Petri nets: plan routes, convert, generate.
+    /// Topological maps as fuzzy Petri nets: explore a world, plan and drive routes, convert, generate.
     #[command(subcommand)]
     Topo(topo_cmd::TopoCommand),
 }

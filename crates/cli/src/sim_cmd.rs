@@ -85,7 +85,7 @@ pub fn run(cmd: SimCommand) -> Result<()> {
     }
 }
 
-fn numbers(text: &str, n: usize, what: &str) -> Result<Vec<f64>> {
+pub(crate) fn numbers(text: &str, n: usize, what: &str) -> Result<Vec<f64>> {
     let v: Vec<f64> = text
         .split(',')
         .map(|s| s.trim().parse::<f64>())

@@ -79,6 +79,28 @@ pub enum TopoCommand {
     ///
     ///   petrinav topo generate 10000 --transitions 40000 --seed 7 -o big.fpn.json
     Generate(GenerateArgs),
+    /// Explores a world with the 16-sonar ring robot (sonars and odometry only) and writes
+    /// the topological map it builds: every time an obstacle ahead makes it abandon its
+    /// strategy it has found a reference place (type a: only a right turn possible, b: only
+    /// left, c: both), recognised as a known one or added; the strategy that led there
+    /// becomes a transition. The robot picks untried actions first, then goes where the map
+    /// still has untried ones. Place recognition is judged against the simulator's true
+    /// poses (precision, recall). Examples:
+    ///
+    ///   petrinav topo explore office --time 600 -o office.fpn.json --picture office.png
+    ///
+    ///   petrinav topo explore my_world.toml --start 1,1,0 --seed 3 -o my.fpn.json --json
+    Explore(crate::topo_run::ExploreArgs),
+    /// Drives a route on a map in the world it was made in: plan, play each transition's
+    /// exit turn and strategy until the next reference place, recognise it, replan when it is
+    /// not the one planned (the map learns: a transition that fails has its threshold λ
+    /// lowered, places found are added). The robot starts at the start place's map pose;
+    /// arrival is the goal recognised within 0.5 m of its map position. Examples:
+    ///
+    ///   petrinav topo go office office.fpn.json --from p3 --to p9 -o route.png
+    ///
+    ///   petrinav topo go office office.fpn.json --from p3 --to p9 --save-map learnt.fpn.json --json
+    Go(crate::topo_run::GoArgs),
 }
 
 /// The stopping rule of the propagation.
@@ -198,6 +220,8 @@ pub fn run(cmd: TopoCommand) -> Result<()> {
         TopoCommand::Plan(a) => plan_cmd(&a),
         TopoCommand::Convert(a) => convert(&a),
         TopoCommand::Generate(a) => generate(&a),
+        TopoCommand::Explore(a) => crate::topo_run::explore(&a),
+        TopoCommand::Go(a) => crate::topo_run::go(&a),
     }
 }
 

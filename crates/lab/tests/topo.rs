@@ -15,6 +15,7 @@ fn spec(seed: u64, time_s: f64) -> ExploreSpec {
         time_s,
         seed,
         trace: TraceParams::default(),
+        robot: topo::robot(),
     }
 }
 
@@ -69,6 +70,7 @@ fn routes_are_judged_against_where_the_goal_truly_is() {
                 time_limit_s: 200.0,
                 seed: 9,
                 trace: TraceParams::poses(),
+                robot: topo::robot(),
             },
         )
         .unwrap();
@@ -95,6 +97,7 @@ fn routes_are_judged_against_where_the_goal_truly_is() {
         time_limit_s: 10.0,
         seed: 1,
         trace: TraceParams::default(),
+        robot: topo::robot(),
     };
     assert!(topo::route(&world, &bad).is_err());
 }
