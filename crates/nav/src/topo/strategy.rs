@@ -354,11 +354,6 @@ impl Executor {
             .then_some(mean)
     }
 
-    #[doc(hidden)]
-    pub fn wall_run_debug(&self) -> f64 {
-        self.wall_run_m
-    }
-
     /// Whether the exit turn is over.
     pub fn turned(&self) -> bool {
         !matches!(self.phase, Phase::Turning { .. })

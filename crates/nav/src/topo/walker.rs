@@ -184,15 +184,6 @@ impl Walker {
                 let leg = *leg;
                 let duration_s = ex.elapsed_s();
                 let aligned = ex.aligned_heading(self.builder.params().align_min_run_m, p.odometry.theta_rad);
-                if std::env::var("DBGAL").is_ok() {
-                    eprintln!(
-                        "DBG {:?} run {:.2} aligned {:?} odom th {:.3}",
-                        leg.action.strategy,
-                        ex.wall_run_debug(),
-                        aligned,
-                        p.odometry.theta_rad
-                    );
-                }
                 self.leg = None;
                 let situation = Situation::classify(&ring, &self.situation);
                 // Aligned with the wall only if the wall followed is the one
