@@ -21,6 +21,17 @@
 //! wherever it leads. A failed leg (timeout) counts as a failed attempt,
 //! and the robot drives straight to the next obstacle. More than
 //! [`NavigateParams::max_legs`] legs: give up.
+//!
+//! **Measured, not kept** (the `topo` suite, 100 office routes, 2026-12-02;
+//! routes by map arrived on 45–48 % with the simulator's default odometry):
+//! heading from a place without a route towards the nearest place the map
+//! can route from, instead of a random untried action (42 %); leaving out of
+//! the rest of a route every transition that already failed on it (45 %);
+//! replaying a transition's exit turn as far as it turned when recorded (90°,
+//! 180° or 270°: 60 % against 64 % with calibrated odometry). What limits the
+//! routes is that a strategy played again from a place ends where it ended
+//! while exploring in about three legs of four, and a leg that ends at a
+//! new place leaves the robot off the map.
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
