@@ -12,7 +12,7 @@
 //! | `success` | back from Warning to Success | same |
 //! | `abnormal` | AutoMove's exception has lasted `abnormal_after_s` | `exception` |
 //! | `normal` | AutoMove is Normal again | — |
-//! | `ask` | the robot starts asking people to step aside | `exception` |
+//! | `ask` | the robot starts asking people to step aside | `exception`: AutoMove's (`path_blocking`, `goal_occupation`) or `contour_blocked` (contour tracking held up, or stopped at a hit point) |
 //! | `switch` | the active behaviour changes | `from`, `to`, `reason` |
 //! | `decision` | the GSPN supervisor decides | `reason`, `f_auto`, `f_cont`, `choice`, `lambda3`…`lambda10`, `p_loc_succ`, `p_loc_warn` |
 //! | `arrived` | the estimate is within `arrive_m` of the goal | — |
@@ -533,7 +533,6 @@ impl Controller for GuideController {
                 s.command
             }
             Behaviour::Contour => {
-                self.asking = false;
                 if self.abnormal {
                     self.sojourns_plan.push(Sojourn {
                         state: StateName::Abnormal,
@@ -544,9 +543,21 @@ impl Controller for GuideController {
                     self.abnormal = false;
                     notes.event(Event::new("normal", t).at(estimate.position()));
                 }
-                self.contour
-                    .step(scan, p.odometry, estimate, self.goal, t)
-                    .command
+                let s = self.contour.step(scan, p.odometry, estimate, self.goal, t);
+                let asking = s.request.is_some();
+                if asking {
+                    self.stats.asking_cycles += 1;
+                    if !self.asking {
+                        notes.event(
+                            Event::new("ask", t)
+                                .at(estimate.position())
+                                .with("exception", "contour_blocked"),
+                        );
+                    }
+                }
+                self.asking = asking;
+                self.request = s.request;
+                s.command
             }
         };
         Step::Run(command)

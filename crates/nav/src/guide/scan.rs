@@ -15,6 +15,27 @@ pub fn points(scan: &LaserScan) -> impl Iterator<Item = Vec2> + '_ {
     })
 }
 
+/// The scan with each range replaced by the median of it and its two
+/// neighbours (a 3-beam median filter, as a laser filter chain runs before
+/// a reactive controller): Gaussian range noise of σ becomes ≈ 0.67 σ, and
+/// the chance that a beam reads 2σ short drops from 2.3 % to 0.16 % (the
+/// median of three is that short only when two of them are). Edges are
+/// kept where they are (at a jump the median is one side or the other);
+/// a thing seen by a single beam is dropped — at 1° between beams, under
+/// 2.6 cm wide at 1.5 m. Beams without a finite reading, and beams beside
+/// one, are left as they are.
+pub fn median3(scan: &LaserScan) -> LaserScan {
+    let r = &scan.ranges_m;
+    let mut out = scan.clone();
+    for i in 1..r.len().saturating_sub(1) {
+        let (a, b, c) = (r[i - 1], r[i], r[i + 1]);
+        if a.is_finite() && b.is_finite() && c.is_finite() {
+            out.ranges_m[i] = a.max(b).min(a.min(b).max(c));
+        }
+    }
+    out
+}
+
 /// Whether the scan sees bearing `bearing_rad` (robot frame, the sensor's
 /// offset neglected) within its field of view.
 pub fn covers(scan: &LaserScan, bearing_rad: f64) -> bool {
@@ -91,9 +112,13 @@ pub fn safe_speed(points: &[Vec2], v: f64, omega: f64, radius_m: f64, decel_mps2
 /// the odometry frame, and forgotten once the robot has moved
 /// [`NearbyPoints::FORGET_AFTER_M`] since (a turn counts as the arc its rim
 /// travels), after [`NearbyPoints::FORGET_AFTER_S`] (what stood beside the
-/// robot may have been a person who left), or when they are out of reach.
+/// robot may have been a person who left; [`NearbyPoints::forgetting_after`]
+/// for another time), or when they are out of reach.
 #[derive(Debug, Clone, Default)]
 pub struct NearbyPoints {
+    /// Remembered points are forgotten after this long, seconds (`None`:
+    /// [`NearbyPoints::FORGET_AFTER_S`]).
+    forget_after_s: Option<f64>,
     /// Remembered points by 5 cm square (odometry frame): the point, the
     /// motion counter and the time when last seen.
     memory: std::collections::BTreeMap<(i64, i64), (Vec2, f64, f64)>,
@@ -116,9 +141,21 @@ impl NearbyPoints {
     /// Radius of the rim whose arc measures a turn, metres.
     const RIM_M: f64 = 0.35;
 
+    /// Remembering points out of view for `seconds` (and as long as the
+    /// robot has not moved [`NearbyPoints::FORGET_AFTER_M`]) instead of
+    /// [`NearbyPoints::FORGET_AFTER_S`]; a `seconds` that is not a number is
+    /// the default.
+    pub fn forgetting_after(seconds: f64) -> NearbyPoints {
+        NearbyPoints {
+            forget_after_s: (!seconds.is_nan()).then_some(seconds),
+            ..NearbyPoints::default()
+        }
+    }
+
     /// Takes a new scan, read at `odometry` and `time_s`; returns the points
     /// near the robot, robot frame.
     pub fn update(&mut self, scan: &LaserScan, odometry: Pose, time_s: f64) -> &[Vec2] {
+        let forget_after_s = self.forget_after_s.unwrap_or(Self::FORGET_AFTER_S);
         if let Some(last) = self.last {
             let turn = robot::wrap_angle(odometry.theta_rad - last.theta_rad).abs();
             self.travelled_m += odometry.position().dist(last.position()) + turn * Self::RIM_M;
@@ -127,9 +164,7 @@ impl NearbyPoints {
         let now = self.travelled_m;
         let here = odometry.position();
         self.memory.retain(|_, &mut (at, m, t)| {
-            now - m <= Self::FORGET_AFTER_M
-                && time_s - t <= Self::FORGET_AFTER_S
-                && at.dist(here) < Self::REACH_M
+            now - m <= Self::FORGET_AFTER_M && time_s - t <= forget_after_s && at.dist(here) < Self::REACH_M
         });
         self.points.clear();
         self.points
@@ -172,6 +207,23 @@ mod tests {
         assert_eq!(p.len(), 1);
         assert!((p[0].x - 0.2).abs() < 1e-12 && (p[0].y + 1.0).abs() < 1e-12);
         assert!(covers(&scan, 1.0) && !covers(&scan, 2.0));
+    }
+
+    #[test]
+    fn the_median_filter_keeps_edges_and_drops_lone_outliers() {
+        let scan = LaserScan {
+            mount: Pose::default(),
+            angle_min_rad: 0.0,
+            angle_increment_rad: 0.01,
+            range_max_m: 10.0,
+            ranges_m: vec![1.0, 1.0, 0.5, 1.0, 1.0, 3.0, 3.0, f64::NAN, 3.0, 2.9],
+        };
+        let m = median3(&scan).ranges_m;
+        // The lone short reading is gone, the 1 m → 3 m edge stays put.
+        assert_eq!(&m[..7], &[1.0, 1.0, 1.0, 1.0, 1.0, 3.0, 3.0]);
+        // Beside a drop-out, as read; the ends as read.
+        assert!(m[7].is_nan());
+        assert_eq!((m[6], m[8], m[9]), (3.0, 3.0, 2.9));
     }
 
     #[test]
