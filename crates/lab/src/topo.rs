@@ -6,7 +6,7 @@
 //! The robot is the 16-sonar `ring` preset (sonars and odometry only, as
 //! the source's Nomad-200). **Decision — odometry:** calibrated, as in the
 //! dead-lock suite — slip of σ 1 % per wheel and step, no large slips
-//! ([`robot`]); the simulator's default, with a large slip of one wheel
+//! ([`robot()`]); the simulator's default, with a large slip of one wheel
 //! (up to 50 %) about every 20 s, is the stress case ([`slipping_robot`]):
 //! it turns the heading by a few degrees at a time and puts the robot a
 //! metre off after a single 9 m corridor.
@@ -170,7 +170,7 @@ pub struct ExploreSpec {
     pub seed: u64,
     /// What to trace.
     pub trace: TraceParams,
-    /// The robot ([`robot`] or [`slipping_robot`]).
+    /// The robot ([`robot()`] or [`slipping_robot`]).
     pub robot: RobotParams,
 }
 
@@ -342,7 +342,7 @@ pub struct RouteSpec<'a> {
     pub seed: u64,
     /// What to trace.
     pub trace: TraceParams,
-    /// The robot ([`robot`] or [`slipping_robot`]).
+    /// The robot ([`robot()`] or [`slipping_robot`]).
     pub robot: RobotParams,
 }
 
