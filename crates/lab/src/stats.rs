@@ -30,7 +30,35 @@ pub struct Proportion {
     pub high: f64,
 }
 
+/// The median of the finite values of `xs`; NaN when there is none.
+pub fn median(xs: impl IntoIterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = xs.into_iter().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
 impl Proportion {
+    /// As a report writes it: `83 % (75–90)`; `-` without trials.
+    pub fn percent(&self) -> String {
+        if self.n == 0 {
+            return "-".into();
+        }
+        format!(
+            "{:.0} % ({:.0}–{:.0})",
+            100.0 * self.value,
+            100.0 * self.low,
+            100.0 * self.high
+        )
+    }
+
     /// The proportion and its interval at `confidence` (e.g. 0.95).
     pub fn new(successes: usize, n: usize, confidence: f64) -> Proportion {
         if n == 0 {
@@ -81,6 +109,18 @@ pub struct Mean {
 }
 
 impl Mean {
+    /// As a report writes it, one decimal: `12.3 ± 0.4`, `12.3` without an
+    /// interval, `-` without samples.
+    pub fn one_decimal(&self) -> String {
+        if self.n == 0 {
+            "-".into()
+        } else if self.half_width.is_finite() {
+            format!("{:.1} ± {:.1}", self.mean, self.half_width)
+        } else {
+            format!("{:.1}", self.mean)
+        }
+    }
+
     /// The mean of `xs` and its interval at `confidence`.
     pub fn new(xs: &[f64], confidence: f64) -> Mean {
         let n = xs.len();

@@ -464,10 +464,19 @@ fn free_ahead(points: &[Vec2], radius_m: f64) -> f64 {
 }
 
 /// Distance from `q` to the segment `[a, b]`.
-fn to_segment(q: Vec2, a: Vec2, b: Vec2) -> f64 {
+/// The squared distance from `q` to the segment `ab` (no square root: the
+/// gap search compares it with a bound, many times a cycle).
+fn to_segment_squared(q: Vec2, a: Vec2, b: Vec2) -> f64 {
     let ab = b - a;
     let t = ((q - a).dot(ab) / ab.dot(ab).max(1e-12)).clamp(0.0, 1.0);
-    q.dist(a + ab.scale(t))
+    let d = q - (a + ab.scale(t));
+    d.dot(d)
+}
+
+/// `|a − b|²`.
+fn dist_squared(a: Vec2, b: Vec2) -> f64 {
+    let d = a - b;
+    d.dot(d)
 }
 
 /// A gap in the way (module docs, doors), robot frame: its two sides, its
@@ -485,32 +494,37 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
     const REACH_M: f64 = GAP_REACH_M;
     let usual = p.robot_radius_m + p.margin_m;
     let fits = p.robot_radius_m + p.pass_margin_m;
+    // Squared distances throughout: `hypot` was most of a crowded cycle.
+    let reach_near = REACH_M + 2.0 * usual;
     let near: Vec<Vec2> = points
         .iter()
         .copied()
-        .filter(|q| q.norm() < REACH_M + 2.0 * usual)
+        .filter(|&q| q.dot(q) < reach_near * reach_near)
         .collect();
+    let (w_lo, w_hi) = (2.0 * fits, 2.0 * usual);
     let mut pairs: Vec<(f64, Vec2, Vec2)> = Vec::new();
     for &j in near
         .iter()
-        .filter(|q| q.x > 0.0 && q.y.abs() < usual && q.norm() < REACH_M)
+        .filter(|q| q.x > 0.0 && q.y.abs() < usual && q.dot(**q) < REACH_M * REACH_M)
     {
         for &k in &near {
-            let w = k.dist(j);
-            if w >= 2.0 * fits && w <= 2.0 * usual {
-                pairs.push((w, j, k));
+            let w2 = dist_squared(k, j);
+            if w2 >= w_lo * w_lo && w2 <= w_hi * w_hi {
+                // The middle ahead, within 60° of the heading (checked here
+                // rather than on each candidate: the same pairs survive).
+                let mid = (j + k).scale(0.5);
+                if mid.x > 0.0 && mid.angle().abs() <= 60f64.to_radians() {
+                    pairs.push((w2.sqrt(), j, k));
+                }
             }
         }
     }
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
     pairs.into_iter().find_map(|(w, j, k)| {
         let mid = (j + k).scale(0.5);
-        if mid.x <= 0.0 || mid.angle().abs() > 60f64.to_radians() {
-            return None;
-        }
-        let free = near
-            .iter()
-            .all(|&q| q.dist(j) < 0.1 || q.dist(k) < 0.1 || to_segment(q, j, k) >= 0.05);
+        let free = near.iter().all(|&q| {
+            dist_squared(q, j) < 0.01 || dist_squared(q, k) < 0.01 || to_segment_squared(q, j, k) >= 0.0025
+        });
         if !free {
             return None;
         }
@@ -521,17 +535,17 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
         }
         // Room beyond: the footprint goes on through the middle.
         let reach = p.robot_radius_m + 0.3;
+        let bound = fits - 1e-9;
         let beyond = near.iter().all(|&q| {
             let rel = q - mid;
             let along = rel.dot(through);
-            let d = if along < 0.0 {
-                rel.norm()
+            if along < 0.0 {
+                rel.dot(rel) >= bound * bound
             } else if along > reach {
-                (rel - through.scale(reach)).norm()
+                dist_squared(rel, through.scale(reach)) >= bound * bound
             } else {
-                rel.dot(across).abs()
-            };
-            d >= fits - 1e-9
+                rel.dot(across).abs() >= bound
+            }
         });
         beyond.then_some(Gap {
             seen_s: 0.0,
@@ -856,6 +870,13 @@ impl ContourTracker {
             wrap_angle(g.mid.angle() - heading).abs() < 35f64.to_radians()
                 && !clear_along(points, heading, usual, GAP_REACH_M)
         };
+        // A new gap is wanted only where the usual clearance is blocked:
+        // the search (quadratic in the points near) runs only then, or while
+        // a gap is being passed.
+        let blocked = || !clear_along(points, heading, usual, GAP_REACH_M);
+        if self.gap.is_none() && !blocked() {
+            return;
+        }
         let found = find_gap(points, &p).filter(|g| self.gap.is_some() || wanted(g));
         if let Some(g) = found {
             let mid = odometry.transform(g.mid);

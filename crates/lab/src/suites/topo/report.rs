@@ -15,7 +15,7 @@ use super::{Explored, METHODS, ROUTES, TopoSuite, WORLDS, metric};
 use crate::charts::{self, Series};
 use crate::page::{Block, Figure};
 use crate::record::{RunRecord, Runs};
-use crate::stats::{Mean, Proportion};
+use crate::stats::{Mean, Proportion, median};
 use crate::suite::{ReportContext, Suite, SuiteReport};
 use crate::summary::CONFIDENCE;
 use crate::tables::{self, MetricColumn};
@@ -34,28 +34,6 @@ fn metric_sum(rs: &[(u32, &RunRecord)], name: &str) -> f64 {
 fn mean_metric(rs: &[(u32, &RunRecord)], name: &str) -> Mean {
     let v: Vec<f64> = rs.iter().filter_map(|(_, r)| r.metric(name)).collect();
     Mean::new(&v, CONFIDENCE)
-}
-
-fn pct(p: &Proportion) -> String {
-    if p.n == 0 {
-        return "-".into();
-    }
-    format!(
-        "{:.0} % ({:.0}–{:.0})",
-        100.0 * p.value,
-        100.0 * p.low,
-        100.0 * p.high
-    )
-}
-
-fn secs(m: &Mean) -> String {
-    if m.n == 0 {
-        "-".into()
-    } else if m.half_width.is_finite() {
-        format!("{:.1} ± {:.1}", m.mean, m.half_width)
-    } else {
-        format!("{:.1}", m.mean)
-    }
 }
 
 fn explored(r: &RunRecord) -> Option<(FuzzyPetriNet, Vec<Pose>)> {
@@ -134,14 +112,14 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
             md,
             "| {world} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
             ex.len(),
-            pct(&connected),
-            secs(&mean_metric(&ex, metric::PLACES)),
-            secs(&mean_metric(&ex, metric::TRANSITIONS)),
-            secs(&mean_metric(&ex, metric::STOPS)),
+            percent(&connected),
+            one_decimal(&mean_metric(&ex, metric::PLACES)),
+            one_decimal(&mean_metric(&ex, metric::TRANSITIONS)),
+            one_decimal(&mean_metric(&ex, metric::STOPS)),
             precision,
             recall,
-            secs(&mean_metric(&ex, metric::RECALIBRATIONS)),
-            secs(&drift),
+            one_decimal(&mean_metric(&ex, metric::RECALIBRATIONS)),
+            one_decimal(&drift),
         );
         let _ = write!(
             explanation,
@@ -256,9 +234,9 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
                 md,
                 "| {world} | {m} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 rs.len(),
-                pct(&p),
-                secs(&time),
-                secs(&bound),
+                percent(&p),
+                one_decimal(&time),
+                one_decimal(&bound),
                 count("lost"),
                 count("time_limit"),
                 count("gave_up"),
@@ -307,14 +285,14 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
             let _ = write!(
                 why,
                 "**{world}.** With its map the robot arrived on {} of the routes. Of the {} failures, {lost} declared arrival at a place that was not the goal (a place recognised wrongly), {timeouts} ran out of time and {gave_up} gave up; {failed_with_replans} of the failed routes had arrived somewhere the plan did not say at least once (a strategy that did not lead where it had led while exploring: a door passed or missed, a wall's end seen or not), {replans:.0} such surprises over all routes. ",
-                pct(p),
+                percent(p),
                 map_runs.values().filter(|r| !r.success).count(),
             );
             if let Some(w) = rates.get("wall_following") {
                 let _ = write!(
                     why,
                     "Wall following alone, judged by an oracle that stops it the moment it passes the goal, arrived on {}; on the same routes the map arrived where wall following did not {only_map} times and the other way round {only_wall} times. ",
-                    pct(w)
+                    percent(w)
                 );
             }
             if !ratios.is_empty() {
@@ -347,18 +325,6 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
         blocks,
         files,
     })
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 /// The longest planned route of the first campaign of the first world,
@@ -418,4 +384,12 @@ fn route_table(runs: &Runs) -> Option<Vec<Block>> {
         out.push(Block::Table(md));
     }
     Some(out)
+}
+
+fn percent(p: &Proportion) -> String {
+    p.percent()
+}
+
+fn one_decimal(m: &Mean) -> String {
+    m.one_decimal()
 }

@@ -17,7 +17,7 @@ use crate::page::{Block, Figure};
 use crate::pictures;
 use crate::record::{RunRecord, Runs};
 use crate::runner::Job;
-use crate::stats::{Mean, Proportion};
+use crate::stats::{Mean, Proportion, median};
 use crate::suite::{ReportContext, Suite, SuiteReport};
 use crate::summary::CONFIDENCE;
 use crate::tables::{self, MetricColumn};
@@ -196,25 +196,6 @@ fn versus(runs: &Runs, density: &str, other: &str) -> Versus {
     v
 }
 
-fn pct(p: &Proportion) -> String {
-    format!(
-        "{:.0} % ({:.0}–{:.0})",
-        100.0 * p.value,
-        100.0 * p.low,
-        100.0 * p.high
-    )
-}
-
-fn secs(m: &Mean) -> String {
-    if m.n == 0 {
-        "-".into()
-    } else if m.half_width.is_finite() {
-        format!("{:.1} ± {:.1}", m.mean, m.half_width)
-    } else {
-        format!("{:.1}", m.mean)
-    }
-}
-
 /// The report (module docs).
 pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport> {
     let runs = ctx.runs;
@@ -391,9 +372,9 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
                 md,
                 "| {density} | {strategy} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 c.missions,
-                pct(&c.success),
-                secs(&c.time),
-                secs(&c.warning),
+                percent(&c.success),
+                one_decimal(&c.time),
+                one_decimal(&c.warning),
                 if c.contour_share.is_finite() {
                     format!("{:.0} %", 100.0 * c.contour_share)
                 } else {
@@ -517,13 +498,13 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
             text,
             "**{density}.** Most successful: {} ({}{}). Fastest: {} ({} s{}). The supervisor: {} success, {} s, {} of its driving in contour tracking, {:.1} s in Warning per mission. Mission by mission against the supervisor: ",
             STRATEGIES[best_success],
-            pct(&bs.success),
+            percent(&bs.success),
             tied(best_success, &|c: &Cell| overlap(&c.success, &bs.success)),
             STRATEGIES[best_time],
-            secs(&bt.time),
+            one_decimal(&bt.time),
             tied(best_time, &|c: &Cell| close_in_time(&c.time, &bt.time)),
-            pct(&sup.success),
-            secs(&sup.time),
+            percent(&sup.success),
+            one_decimal(&sup.time),
             if sup.contour_share.is_finite() {
                 format!("{:.0} %", 100.0 * sup.contour_share)
             } else {
@@ -597,20 +578,6 @@ fn final_behaviour(r: &RunRecord) -> Option<&str> {
     })
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Why the supervisor did as it did at a density, from its records: what
 /// it decided and on which values, how its failed missions ended, whether
 /// the net's premise (a warning localizer hurts AutoMove) held for AutoMove
@@ -643,7 +610,7 @@ fn why(runs: &Runs, density: &str, d: usize, cells: &BTreeMap<(usize, usize), Ce
         .iter()
         .filter(|e| e.text("choice") == Some("contour"))
         .count();
-    let at_start = |key: &str| median(starts.iter().map(|e| num(Some(e), key)).collect());
+    let at_start = |key: &str| median(starts.iter().map(|e| num(Some(e), key)));
     let failed: Vec<&RunRecord> = sup.iter().copied().filter(|r| !r.success).collect();
     let failed_in_contour = failed
         .iter()
@@ -692,7 +659,7 @@ fn why(runs: &Runs, density: &str, d: usize, cells: &BTreeMap<(usize, usize), Ce
             auto_cell.warning.mean,
             loc_mean.mean,
             loc_max,
-            pct(&auto_cell.success),
+            percent(&auto_cell.success),
         );
         if loc_max < 0.5 && auto_cell.success.low > rule_cell.success.high.min(sup_cell.success.high) {
             out.push_str(
@@ -717,7 +684,7 @@ fn why(runs: &Runs, density: &str, d: usize, cells: &BTreeMap<(usize, usize), Ce
             "The contour hypothesis rests on the calibration runs that reached the goal ({} of {} contour runs here: λ8 is one over their mean time) and fails only while the localizer warns (t12, λ10 from the share of failed missions). Contour tracking alone reached {} of its missions at this density ({} time limits, {} collisions): ",
             ok,
             contour_calibration.len(),
-            pct(&contour_cell.success),
+            percent(&contour_cell.success),
             contour_cell.timeouts,
             contour_cell.collisions,
         );
@@ -805,4 +772,12 @@ fn write_logs(
         }
     }
     Ok(())
+}
+
+fn percent(p: &Proportion) -> String {
+    p.percent()
+}
+
+fn one_decimal(m: &Mean) -> String {
+    m.one_decimal()
 }
