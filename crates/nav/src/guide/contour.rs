@@ -521,7 +521,17 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
                 // The middle ahead, within 60° of the heading (checked here
                 // rather than on each candidate: the same pairs survive).
                 let mid = (j + k).scale(0.5);
-                if mid.x > 0.0 && mid.y.abs() <= tan_60 * mid.x {
+                // Two points of one wall: the beam between them in the
+                // middle lies on their segment (a cheap part of the check
+                // below, done before the sort: most pairs go here).
+                let (lo, hi) = (ji.min(ki), ji.max(ki));
+                let on_wall = hi > lo + 1 && {
+                    let q = near[lo + 1 + (hi - lo - 1) / 2];
+                    dist_squared(q, j) >= 0.01
+                        && dist_squared(q, k) >= 0.01
+                        && to_segment_squared(q, j, k) < 0.0025
+                };
+                if mid.x > 0.0 && mid.y.abs() <= tan_60 * mid.x && !on_wall {
                     pairs.push((w2.sqrt(), ji, ki));
                 }
             }
@@ -559,12 +569,11 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
         // The points are in scan order, so what lies on the segment of two
         // points of one wall, or in the way beyond two points of different
         // things, is mostly seen by the beams between them: those are
-        // looked at first, the middle one first (it rejects most pairs),
-        // then all points (the verdict is the same; only the work differs).
+        // looked at first (the middle one before the sort, above), then all
+        // points (the verdict is the same; only the work differs).
         let (lo, hi) = (ji.min(ki), ji.max(ki));
         let between = &near[lo + 1..hi];
-        let rejected = between.get(between.len() / 2).is_some_and(|&q| on_segment(q))
-            || between.iter().any(|&q| on_segment(q) || in_the_way(q))
+        let rejected = between.iter().any(|&q| on_segment(q) || in_the_way(q))
             || near.iter().any(|&q| on_segment(q) || in_the_way(q));
         if rejected {
             return None;
