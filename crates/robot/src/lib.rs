@@ -211,6 +211,43 @@ pub struct LaserScan {
     pub ranges_m: Vec<f64>,
 }
 
+impl LaserScan {
+    /// The `(cos a, sin a)` of every beam's angle `a = angle_min_rad + k ·
+    /// angle_increment_rad` (sensor frame), bit for bit `a.cos()` and
+    /// `a.sin()`: computed once per thread and scan geometry and kept (a
+    /// cache, not an approximation; the consumers of a scan each turned
+    /// every beam into a point, two trigonometric calls a beam, several
+    /// times a control cycle).
+    pub fn beam_directions(&self) -> std::rc::Rc<[(f64, f64)]> {
+        type Key = (u64, u64, usize);
+        type Directions = std::rc::Rc<[(f64, f64)]>;
+        thread_local! {
+            static CACHE: std::cell::RefCell<Option<(Key, Directions)>> = const { std::cell::RefCell::new(None) };
+        }
+        let key = (
+            self.angle_min_rad.to_bits(),
+            self.angle_increment_rad.to_bits(),
+            self.ranges_m.len(),
+        );
+        CACHE.with(|c| {
+            let mut c = c.borrow_mut();
+            match &*c {
+                Some((k, dirs)) if *k == key => dirs.clone(),
+                _ => {
+                    let dirs: Directions = (0..self.ranges_m.len())
+                        .map(|k| {
+                            let a = self.angle_min_rad + k as f64 * self.angle_increment_rad;
+                            (a.cos(), a.sin())
+                        })
+                        .collect();
+                    *c = Some((key, dirs.clone()));
+                    dirs
+                }
+            }
+        })
+    }
+}
+
 /// One sonar transducer: the nearest echo inside its cone.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct SonarReading {
@@ -373,6 +410,33 @@ pub trait Controller {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn beam_directions_are_the_angles_cosines_and_follow_the_geometry() {
+        let scan = |min: f64, inc: f64, n: usize| LaserScan {
+            mount: Pose::default(),
+            angle_min_rad: min,
+            angle_increment_rad: inc,
+            range_max_m: 10.0,
+            ranges_m: vec![1.0; n],
+        };
+        for s in [
+            scan(-1.5, 0.01745, 181),
+            scan(-2.0, 0.1, 41),
+            scan(-1.5, 0.01745, 181),
+            scan(0.3, 0.02, 3),
+        ] {
+            let dirs = s.beam_directions();
+            assert_eq!(dirs.len(), s.ranges_m.len());
+            for (k, &(c, sn)) in dirs.iter().enumerate() {
+                let a = s.angle_min_rad + k as f64 * s.angle_increment_rad;
+                assert_eq!(
+                    (c.to_bits(), sn.to_bits()),
+                    (a.cos().to_bits(), a.sin().to_bits())
+                );
+            }
+        }
+    }
 
     #[test]
     fn angles_wrap_to_minus_pi_exclusive_pi_inclusive() {

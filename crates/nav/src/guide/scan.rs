@@ -6,12 +6,17 @@ use robot::{LaserScan, Pose, Vec2};
 /// (the scan's mount applied): beams that hit nothing (`INFINITY`), fell
 /// out (`NaN`) or read beyond `range_max_m` give no point.
 pub fn points(scan: &LaserScan) -> impl Iterator<Item = Vec2> + '_ {
+    let dirs = scan.beam_directions();
+    let m = scan.mount;
+    // `m.transform`, its sine and cosine once.
+    let (s, c) = m.theta_rad.sin_cos();
     scan.ranges_m.iter().enumerate().filter_map(move |(i, &r)| {
         if !(r.is_finite() && r >= 0.0 && r < scan.range_max_m) {
             return None;
         }
-        let a = scan.angle_min_rad + i as f64 * scan.angle_increment_rad;
-        Some(scan.mount.transform(Vec2::new(r * a.cos(), r * a.sin())))
+        let (ca, sa) = dirs[i];
+        let q = Vec2::new(r * ca, r * sa);
+        Some(Vec2::new(m.x_m + c * q.x - s * q.y, m.y_m + s * q.x + c * q.y))
     })
 }
 

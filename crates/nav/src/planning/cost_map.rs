@@ -631,12 +631,19 @@ fn check_grown(window: &Window, m: usize) -> Result<(), PlanningError> {
 /// (infinite, NaN, not positive, or at or beyond `range_max_m`) are skipped.
 pub fn laser_endpoints(robot_in_world: Pose, scan: &LaserScan, out: &mut Vec<Vec2>) {
     let sensor = robot_in_world.compose(&scan.mount);
+    let dirs = scan.beam_directions();
+    // `sensor.transform`, its sine and cosine once.
+    let (s, c) = sensor.theta_rad.sin_cos();
     out.extend(scan.ranges_m.iter().enumerate().filter_map(|(k, &r)| {
         if !(r.is_finite() && r > 0.0 && r < scan.range_max_m) {
             return None;
         }
-        let a = scan.angle_min_rad + k as f64 * scan.angle_increment_rad;
-        Some(sensor.transform(Vec2::new(r * a.cos(), r * a.sin())))
+        let (ca, sa) = dirs[k];
+        let q = Vec2::new(r * ca, r * sa);
+        Some(Vec2::new(
+            sensor.x_m + c * q.x - s * q.y,
+            sensor.y_m + s * q.x + c * q.y,
+        ))
     }));
 }
 
