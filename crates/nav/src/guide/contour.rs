@@ -211,7 +211,12 @@ pub struct ContourParams {
     /// the laser's view, this long (and until the robot has moved 1 m),
     /// seconds. Default 10 (more than `hit_wait_s` and `ask_after_s`: a
     /// robot that waits must not forget the wall beside it; the
-    /// simulator's 3 s let it turn into a wall after a 3 s wait).
+    /// simulator's 3 s let it turn into a wall after a 3 s wait). Not
+    /// longer: with 60 s, what people were beside the robot held it long
+    /// after they left (`lab run maps`, building_31 among 20 people,
+    /// contour legs reached 13 → 4 of 33), though 10 s is what still lets
+    /// the robot touch a lone post beside it after a wait of more than
+    /// 10 s in building_31's south corridor (tour 3, last leg).
     pub safety_memory_s: f64,
     /// Deceleration the stopping distance assumes, m/s². Default 0.4
     /// (below Jinny's 0.5 m/s² per wheel).

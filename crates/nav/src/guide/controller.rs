@@ -37,7 +37,7 @@ use crate::supervisor::reference::Reference;
 use crate::supervisor::{Rates, Supervisor};
 
 use super::automove::{AutoMove, AutoMoveError, AutoMoveParams};
-use super::contour::{ContourParams, ContourTracker};
+use super::contour::{ContourMode, ContourParams, ContourTracker, Side};
 use crate::localization::{LocalizationError, LocalizationStatus, Localizer, MclParams};
 use crate::supervisor::Behaviour;
 
@@ -544,6 +544,22 @@ impl Controller for GuideController {
                     notes.event(Event::new("normal", t).at(estimate.position()));
                 }
                 let s = self.contour.step(scan, p.odometry, estimate, self.goal, t);
+                if notes.is_enabled() {
+                    // What the tracker does, for traces and replays: mode
+                    // (0 seek, −1 following on the right, +1 on the left),
+                    // distance to the contour, centred, passing a gap.
+                    let mode = match s.mode {
+                        ContourMode::Seek => 0.0,
+                        ContourMode::Follow { side, .. } => match side {
+                            Side::Left => 1.0,
+                            Side::Right => -1.0,
+                        },
+                    };
+                    notes.value("contour_mode", mode);
+                    notes.value("contour_m", s.contour_m);
+                    notes.value("contour_centred", f64::from(u8::from(s.centred)));
+                    notes.value("contour_gap", f64::from(u8::from(s.gap)));
+                }
                 let asking = s.request.is_some();
                 if asking {
                     self.stats.asking_cycles += 1;
