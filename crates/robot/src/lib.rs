@@ -146,8 +146,15 @@ impl Pose {
 
     /// A point given in the frame of `self`, in the parent frame.
     pub fn transform(&self, p: Vec2) -> Vec2 {
+        self.transformer()(p)
+    }
+
+    /// [`Pose::transform`] for many points: the heading's sine and cosine
+    /// taken once (the same result, bit for bit).
+    pub fn transformer(&self) -> impl Fn(Vec2) -> Vec2 + Copy + use<> {
         let (s, c) = self.theta_rad.sin_cos();
-        Vec2::new(self.x_m + c * p.x - s * p.y, self.y_m + s * p.x + c * p.y)
+        let (x, y) = (self.x_m, self.y_m);
+        move |p: Vec2| Vec2::new(x + c * p.x - s * p.y, y + s * p.x + c * p.y)
     }
 
     /// A point of the parent frame, in the frame of `self`.

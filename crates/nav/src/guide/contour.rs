@@ -475,6 +475,12 @@ fn to_segment_squared(q: Vec2, a: Vec2, b: Vec2) -> f64 {
     d.dot(d)
 }
 
+/// Whether `q` lies on the segment between the gap's sides `j` and `k`:
+/// within 5 cm of it and not within 10 cm of either end (their own wall).
+fn on_segment(q: Vec2, j: Vec2, k: Vec2) -> bool {
+    dist_squared(q, j) >= 0.01 && dist_squared(q, k) >= 0.01 && to_segment_squared(q, j, k) < 0.0025
+}
+
 /// `|a − b|²`.
 fn dist_squared(a: Vec2, b: Vec2) -> f64 {
     let d = a - b;
@@ -530,12 +536,7 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
                 // middle lies on their segment (a cheap part of the check
                 // below, done before the sort: most pairs go here).
                 let (lo, hi) = (ji.min(ki), ji.max(ki));
-                let on_wall = hi > lo + 1 && {
-                    let q = near[lo + 1 + (hi - lo - 1) / 2];
-                    dist_squared(q, j) >= 0.01
-                        && dist_squared(q, k) >= 0.01
-                        && to_segment_squared(q, j, k) < 0.0025
-                };
+                let on_wall = hi > lo + 1 && on_segment(near[lo + 1 + (hi - lo - 1) / 2], j, k);
                 if mid.x > 0.0 && mid.y.abs() <= tan_60 * mid.x && !on_wall {
                     pairs.push((w2.sqrt(), ji, ki));
                 }
@@ -555,10 +556,6 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
         if through.dot(mid) < 0.0 {
             through = through.scale(-1.0);
         }
-        // Nothing on the segment between them.
-        let on_segment = |q: Vec2| {
-            dist_squared(q, j) >= 0.01 && dist_squared(q, k) >= 0.01 && to_segment_squared(q, j, k) < 0.0025
-        };
         // Room beyond: the footprint goes on through the middle.
         let in_the_way = |q: Vec2| {
             let rel = q - mid;
@@ -578,8 +575,9 @@ fn find_gap(points: &[Vec2], p: &ContourParams) -> Option<Gap> {
         // points (the verdict is the same; only the work differs).
         let (lo, hi) = (ji.min(ki), ji.max(ki));
         let between = &near[lo + 1..hi];
-        let rejected = between.iter().any(|&q| on_segment(q) || in_the_way(q))
-            || near.iter().any(|&q| on_segment(q) || in_the_way(q));
+        // Nothing on the segment between them, nothing in the way beyond.
+        let rejected = between.iter().any(|&q| on_segment(q, j, k) || in_the_way(q))
+            || near.iter().any(|&q| on_segment(q, j, k) || in_the_way(q));
         if rejected {
             return None;
         }

@@ -7,16 +7,13 @@ use robot::{LaserScan, Pose, Vec2};
 /// out (`NaN`) or read beyond `range_max_m` give no point.
 pub fn points(scan: &LaserScan) -> impl Iterator<Item = Vec2> + '_ {
     let dirs = scan.beam_directions();
-    let m = scan.mount;
-    // `m.transform`, its sine and cosine once.
-    let (s, c) = m.theta_rad.sin_cos();
+    let to_robot = scan.mount.transformer();
     scan.ranges_m.iter().enumerate().filter_map(move |(i, &r)| {
         if !(r.is_finite() && r >= 0.0 && r < scan.range_max_m) {
             return None;
         }
         let (ca, sa) = dirs[i];
-        let q = Vec2::new(r * ca, r * sa);
-        Some(Vec2::new(m.x_m + c * q.x - s * q.y, m.y_m + s * q.x + c * q.y))
+        Some(to_robot(Vec2::new(r * ca, r * sa)))
     })
 }
 

@@ -632,18 +632,13 @@ fn check_grown(window: &Window, m: usize) -> Result<(), PlanningError> {
 pub fn laser_endpoints(robot_in_world: Pose, scan: &LaserScan, out: &mut Vec<Vec2>) {
     let sensor = robot_in_world.compose(&scan.mount);
     let dirs = scan.beam_directions();
-    // `sensor.transform`, its sine and cosine once.
-    let (s, c) = sensor.theta_rad.sin_cos();
+    let to_world = sensor.transformer();
     out.extend(scan.ranges_m.iter().enumerate().filter_map(|(k, &r)| {
         if !(r.is_finite() && r > 0.0 && r < scan.range_max_m) {
             return None;
         }
         let (ca, sa) = dirs[k];
-        let q = Vec2::new(r * ca, r * sa);
-        Some(Vec2::new(
-            sensor.x_m + c * q.x - s * q.y,
-            sensor.y_m + s * q.x + c * q.y,
-        ))
+        Some(to_world(Vec2::new(r * ca, r * sa)))
     }));
 }
 
