@@ -410,15 +410,36 @@ struct Gap {
     width_m: f64,
 }
 
-/// The nearest point of `points` with bearing (in `bearings`, one per
-/// point) in `[lo, hi]` (robot frame, radians), if any.
-fn nearest_in(points: &[Vec2], bearings: &[f64], lo: f64, hi: f64) -> Option<Vec2> {
+/// The points of a cycle's scan (robot frame) with their bearings and
+/// distances, computed once a cycle: the arc tangents and the `hypot`s of
+/// the comparisons below were a fifth of a crowded contour cycle.
+struct Polar<'a> {
+    points: &'a [Vec2],
+    bearings: &'a [f64],
+    norms: &'a [f64],
+}
+
+impl Polar<'_> {
+    /// The nearest point with bearing in `[lo, hi]` (radians), and its
+    /// distance, if any (of equally near ones, the first).
+    fn nearest_in(&self, lo: f64, hi: f64) -> Option<(Vec2, f64)> {
+        self.points
+            .iter()
+            .zip(self.bearings)
+            .zip(self.norms)
+            .filter(|&((_, &a), _)| a >= lo && a <= hi)
+            .map(|((&q, _), &n)| (q, n))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+}
+
+/// The point of `points` nearest `q` (of equally near ones, the first).
+fn nearest_to(points: &[Vec2], q: Vec2) -> Option<Vec2> {
     points
         .iter()
-        .zip(bearings)
-        .filter(|&(_, &a)| a >= lo && a <= hi)
-        .map(|(&q, _)| q)
-        .min_by(|a, b| a.norm().total_cmp(&b.norm()))
+        .map(|&a| (a, a.dist(q)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(a, _)| a)
 }
 
 /// Whether a corridor of half-width `half_m` along bearing `bearing` is
@@ -663,6 +684,12 @@ impl ContourTracker {
         // Their bearings, once a cycle (the arc tangent was a tenth of a
         // crowded mission).
         let bearings: Vec<f64> = points.iter().map(|q| q.angle()).collect();
+        let norms: Vec<f64> = points.iter().map(|q| q.norm()).collect();
+        let polar = Polar {
+            points: &points,
+            bearings: &bearings,
+            norms: &norms,
+        };
         let to_goal = estimate.inverse_transform(goal);
         let goal_m = to_goal.norm();
         let goal_bearing = to_goal.angle();
@@ -726,7 +753,7 @@ impl ContourTracker {
         }
         let (mut psi, mut contour_m, mut centred) = match self.mode {
             ContourMode::Seek => (goal_bearing, f64::INFINITY, false),
-            ContourMode::Follow { side, .. } => self.follow(scan, &points, &bearings, side, odometry, time_s),
+            ContourMode::Follow { side, .. } => self.follow(scan, &polar, side, odometry, time_s),
         };
         // A gap in the way the law wants to go, narrower than the usual
         // clearance, that the footprint fits through: pass it (module
@@ -770,10 +797,12 @@ impl ContourTracker {
             let side = *self.turning.get_or_insert_with(|| match self.mode {
                 ContourMode::Follow { side, .. } => -side.sign(),
                 ContourMode::Seek => {
-                    let left = nearest_in(&points, &bearings, 0.0, std::f64::consts::PI)
-                        .map_or(f64::INFINITY, Vec2::norm);
-                    let right = nearest_in(&points, &bearings, -std::f64::consts::PI, 0.0)
-                        .map_or(f64::INFINITY, Vec2::norm);
+                    let left = polar
+                        .nearest_in(0.0, std::f64::consts::PI)
+                        .map_or(f64::INFINITY, |(_, n)| n);
+                    let right = polar
+                        .nearest_in(-std::f64::consts::PI, 0.0)
+                        .map_or(f64::INFINITY, |(_, n)| n);
                     if left >= right { 1.0 } else { -1.0 }
                 }
             });
@@ -1011,8 +1040,7 @@ impl ContourTracker {
     fn follow(
         &mut self,
         scan: &LaserScan,
-        points: &[Vec2],
-        bearings: &[f64],
+        polar: &Polar<'_>,
         side: Side,
         odometry: Pose,
         time_s: f64,
@@ -1026,16 +1054,18 @@ impl ContourTracker {
             Side::Left => (deg(-45.0), deg(180.0)),
             Side::Right => (deg(-180.0), deg(45.0)),
         };
-        let mut contour: Vec<Vec2> = points
-            .iter()
-            .zip(bearings)
-            .filter(|&(q, a)| (lo..=hi).contains(a) && q.norm() < p.distance_m + p.lost_m)
-            .map(|(&q, _)| q)
-            .collect();
-        let seen = contour
-            .iter()
-            .copied()
-            .min_by(|a, b| a.norm().total_cmp(&b.norm()));
+        let mut contour: Vec<Vec2> = Vec::new();
+        // The nearest point seen, and its distance.
+        let mut seen: Option<(Vec2, f64)> = None;
+        for ((&q, a), &n) in polar.points.iter().zip(polar.bearings).zip(polar.norms) {
+            if (lo..=hi).contains(a) && n < p.distance_m + p.lost_m {
+                contour.push(q);
+                if seen.is_none_or(|(_, m)| n < m) {
+                    seen = Some((q, n));
+                }
+            }
+        }
+        let seen_points = contour.len();
         while self.memory.front().is_some_and(|&(_, t)| time_s - t > p.memory_s) {
             self.memory.pop_front();
         }
@@ -1046,16 +1076,19 @@ impl ContourTracker {
                 contour.push(here);
             }
         }
-        if let Some(n) = seen {
+        if let Some((n, _)) = seen {
             self.memory.push_back((odometry.transform(n), time_s));
         }
-        let nearest_to = |q: Vec2| {
-            contour
-                .iter()
-                .copied()
-                .min_by(|a, b| a.dist(q).total_cmp(&b.dist(q)))
-        };
-        let Some(n) = nearest_to(Vec2::default()) else {
+        // The nearest of all: the nearest seen, or a nearer remembered one
+        // (the first of equally near ones, in the contour's order).
+        let nearest = contour[seen_points..]
+            .iter()
+            .map(|&q| (q, q.norm()))
+            .fold(seen, |best, (q, n)| match best {
+                Some((_, m)) if m <= n => best,
+                _ => Some((q, n)),
+            });
+        let Some((n, d)) = nearest else {
             // Lost: arc towards the contour's side on a circle of radius d*.
             return (
                 s * (p.cruise_mps / p.distance_m) / p.k_heading,
@@ -1063,17 +1096,16 @@ impl ContourTracker {
                 false,
             );
         };
-        let d = n.norm();
         // Corridor: both sides seen beside the robot.
-        let left = nearest_in(points, bearings, deg(45.0), deg(135.0));
-        let right = nearest_in(points, bearings, deg(-135.0), deg(-45.0));
-        if let (Some(l), Some(r)) = (left, right)
-            && l.norm() + r.norm() <= p.corridor_m
-            && d > p.distance_m.min(0.5 * (l.norm() + r.norm())) - 0.05
+        let left = polar.nearest_in(deg(45.0), deg(135.0));
+        let right = polar.nearest_in(deg(-135.0), deg(-45.0));
+        if let (Some((l, ln)), Some((r, rn))) = (left, right)
+            && ln + rn <= p.corridor_m
+            && d > p.distance_m.min(0.5 * (ln + rn)) - 0.05
         {
             let tl = wrap_angle(l.angle() - std::f64::consts::FRAC_PI_2);
             let tr = wrap_angle(r.angle() + std::f64::consts::FRAC_PI_2);
-            let offset = 0.5 * (l.norm() - r.norm());
+            let offset = 0.5 * (ln - rn);
             let psi = 0.5 * (tl + tr) + (p.k_distance * offset).atan();
             return (psi, d, true);
         }
@@ -1082,7 +1114,7 @@ impl ContourTracker {
         let normal = n.scale(-1.0 / d); // from the contour to the robot
         let tangent = Vec2::new(-s * normal.y, s * normal.x);
         let ahead = tangent.scale(p.lookahead_m);
-        let target = match nearest_to(ahead) {
+        let target = match nearest_to(&contour, ahead) {
             Some(m) if m.dist(ahead) > 1e-9 => m + (ahead - m).scale(p.distance_m / m.dist(ahead)),
             _ => ahead,
         };
