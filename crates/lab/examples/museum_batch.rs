@@ -30,6 +30,7 @@ fn main() -> Result<()> {
     let missions: u32 = args.get(2).map_or(Ok(20), |s| s.parse()).context("missions")?;
     let pictures = args.get(3).map(std::path::PathBuf::from);
     let mut setup = MissionSetup::new(museum()?, MISSION_TIME_LIMIT_S);
+    setup.prepare()?;
     if people > 0 {
         setup.people = Some(PeoplePlan {
             count: people,

@@ -21,9 +21,10 @@
 //! controller stopped, e.g. without a laser).
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use nav::guide::{GuideController, GuideError, GuideParams, GuideStats, GuideSummary, Policy};
+use nav::guide::{GuideController, GuideError, GuideMap, GuideParams, GuideStats, GuideSummary, Policy};
 use nav::supervisor::Behaviour;
 use nav::supervisor::log::{CalibrationRun, Entry, MissionRecord};
 use robot::{Controller, Event, Notes, Perception, Pose, Request, Step, Vec2};
@@ -130,6 +131,8 @@ pub struct MissionSetup {
     pub lost_error_m: f64,
     /// Seconds, see `lost_error_m`. Default 5.
     pub lost_after_s: f64,
+    /// The map prepared for the controller ([`MissionSetup::prepare`]).
+    prepared: Option<Arc<GuideMap>>,
 }
 
 impl MissionSetup {
@@ -145,7 +148,20 @@ impl MissionSetup {
             goal_tolerance_m: 0.3,
             lost_error_m: 2.0,
             lost_after_s: 5.0,
+            prepared: None,
         }
+    }
+
+    /// Prepares the world's map for the guide controller with `guide`
+    /// ([`GuideMap`]: likelihood field, cost maps), once for every leg run
+    /// on this setup and its clones, instead of once a leg; the legs are
+    /// the same bit for bit. A leg whose `world` or `guide` has changed
+    /// since prepares its own. Fails as a leg would on bad parameters.
+    pub fn prepare(&mut self) -> Result<()> {
+        let map = self.world.grid().grid_map();
+        let prepared = GuideMap::new(&map, self.guide.clone()).context("preparing the map for the guide")?;
+        self.prepared = Some(Arc::new(prepared));
+        Ok(())
     }
 }
 
@@ -311,14 +327,14 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         },
         sim: None,
     };
-    let mut controller = match GuideController::new(
-        &map,
-        setup.guide.clone(),
-        believed,
-        goal,
-        policy.clone(),
-        seed ^ 0x6c6f_6361_6c69_7a65,
-    ) {
+    let prepared = match &setup.prepared {
+        Some(m) if m.is_for(&map, &setup.guide) => Ok(std::borrow::Cow::Borrowed(&**m)),
+        _ => GuideMap::new(&map, setup.guide.clone()).map(std::borrow::Cow::Owned),
+    };
+    let started = prepared.and_then(|m| {
+        GuideController::on_map(&m, believed, goal, policy.clone(), seed ^ 0x6c6f_6361_6c69_7a65)
+    });
+    let mut controller = match started {
         Ok(c) => c,
         Err(GuideError::AutoMove(e)) => return Ok(unreachable(e.to_string())),
         Err(e) => return Err(e).context("starting the guide controller"),

@@ -157,3 +157,43 @@ fn the_supervisor_decides_at_the_start_and_on_returns_to_success_only() {
         );
     }
 }
+
+/// A mission on a prepared map (`MissionSetup::prepare`, the suite's way)
+/// is the mission on the raw map, bit for bit: poses, estimates, events;
+/// and a prepared setup whose parameters changed since prepares its own.
+#[test]
+fn a_prepared_map_runs_the_same_mission() {
+    let spec = |policy| LegSpec {
+        from: "start",
+        to: "goal",
+        start: START,
+        believed: START,
+        goal: GOAL,
+        policy,
+        seed: 11,
+        trace: TraceParams::default(),
+    };
+    let raw = setup(25);
+    let mut prepared = setup(25);
+    prepared.prepare().unwrap();
+    for policy in [Policy::Rule, Policy::Fixed(nav::supervisor::Behaviour::Contour)] {
+        let a = mission::run_leg(&raw, &spec(policy.clone())).unwrap();
+        let b = mission::run_leg(&prepared, &spec(policy)).unwrap();
+        assert_eq!(a.trace.poses, b.trace.poses);
+        assert_eq!(a.trace.estimates, b.trace.estimates);
+        assert_eq!(a.trace.events, b.trace.events);
+        assert_eq!(a.result.time_s, b.result.time_s);
+    }
+    // Other parameters after preparing: the leg does not use the stale map.
+    let mut changed = prepared.clone();
+    changed.guide.automove.local.cost.inscribed_radius_m += 0.05;
+    let mut fresh = raw.clone();
+    fresh.guide = changed.guide.clone();
+    let a = mission::run_leg(&fresh, &spec(Policy::Fixed(nav::supervisor::Behaviour::AutoMove))).unwrap();
+    let b = mission::run_leg(
+        &changed,
+        &spec(Policy::Fixed(nav::supervisor::Behaviour::AutoMove)),
+    )
+    .unwrap();
+    assert_eq!(a.trace.poses, b.trace.poses);
+}

@@ -31,13 +31,15 @@
 //! why the supervisor switches to contour tracking when the localizer
 //! warns.
 
+use std::sync::Arc;
+
 use robot::{Cell, Command, GridMap, LaserScan, Pose, Request, Vec2, wrap_angle};
 
 use super::scan;
 use crate::planning::distance_transform::{BEYOND, DistanceTransform};
 use crate::planning::{
     Blocked, GlobalPlanner, LocalPlanner, LocalPlannerParams, PlanningError, Route, RouteParams,
-    laser_endpoints,
+    StaticCostLayer, laser_endpoints,
 };
 
 /// Parameters of AutoMove.
@@ -205,7 +207,9 @@ pub enum AutoMoveError {
 #[derive(Debug, Clone)]
 pub struct AutoMove {
     p: AutoMoveParams,
-    map: GridMap,
+    /// The map and what is built from it (below) are shared by the
+    /// AutoMoves on one map ([`AutoMove::on_same_map`]).
+    map: Arc<GridMap>,
     global: GlobalPlanner,
     local: LocalPlanner,
     route: Option<Route>,
@@ -217,13 +221,14 @@ pub struct AutoMove {
     last: (f64, f64),
     endpoints: Vec<Vec2>,
     /// Map cells within `echo_tolerance_m` of a blocked cell, row-major.
-    near_wall: Vec<bool>,
+    near_wall: Arc<[bool]>,
     /// The scan's points near the robot, and recent ones out of view.
     nearby: scan::NearbyPoints,
 }
 
 impl AutoMove {
-    /// AutoMove on a static map (the whole-map cost map is built here, once).
+    /// AutoMove on a static map: the whole map's cost map (global routes)
+    /// and static cost layer (local windows) are built here, once.
     pub fn new(map: &GridMap, params: AutoMoveParams) -> Result<AutoMove, AutoMoveError> {
         params.validate().map_err(AutoMoveError::Params)?;
         let blocked: Vec<u8> = map.cells().iter().map(|&c| u8::from(c != Cell::Free)).collect();
@@ -231,11 +236,12 @@ impl AutoMove {
         let mut d2 = Vec::new();
         DistanceTransform::new().compute(&blocked, map.width(), map.height(), cap, &mut d2);
         let near_wall = d2.iter().map(|&d| d != BEYOND && d <= cap * cap).collect();
+        let layer = Arc::new(StaticCostLayer::new(params.local.cost, map)?);
         Ok(AutoMove {
             p: params,
-            map: map.clone(),
+            map: Arc::new(map.clone()),
             global: GlobalPlanner::new(map, params.route)?,
-            local: LocalPlanner::new(params.local)?,
+            local: LocalPlanner::with_static_layer(params.local, layer)?,
             route: None,
             next: 0,
             since_s: None,
@@ -246,9 +252,35 @@ impl AutoMove {
         })
     }
 
+    /// A new AutoMove on this one's map with its parameters: the same as
+    /// [`AutoMove::new`] on the map (no route, nothing of this one's
+    /// state), without building the map's cost map, static layer and wall
+    /// mask again — they are shared. For missions after missions on one
+    /// map.
+    pub fn on_same_map(&self) -> AutoMove {
+        AutoMove {
+            p: self.p,
+            map: Arc::clone(&self.map),
+            global: self.global.on_same_map(),
+            local: self.local.sharing_layer(),
+            route: None,
+            next: 0,
+            since_s: None,
+            last: (0.0, 0.0),
+            endpoints: Vec::new(),
+            near_wall: Arc::clone(&self.near_wall),
+            nearby: scan::NearbyPoints::default(),
+        }
+    }
+
     /// The parameters.
     pub fn params(&self) -> &AutoMoveParams {
         &self.p
+    }
+
+    /// The static map.
+    pub fn map(&self) -> &GridMap {
+        &self.map
     }
 
     /// Plans the global route from `from` to `goal`.

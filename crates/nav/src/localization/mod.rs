@@ -152,6 +152,8 @@ pub mod recovery;
 pub mod resampling;
 pub mod status;
 
+use std::sync::Arc;
+
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use robot::{Cell, GridMap, LaserScan, Pose, Vec2, wrap_angle};
@@ -408,13 +410,14 @@ pub struct UpdateInfo {
 #[derive(Debug, Clone)]
 pub struct Localizer {
     params: MclParams,
-    field: LikelihoodField,
+    /// Shared by the localizers on one map ([`Localizer::on_same_map`]).
+    field: Arc<LikelihoodField>,
     table: Option<BeamTable>,
     prepared: PreparedScan,
     map_origin: Pose,
     map_width: usize,
     resolution_m: f64,
-    free_cells: Vec<usize>,
+    free_cells: Arc<[usize]>,
     noise: Gaussian,
     x: Vec<f64>,
     y: Vec<f64>,
@@ -452,7 +455,7 @@ impl Localizer {
     /// [`LocalizationError::NoFreeCell`].
     pub fn new(map: &GridMap, params: MclParams, seed: u64) -> Result<Localizer, LocalizationError> {
         params.validate()?;
-        let free_cells: Vec<usize> = map
+        let free_cells: Arc<[usize]> = map
             .cells()
             .iter()
             .enumerate()
@@ -462,13 +465,47 @@ impl Localizer {
         if free_cells.is_empty() {
             return Err(LocalizationError::NoFreeCell);
         }
-        Ok(Localizer {
-            field: LikelihoodField::new(map, params.field.max_distance_m),
+        let geometry = (map.origin(), map.width(), map.resolution_m());
+        Ok(Localizer::fresh(
+            Arc::new(LikelihoodField::new(map, params.field.max_distance_m)),
+            free_cells,
+            geometry,
+            params,
+            seed,
+        ))
+    }
+
+    /// A new localizer on this one's map, with its parameters and every
+    /// random draw from `seed`: the same as [`Localizer::new`] on the map
+    /// (no particles, nothing of this one's state), without building the
+    /// likelihood field and the free cells again — they are shared. For
+    /// missions after missions on one map.
+    pub fn on_same_map(&self, seed: u64) -> Localizer {
+        Localizer::fresh(
+            Arc::clone(&self.field),
+            Arc::clone(&self.free_cells),
+            (self.map_origin, self.map_width, self.resolution_m),
+            self.params,
+            seed,
+        )
+    }
+
+    /// A localizer without particles on a prepared field; `geometry` is
+    /// the map's origin, width in cells and resolution.
+    fn fresh(
+        field: Arc<LikelihoodField>,
+        free_cells: Arc<[usize]>,
+        (map_origin, map_width, resolution_m): (Pose, usize, f64),
+        params: MclParams,
+        seed: u64,
+    ) -> Localizer {
+        Localizer {
+            field,
             table: None,
             prepared: PreparedScan::default(),
-            map_origin: map.origin(),
-            map_width: map.width(),
-            resolution_m: map.resolution_m(),
+            map_origin,
+            map_width,
+            resolution_m,
             free_cells,
             noise: Gaussian::new(ChaCha8Rng::seed_from_u64(seed)),
             x: Vec::new(),
@@ -492,7 +529,7 @@ impl Localizer {
             machine: StatusMachine::new(),
             recovery: Recovery::new(params.recovery),
             params,
-        })
+        }
     }
 
     /// The parameters.

@@ -28,6 +28,8 @@
 //! `O(p log p)` typically (`O(p²)` at worst) for the simplification of a
 //! path of `p` points.
 
+use std::sync::Arc;
+
 use robot::{CellIndex, GridMap, Vec2};
 
 use super::gradient::{DescentInfo, GradientParams, descend};
@@ -127,7 +129,8 @@ pub struct Route {
 #[derive(Debug, Clone)]
 pub struct GlobalPlanner {
     params: RouteParams,
-    cost_map: CostMap,
+    /// Shared by the planners on one map ([`GlobalPlanner::on_same_map`]).
+    cost_map: Arc<CostMap>,
     nf: NavigationFunction,
 }
 
@@ -135,12 +138,22 @@ impl GlobalPlanner {
     /// Builds the cost map of the whole `map`. Errors: invalid parameters.
     pub fn new(map: &GridMap, params: RouteParams) -> Result<GlobalPlanner, PlanningError> {
         params.validate()?;
-        let cost_map = CostMap::build(params.cost, map, Window::whole(map)?, &[])?;
+        let cost_map = Arc::new(CostMap::build(params.cost, map, Window::whole(map)?, &[])?);
         Ok(GlobalPlanner {
             params,
             cost_map,
             nf: NavigationFunction::new(),
         })
+    }
+
+    /// A new planner on this one's map with its parameters, the cost map
+    /// shared (not built again), no route's memory.
+    pub fn on_same_map(&self) -> GlobalPlanner {
+        GlobalPlanner {
+            params: self.params,
+            cost_map: Arc::clone(&self.cost_map),
+            nf: NavigationFunction::new(),
+        }
     }
 
     /// The parameters.

@@ -147,6 +147,19 @@ impl LocalPlanner {
         Ok(planner)
     }
 
+    /// A new planner with this one's parameters and static layer (shared),
+    /// none of its buffers: what [`LocalPlanner::with_static_layer`] makes
+    /// with them, without checking the parameters again.
+    pub fn sharing_layer(&self) -> LocalPlanner {
+        LocalPlanner {
+            params: self.params,
+            layer: self.layer.clone(),
+            cost_map: None,
+            nf: NavigationFunction::new(),
+            path: Vec::new(),
+        }
+    }
+
     /// The parameters.
     pub fn params(&self) -> &LocalPlannerParams {
         &self.params

@@ -90,10 +90,12 @@ pub mod metric {
     pub const ABNORMAL_S: &str = "time_abnormal_s";
 }
 
-/// One map: its world (with the crowd's waypoints), places.
+/// One map: its world (with the crowd's waypoints), places, and a leg's
+/// setup without people, the map prepared for the guide controller once.
 struct MapData {
     world: World,
     stops: Vec<Stop>,
+    setup: MissionSetup,
 }
 
 fn load_map(k: usize) -> Result<MapData> {
@@ -115,7 +117,9 @@ fn load_map(k: usize) -> Result<MapData> {
         gather_radius_m: 1.5,
         ..CrowdParams::default()
     })?;
-    Ok(MapData { world, stops })
+    let mut setup = MissionSetup::new(world.clone(), LEG_TIME_LIMIT_S);
+    setup.prepare()?;
+    Ok(MapData { world, stops, setup })
 }
 
 /// A scenario: map, behaviour, crowd.
@@ -213,7 +217,7 @@ impl MapsSuite {
             Some(r) => serde_json::from_value(r.state.clone().context("an earlier leg without its state")?)
                 .context("the state of an earlier leg")?,
         };
-        let mut setup = MissionSetup::new(data.world.clone(), LEG_TIME_LIMIT_S);
+        let mut setup = data.setup.clone();
         if CROWDS[s.people] > 0 {
             setup.people = Some(PeoplePlan {
                 count: CROWDS[s.people],

@@ -148,6 +148,8 @@ enum Kind {
 pub struct TourGuideSuite {
     info: SuiteInfo,
     world: OnceLock<Result<World, String>>,
+    /// The museum prepared for the guide controller, shared by all missions.
+    setup: OnceLock<Result<MissionSetup, String>>,
     supervisor: OnceLock<Result<Supervisor, String>>,
 }
 
@@ -203,6 +205,7 @@ impl TourGuideSuite {
                 sources: BTreeMap::new(),
             },
             world: OnceLock::new(),
+            setup: OnceLock::new(),
             supervisor: OnceLock::new(),
         })
     }
@@ -210,6 +213,20 @@ impl TourGuideSuite {
     fn world(&self) -> Result<&World> {
         self.world
             .get_or_init(|| museum().map_err(|e| format!("{e:#}")))
+            .as_ref()
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    }
+
+    /// A mission's setup without its visitors: the museum, prepared once
+    /// for the guide controller ([`MissionSetup::prepare`]).
+    fn setup(&self) -> Result<&MissionSetup> {
+        self.setup
+            .get_or_init(|| {
+                let world = self.world().map_err(|e| format!("{e:#}"))?.clone();
+                let mut setup = MissionSetup::new(world, MISSION_TIME_LIMIT_S);
+                setup.prepare().map_err(|e| format!("{e:#}"))?;
+                Ok(setup)
+            })
             .as_ref()
             .map_err(|e| anyhow::anyhow!("{e}"))
     }
@@ -299,7 +316,7 @@ impl TourGuideSuite {
             }
             Kind::Mission(s, m) => (self.policy(s, &log)?, format!("mission {}", m + 1)),
         };
-        let mut setup = MissionSetup::new(self.world()?.clone(), MISSION_TIME_LIMIT_S);
+        let mut setup = self.setup()?.clone();
         let people = DENSITIES[d].1;
         if people > 0 {
             setup.people = Some(PeoplePlan {
