@@ -78,8 +78,10 @@ impl Default for GuideParams {
 /// the localizer's likelihood field and free cells, AutoMove's whole-map
 /// cost map, static cost layer and wall mask — built once with the
 /// parameters and shared (immutable) by every mission on the map
-/// ([`GuideController::on_map`]). In the museum this is 13 % of a mission
-/// without visitors.
+/// ([`GuideController::on_map`]). In the museum, building it once saves
+/// 8 % of an AutoMove mission without visitors (24 missions of
+/// `museum_batch automove 0 24`: 1.91 → 1.75 s on one core; results the
+/// same bit for bit).
 #[derive(Debug, Clone)]
 pub struct GuideMap {
     params: GuideParams,
