@@ -38,6 +38,8 @@ pub enum LabCommand {
     ///   petrinav lab replay out/voting 'e4/field12#0' -o run.png
     ///
     ///   petrinav lab replay out/voting 'e1/field03#7' --trace run.jsonl
+    ///
+    ///   petrinav lab replay out/voting 'e4/field12#0' --html run.html   (open it in a browser)
     Replay(ReplayArgs),
     /// Merges the folders of a sharded batch (`lab run … --shard i/n`) into one, in the
     /// order of an unsharded run, and writes its report.
@@ -106,6 +108,11 @@ pub struct ReplayArgs {
     /// Per-tick trace as JSON lines (perceptions included).
     #[arg(long)]
     trace: Option<PathBuf>,
+    /// The run viewer: one self-contained HTML page (map, trajectory,
+    /// sensors, people, a time slider, the controller's notes per tick)
+    /// that opens offline in any browser.
+    #[arg(long, value_name = "FILE.html")]
+    html: Option<PathBuf>,
     /// Print the run's record as JSON.
     #[arg(long)]
     json: bool,
@@ -281,6 +288,9 @@ fn replay(a: &ReplayArgs) -> Result<()> {
     }
     if let Some(path) = &a.output {
         lab::pictures::run_picture(&replay, suite.markers(), path)?;
+    }
+    if let Some(path) = &a.html {
+        lab::viewer::write_page(&replay, suite.markers(), &suite.info().name, &a.run, path)?;
     }
     let r = &replay.record;
     if a.json {

@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod charts;
+pub mod encode;
 pub mod experiment;
 pub mod mission;
 pub mod page;
@@ -28,3 +29,4 @@ pub mod summary;
 pub mod tables;
 pub mod topo;
 pub mod traps;
+pub mod viewer;
