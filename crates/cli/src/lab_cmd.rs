@@ -40,6 +40,8 @@ pub enum LabCommand {
     ///   petrinav lab replay out/voting 'e1/field03#7' --trace run.jsonl
     ///
     ///   petrinav lab replay out/voting 'e4/field12#0' --html run.html   (open it in a browser)
+    ///
+    ///   petrinav lab replay out/voting 'e4/field12#0' --mcap run.mcap   (open it in Foxglove)
     Replay(ReplayArgs),
     /// Merges the folders of a sharded batch (`lab run … --shard i/n`) into one, in the
     /// order of an unsharded run, and writes its report.
@@ -113,6 +115,11 @@ pub struct ReplayArgs {
     /// that opens offline in any browser.
     #[arg(long, value_name = "FILE.html")]
     html: Option<PathBuf>,
+    /// The run as MCAP in Foxglove's schemas (map, poses, transforms,
+    /// scans, people, the controller's notes, events): open it in
+    /// Foxglove as a local file.
+    #[arg(long, value_name = "FILE.mcap")]
+    mcap: Option<PathBuf>,
     /// Print the run's record as JSON.
     #[arg(long)]
     json: bool,
@@ -291,6 +298,18 @@ fn replay(a: &ReplayArgs) -> Result<()> {
     }
     if let Some(path) = &a.html {
         lab::viewer::write_page(&replay, suite.markers(), &suite.info().name, &a.run, path)?;
+    }
+    if let Some(path) = &a.mcap {
+        let started = std::time::Instant::now();
+        let written = lab::foxglove::write_file(&replay, &suite.info().name, &a.run, path)?;
+        let messages: u64 = written.messages.values().sum();
+        eprintln!(
+            "{}: {messages} messages on {} topics, {:.1} kB, written in {:.0} ms",
+            path.display(),
+            written.messages.len(),
+            written.bytes as f64 / 1000.0,
+            started.elapsed().as_secs_f64() * 1000.0
+        );
     }
     let r = &replay.record;
     if a.json {

@@ -14,6 +14,7 @@
 pub mod charts;
 pub mod encode;
 pub mod experiment;
+pub mod foxglove;
 pub mod mission;
 pub mod page;
 pub mod pictures;
