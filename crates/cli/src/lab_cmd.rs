@@ -176,6 +176,12 @@ fn load_suite(what: &[String], runs: Option<u32>) -> Result<Box<dyn Suite>> {
 
 fn read_info(dir: &Path) -> Result<SuiteInfo> {
     let path = dir.join("suite.json");
+    if !path.exists() {
+        bail!(
+            "{} is not a results folder (it has no suite.json): `petrinav lab run` makes one",
+            dir.display()
+        );
+    }
     serde_json::from_str(
         &std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?,
     )
@@ -283,7 +289,28 @@ fn merge(out: &Path, parts: &[PathBuf], pictures: bool) -> Result<()> {
     print_report(out, suite.as_ref(), pictures)
 }
 
+/// Fails early (before a replay that may take a while) when a file cannot
+/// go where asked: its folder missing, or the path a folder.
+fn check_output(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        bail!("cannot write {}: it is a folder", path.display());
+    }
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
+        && !parent.is_dir()
+    {
+        bail!(
+            "cannot write {}: there is no folder {}",
+            path.display(),
+            parent.display()
+        );
+    }
+    Ok(())
+}
+
 fn replay(a: &ReplayArgs) -> Result<()> {
+    for path in [&a.output, &a.trace, &a.html, &a.mcap].into_iter().flatten() {
+        check_output(path)?;
+    }
     let suite = suite_of(&a.dir)?;
     let replay = lab::suite::replay_key(suite.as_ref(), &a.dir, &a.run, sim::TraceParams::full())?;
     if let Some(path) = &a.trace {

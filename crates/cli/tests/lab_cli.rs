@@ -168,6 +168,95 @@ fn a_run_is_replayed_with_its_picture_and_trace() {
 }
 
 #[test]
+fn a_replay_explains_an_unknown_run_another_suites_folder_and_an_unwritable_output() {
+    let voting = fresh("replay_bad_voting");
+    assert!(run_voting(&voting, "1", "2", &[]).status.success());
+    let deadlock = fresh("replay_bad_deadlock");
+    let out = petrinav(&[
+        "lab",
+        "run",
+        "deadlock",
+        "--runs",
+        "1",
+        "--no-pictures",
+        "--out",
+        deadlock.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let html = voting.join("run.html");
+    let fails = |dir: &Path, run: &str, extra: &[&str], says: &str| {
+        let mut args = vec!["lab", "replay", dir.to_str().unwrap(), run];
+        args.extend_from_slice(extra);
+        let out = petrinav(&args);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.starts_with("error: ") && !err.contains("panicked"), "{err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    };
+    let h = html.to_str().unwrap();
+    // Unknown runs.
+    fails(
+        &voting,
+        "e4/field12#99",
+        &["--html", h],
+        "no run `99` of `e4/field12` in this batch (it has 1 runs",
+    );
+    fails(
+        &voting,
+        "e4/field99#0",
+        &["--html", h],
+        "no scenario `e4/field99` in this batch of the `voting` suite",
+    );
+    fails(&voting, "field12", &["--html", h], "a run is SCENARIO#INDEX");
+    // A results folder of another suite, and a folder that is none.
+    fails(
+        &deadlock,
+        "e4/field12#0",
+        &["--html", h],
+        "no scenario `e4/field12` in this batch of the `deadlock` suite; it has: priority",
+    );
+    fails(
+        &voting.join("pictures-none"),
+        "e4/field12#0",
+        &["--html", h],
+        "is not a results folder",
+    );
+    // Outputs that cannot be written, refused before the replay.
+    let missing = voting.join("no/such/folder/run.html");
+    fails(
+        &voting,
+        "e4/field12#0",
+        &["--html", missing.to_str().unwrap()],
+        "there is no folder",
+    );
+    let under_a_file = voting.join("results.jsonl").join("run.mcap");
+    fails(
+        &voting,
+        "e4/field12#0",
+        &["--mcap", under_a_file.to_str().unwrap()],
+        "there is no folder",
+    );
+    fails(
+        &voting,
+        "e4/field12#0",
+        &["--mcap", voting.to_str().unwrap()],
+        "it is a folder",
+    );
+    assert!(!html.exists());
+    // And what works after all that.
+    let out = petrinav(&[
+        "lab",
+        "replay",
+        voting.to_str().unwrap(),
+        "e4/field12#0",
+        "--html",
+        h,
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read_to_string(&html).unwrap().contains("e4/field12#0"));
+}
+
+#[test]
 fn a_malformed_scenario_names_the_key_and_line() {
     let dir = fresh("bad_scenario");
     std::fs::create_dir_all(&dir).unwrap();

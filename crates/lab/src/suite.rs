@@ -184,15 +184,17 @@ pub fn find_job(suite: &dyn Suite, key: &str) -> Result<(Job, Vec<String>)> {
     let Some((name, index)) = key.rsplit_once('#') else {
         bail!("`{key}`: a run is SCENARIO#INDEX, e.g. e3/field03#1");
     };
-    if !suite.info().scenarios.iter().any(|s| s == name) {
+    let info = suite.info();
+    if !info.scenarios.iter().any(|s| s == name) {
         bail!(
-            "no scenario `{name}` in this batch; it has: {}",
-            suite.info().scenarios.join(", ")
+            "no scenario `{name}` in this batch of the `{}` suite; it has: {}",
+            info.suite,
+            info.scenarios.join(", ")
         );
     }
     bail!(
         "no run `{index}` of `{name}` in this batch (it has {} runs per scenario)",
-        suite.info().runs
+        info.runs
     )
 }
 
