@@ -252,12 +252,13 @@ fn a_script_error_is_reported_in_the_page() {
     let dir = fresh("broken");
     let html = voting_page(&dir);
     let text = std::fs::read_to_string(&html).unwrap();
-    assert!(text.contains("\"pose\":[["));
+    let (good, bad) = ("const T = D.ticks;", "const T = D.no_such_thing.ticks;");
+    assert!(text.contains(good));
     let broken = dir.join("broken.html");
-    std::fs::write(&broken, text.replacen("\"pose\":[[", "\"pose\":[null,[", 1)).unwrap();
+    std::fs::write(&broken, text.replacen(good, bad, 1)).unwrap();
     let (state, errors) = page_state(&dir.join("profile"), &url(&broken, "t=0"), 2000);
     let n: u32 = state.get("data-errors").and_then(|n| n.parse().ok()).unwrap_or(0);
     assert!(n >= 1, "no error reported: {state:?}");
-    assert!(errors.contains("<li>"), "{errors}");
+    assert!(errors.contains("<li>the viewer failed: "), "{errors}");
     assert_ne!(state.get("data-ready").map(String::as_str), Some("1"));
 }

@@ -4,8 +4,21 @@
 // data-robot-x data-robot-y data-robot-page-x data-robot-page-y>.
 // URL hash: #t=SECONDS, #tick=N, &play=1, &speed=K.
 "use strict";
-(function () {
-  const D = JSON.parse(document.getElementById("run-data").textContent);
+// The data: JSON, zlib-compressed and in base64 (data-encoding), or plain.
+async function petrinavRunData() {
+  const el = document.getElementById("run-data");
+  if (el.dataset.encoding !== "zlib+base64") return JSON.parse(el.textContent);
+  const bin = atob(el.textContent.trim());
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
+  return JSON.parse(await new Response(stream).text());
+}
+petrinavRunData()
+  .then(petrinavViewer)
+  .catch((e) => console.error("the viewer failed: " + (e && e.message ? e.message : e)));
+
+function petrinavViewer(D) {
   const T = D.ticks;
   const N = T.t.length;
   if (N === 0) throw new Error("the run has no ticks");
@@ -417,4 +430,4 @@
   img.onerror = () => { throw new Error("the map image could not be decoded"); };
   img.src = D.map.png;
   readHash();
-})();
+}
