@@ -103,7 +103,7 @@ fn line(kind: u8, points: &[(f64, f64)], thickness_px: f64, c: Value) -> Value {
         "pose": pose(Pose::default()),
         "thickness": thickness_px,
         "scale_invariant": true,
-        "points": points.iter().map(|&(x, y)| vec3(x, y, 0.05)).collect::<Vec<_>>(),
+        "points": points.iter().map(|&(x, y)| json!({"x": x, "y": y, "z": 0})).collect::<Vec<_>>(),
         "color": c,
         "colors": [],
         "indices": [],
@@ -406,14 +406,14 @@ fn ranges_message(ns: u64, p: &robot::Perception) -> Value {
             continue;
         }
         let m = s.mount;
-        let arc: Vec<(f64, f64)> = (0..=4)
+        let arc: Vec<(f64, f64)> = (0..=2)
             .map(|k| {
-                let a = m.theta_rad - s.cone_rad / 2.0 + s.cone_rad * f64::from(k) / 4.0;
+                let a = m.theta_rad - s.cone_rad / 2.0 + s.cone_rad * f64::from(k) / 2.0;
                 (mm(m.x_m + s.range_m * a.cos()), mm(m.y_m + s.range_m * a.sin()))
             })
             .collect();
         let at = (mm(m.x_m), mm(m.y_m));
-        cones.extend([at, arc[0], at, arc[4]]);
+        cones.extend([at, arc[0], at, arc[2]]);
         for pair in arc.windows(2) {
             cones.extend([pair[0], pair[1]]);
         }
