@@ -257,6 +257,52 @@ fn a_replay_explains_an_unknown_run_another_suites_folder_and_an_unwritable_outp
 }
 
 #[test]
+fn the_report_links_each_pictured_run_to_its_viewer_page() {
+    let dir = fresh("report_viewer");
+    let out = petrinav(&[
+        "lab",
+        "run",
+        "voting",
+        "--runs",
+        "1",
+        "--jobs",
+        "2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let index = std::fs::read_to_string(dir.join("index.html")).unwrap();
+    let links: Vec<&str> = index
+        .split("<a href=\"")
+        .skip(1)
+        .filter_map(|s| s.split('"').next())
+        .filter(|href| href.starts_with("viewer/"))
+        .collect();
+    // One figure per scenario, its run drawn and linked.
+    assert_eq!(links.len(), 5 * 14, "{links:?}");
+    assert!(links.contains(&"viewer/e4-field12-0.html"));
+    for href in &links {
+        let page = std::fs::read_to_string(dir.join(href)).unwrap();
+        assert!(page.contains("id=\"run-data\""), "{href}");
+    }
+    // The report's page is the one `lab replay --html` writes.
+    let replayed = dir.join("replayed.html");
+    let out = petrinav(&[
+        "lab",
+        "replay",
+        dir.to_str().unwrap(),
+        "e4/field12#0",
+        "--html",
+        replayed.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        std::fs::read(&replayed).unwrap() == std::fs::read(dir.join("viewer/e4-field12-0.html")).unwrap(),
+        "the report's viewer page and the replayed one differ"
+    );
+}
+
+#[test]
 fn a_malformed_scenario_names_the_key_and_line() {
     let dir = fresh("bad_scenario");
     std::fs::create_dir_all(&dir).unwrap();

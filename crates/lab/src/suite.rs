@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use serde_json::Value;
 use sim::TraceParams;
 
-use crate::page::Block;
+use crate::page::{Block, RunLink};
 use crate::pictures::{EventMarker, Replay};
 use crate::record::{self, RunRecord, Runs};
 use crate::runner::{self, BatchParams, BatchSummary, Campaign, Job, Shard};
@@ -117,6 +117,30 @@ impl ReportContext<'_> {
         let dir = self.dir.join("pictures");
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
         Ok((dir.join(file), format!("pictures/{file}")))
+    }
+
+    /// Writes the viewer page of a pictured run (`viewer/` in the results
+    /// folder, named after the run's key) and returns the path written and
+    /// the link for the page's figure, labelled `label`.
+    pub fn viewer_page(
+        &self,
+        replay: &Replay,
+        markers: &[EventMarker],
+        key: &str,
+        label: &str,
+    ) -> Result<(PathBuf, RunLink)> {
+        let dir = self.dir.join("viewer");
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let file = format!("{}.html", key.replace(['/', '#'], "-"));
+        let path = dir.join(&file);
+        crate::viewer::write_page(replay, markers, &self.info.name, key, &path)?;
+        Ok((
+            path,
+            RunLink {
+                label: label.to_string(),
+                href: format!("viewer/{file}"),
+            },
+        ))
     }
 }
 
