@@ -21,7 +21,10 @@
 //!
 //! A metadata record `petrinav` names the suite, the run and its seed.
 //! Chunks are not compressed (the crate is built without its zstd and lz4
-//! features); the file is the same bytes for the same run.
+//! features: C libraries to compile, not needed here); the file is
+//! the same bytes for the same run. Sizes: the voting run `e4/field12#0`
+//! (37.5 s, 3 sonars and 7 IR detectors) is 1.35 MB, written in about
+//! 40 ms; a 600 s exploration of the 16-sonar robot 32 MB.
 
 use std::collections::BTreeMap;
 use std::io::{Seek, Write};
@@ -703,7 +706,7 @@ mod tests {
     use sim::{OccupancyGrid, StepKind, Trace, TraceTick};
 
     /// Three ticks of a robot with a 5-beam laser (one beam without a
-    /// return, one dropped out) among two people, a dead-lock at the last.
+    /// return, one dropped out) among two people, an event at the last.
     pub(crate) fn laser_replay() -> Replay {
         let ticks = (0..3u64)
             .map(|k| {
@@ -723,11 +726,7 @@ mod tests {
                     behaviour: Some("go"),
                     values: vec![("w", 0.25), ("inf", f64::INFINITY)],
                     events: if k == 2 {
-                        vec![
-                            Event::new("deadlock", t)
-                                .at(Vec2::new(1.0, 1.0))
-                                .with("events", 3.0),
-                        ]
+                        vec![Event::new("stuck", t).at(Vec2::new(1.0, 1.0)).with("events", 3.0)]
                     } else {
                         Vec::new()
                     },
@@ -816,7 +815,7 @@ mod tests {
                     assert_eq!(v["column_count"], 40);
                     assert_eq!(v["data"].as_str().unwrap().len(), (40 * 30usize).div_ceil(3) * 4);
                 }
-                "/events" => assert_eq!(v["message"], "deadlock: events 3"),
+                "/events" => assert_eq!(v["message"], "stuck: events 3"),
                 _ => {}
             }
         }
