@@ -38,6 +38,10 @@ pub enum LabCommand {
     ///   petrinav lab replay out/voting 'e4/field12#0' -o run.png
     ///
     ///   petrinav lab replay out/voting 'e1/field03#7' --trace run.jsonl
+    ///
+    ///   petrinav lab replay out/voting 'e4/field12#0' --html run.html   (open it in a browser)
+    ///
+    ///   petrinav lab replay out/voting 'e4/field12#0' --mcap run.mcap   (open it in Foxglove)
     Replay(ReplayArgs),
     /// Merges the folders of a sharded batch (`lab run … --shard i/n`) into one, in the
     /// order of an unsharded run, and writes its report.
@@ -106,6 +110,16 @@ pub struct ReplayArgs {
     /// Per-tick trace as JSON lines (perceptions included).
     #[arg(long)]
     trace: Option<PathBuf>,
+    /// The run viewer: one self-contained HTML page (map, trajectory,
+    /// sensors, people, a time slider, the controller's notes per tick)
+    /// that opens offline in any browser.
+    #[arg(long, value_name = "FILE.html")]
+    html: Option<PathBuf>,
+    /// The run as MCAP in Foxglove's schemas (map, poses, transforms,
+    /// scans, people, the controller's notes, events): open it in
+    /// Foxglove as a local file.
+    #[arg(long, value_name = "FILE.mcap")]
+    mcap: Option<PathBuf>,
     /// Print the run's record as JSON.
     #[arg(long)]
     json: bool,
@@ -162,6 +176,12 @@ fn load_suite(what: &[String], runs: Option<u32>) -> Result<Box<dyn Suite>> {
 
 fn read_info(dir: &Path) -> Result<SuiteInfo> {
     let path = dir.join("suite.json");
+    if !path.exists() {
+        bail!(
+            "{} is not a results folder (it has no suite.json): `petrinav lab run` makes one",
+            dir.display()
+        );
+    }
     serde_json::from_str(
         &std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?,
     )
@@ -269,7 +289,28 @@ fn merge(out: &Path, parts: &[PathBuf], pictures: bool) -> Result<()> {
     print_report(out, suite.as_ref(), pictures)
 }
 
+/// Fails early (before a replay that may take a while) when a file cannot
+/// go where asked: its folder missing, or the path a folder.
+fn check_output(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        bail!("cannot write {}: it is a folder", path.display());
+    }
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
+        && !parent.is_dir()
+    {
+        bail!(
+            "cannot write {}: there is no folder {}",
+            path.display(),
+            parent.display()
+        );
+    }
+    Ok(())
+}
+
 fn replay(a: &ReplayArgs) -> Result<()> {
+    for path in [&a.output, &a.trace, &a.html, &a.mcap].into_iter().flatten() {
+        check_output(path)?;
+    }
     let suite = suite_of(&a.dir)?;
     let replay = lab::suite::replay_key(suite.as_ref(), &a.dir, &a.run, sim::TraceParams::full())?;
     if let Some(path) = &a.trace {
@@ -281,6 +322,21 @@ fn replay(a: &ReplayArgs) -> Result<()> {
     }
     if let Some(path) = &a.output {
         lab::pictures::run_picture(&replay, suite.markers(), path)?;
+    }
+    if let Some(path) = &a.html {
+        lab::viewer::write_page(&replay, suite.markers(), &suite.info().name, &a.run, path)?;
+    }
+    if let Some(path) = &a.mcap {
+        let started = std::time::Instant::now();
+        let written = lab::foxglove::write_file(&replay, &suite.info().name, &a.run, path)?;
+        let messages: u64 = written.messages.values().sum();
+        eprintln!(
+            "{}: {messages} messages on {} topics, {:.1} kB, written in {:.0} ms",
+            path.display(),
+            written.messages.len(),
+            written.bytes as f64 / 1000.0,
+            started.elapsed().as_secs_f64() * 1000.0
+        );
     }
     let r = &replay.record;
     if a.json {

@@ -168,6 +168,141 @@ fn a_run_is_replayed_with_its_picture_and_trace() {
 }
 
 #[test]
+fn a_replay_explains_an_unknown_run_another_suites_folder_and_an_unwritable_output() {
+    let voting = fresh("replay_bad_voting");
+    assert!(run_voting(&voting, "1", "2", &[]).status.success());
+    let deadlock = fresh("replay_bad_deadlock");
+    let out = petrinav(&[
+        "lab",
+        "run",
+        "deadlock",
+        "--runs",
+        "1",
+        "--no-pictures",
+        "--out",
+        deadlock.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let html = voting.join("run.html");
+    let fails = |dir: &Path, run: &str, extra: &[&str], says: &str| {
+        let mut args = vec!["lab", "replay", dir.to_str().unwrap(), run];
+        args.extend_from_slice(extra);
+        let out = petrinav(&args);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.starts_with("error: ") && !err.contains("panicked"), "{err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    };
+    let h = html.to_str().unwrap();
+    // Unknown runs.
+    fails(
+        &voting,
+        "e4/field12#99",
+        &["--html", h],
+        "no run `99` of `e4/field12` in this batch (it has 1 runs",
+    );
+    fails(
+        &voting,
+        "e4/field99#0",
+        &["--html", h],
+        "no scenario `e4/field99` in this batch of the `voting` suite",
+    );
+    fails(&voting, "field12", &["--html", h], "a run is SCENARIO#INDEX");
+    // A results folder of another suite, and a folder that is none.
+    fails(
+        &deadlock,
+        "e4/field12#0",
+        &["--html", h],
+        "no scenario `e4/field12` in this batch of the `deadlock` suite; it has: priority",
+    );
+    fails(
+        &voting.join("pictures-none"),
+        "e4/field12#0",
+        &["--html", h],
+        "is not a results folder",
+    );
+    // Outputs that cannot be written, refused before the replay.
+    let missing = voting.join("no/such/folder/run.html");
+    fails(
+        &voting,
+        "e4/field12#0",
+        &["--html", missing.to_str().unwrap()],
+        "there is no folder",
+    );
+    let under_a_file = voting.join("results.jsonl").join("run.mcap");
+    fails(
+        &voting,
+        "e4/field12#0",
+        &["--mcap", under_a_file.to_str().unwrap()],
+        "there is no folder",
+    );
+    fails(
+        &voting,
+        "e4/field12#0",
+        &["--mcap", voting.to_str().unwrap()],
+        "it is a folder",
+    );
+    assert!(!html.exists());
+    // And what works after all that.
+    let out = petrinav(&[
+        "lab",
+        "replay",
+        voting.to_str().unwrap(),
+        "e4/field12#0",
+        "--html",
+        h,
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read_to_string(&html).unwrap().contains("e4/field12#0"));
+}
+
+#[test]
+fn the_report_links_each_pictured_run_to_its_viewer_page() {
+    let dir = fresh("report_viewer");
+    let out = petrinav(&[
+        "lab",
+        "run",
+        "voting",
+        "--runs",
+        "1",
+        "--jobs",
+        "2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let index = std::fs::read_to_string(dir.join("index.html")).unwrap();
+    let links: Vec<&str> = index
+        .split("<a href=\"")
+        .skip(1)
+        .filter_map(|s| s.split('"').next())
+        .filter(|href| href.starts_with("viewer/"))
+        .collect();
+    // One figure per scenario, its run drawn and linked.
+    assert_eq!(links.len(), 5 * 14, "{links:?}");
+    assert!(links.contains(&"viewer/e4-field12-0.html"));
+    for href in &links {
+        let page = std::fs::read_to_string(dir.join(href)).unwrap();
+        assert!(page.contains("id=\"run-data\""), "{href}");
+    }
+    // The report's page is the one `lab replay --html` writes.
+    let replayed = dir.join("replayed.html");
+    let out = petrinav(&[
+        "lab",
+        "replay",
+        dir.to_str().unwrap(),
+        "e4/field12#0",
+        "--html",
+        replayed.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        std::fs::read(&replayed).unwrap() == std::fs::read(dir.join("viewer/e4-field12-0.html")).unwrap(),
+        "the report's viewer page and the replayed one differ"
+    );
+}
+
+#[test]
 fn a_malformed_scenario_names_the_key_and_line() {
     let dir = fresh("bad_scenario");
     std::fs::create_dir_all(&dir).unwrap();

@@ -5,14 +5,19 @@
 //! runs — independent, or campaigns whose state carries over — that the
 //! [`runner`] executes as one resumable, shardable batch into one record
 //! per run ([`record::RunRecord`]); [`report`] turns a results folder into
-//! summaries, tables, pictures and an offline HTML page.
+//! summaries, tables, pictures and an offline HTML page. One replayed run
+//! ([`pictures::Replay`]) can be watched: [`viewer`] writes it as a
+//! self-contained page with a time slider, [`foxglove`] as an MCAP file for
+//! Foxglove.
 //!
 //! The suites themselves live in [`suites`], one folder each, listed in
 //! [`suites::REGISTRY`]; nothing outside that module names one.
 #![warn(missing_docs)]
 
 pub mod charts;
+pub mod encode;
 pub mod experiment;
+pub mod foxglove;
 pub mod mission;
 pub mod page;
 pub mod pictures;
@@ -28,3 +33,4 @@ pub mod summary;
 pub mod tables;
 pub mod topo;
 pub mod traps;
+pub mod viewer;

@@ -1,16 +1,29 @@
 //! The report page as a list of blocks, written twice: as Markdown
 //! (`tables.md`) and as an HTML page that opens offline (`index.html`: no
-//! script, no network, pictures as relative links).
+//! script, no network, pictures as relative links, and under a picture the
+//! links to the run viewer's pages of the runs it draws).
 
 use std::fmt::Write as _;
 
 /// A picture on the page.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Figure {
     /// Caption under the picture.
     pub title: String,
     /// Path relative to the report folder (e.g. `pictures/e1-field01.png`).
     pub src: String,
+    /// The runs it draws, each linked to its viewer page
+    /// ([`crate::suite::ReportContext::viewer_page`]).
+    pub runs: Vec<RunLink>,
+}
+
+/// A link to one run's viewer page.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunLink {
+    /// What the link says (`#0`, `leg 3`…).
+    pub label: String,
+    /// Path relative to the report folder (e.g. `viewer/e1-field01-0.html`).
+    pub href: String,
 }
 
 /// One block of the page.
@@ -103,7 +116,7 @@ pub fn table_to_html(md: &str) -> String {
     out
 }
 
-const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\ntable{border-collapse:collapse;margin:1em 0;font-size:14px}\ntd,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\ntd:first-child,th:first-child{text-align:left}\nth{background:#f2f2f2}\n.pics{display:flex;flex-wrap:wrap;gap:12px}\nfigure{margin:0;width:280px}\nfigure img{width:280px;border:1px solid #ccc}\nfigcaption{font-size:13px}\nfigure.chart{width:760px}\nfigure.chart img{width:760px;border:none}\ncode{background:#f4f4f4;padding:0 2px}\n";
+const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\ntable{border-collapse:collapse;margin:1em 0;font-size:14px}\ntd,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\ntd:first-child,th:first-child{text-align:left}\nth{background:#f2f2f2}\n.pics{display:flex;flex-wrap:wrap;gap:12px}\nfigure{margin:0;width:280px}\nfigure img{width:280px;border:1px solid #ccc}\nfigcaption{font-size:13px}\n.runs{color:#555}\n.runs a{margin-left:4px}\nfigure.chart{width:760px}\nfigure.chart img{width:760px;border:none}\ncode{background:#f4f4f4;padding:0 2px}\n";
 
 impl Page {
     /// The page as Markdown (tables and text; pictures are on the HTML
@@ -174,9 +187,25 @@ impl Page {
                         inline_html(caption)
                     );
                     for f in figures {
+                        let runs = if f.runs.is_empty() {
+                            String::new()
+                        } else {
+                            let links: Vec<String> = f
+                                .runs
+                                .iter()
+                                .map(|r| {
+                                    format!(
+                                        "<a href=\"{}\">{}</a>",
+                                        html_escape(&r.href),
+                                        html_escape(&r.label)
+                                    )
+                                })
+                                .collect();
+                            format!("<br><span class=\"runs\">viewer:{}</span>", links.join(""))
+                        };
                         let _ = writeln!(
                             html,
-                            "<figure{class}><a href=\"{src}\"><img src=\"{src}\" alt=\"{0}\"></a><figcaption>{0}</figcaption></figure>",
+                            "<figure{class}><a href=\"{src}\"><img src=\"{src}\" alt=\"{0}\"></a><figcaption>{0}{runs}</figcaption></figure>",
                             html_escape(&f.title),
                             src = html_escape(&f.src),
                         );
@@ -210,6 +239,10 @@ mod tests {
                     figures: vec![Figure {
                         title: "x".into(),
                         src: "pictures/x.png".into(),
+                        runs: vec![RunLink {
+                            label: "#0".into(),
+                            href: "viewer/x-0.html".into(),
+                        }],
                     }],
                 },
             ],
@@ -223,6 +256,9 @@ mod tests {
         assert!(html.contains("<tr><td>x</td><td>1.00</td></tr>"));
         assert!(html.contains("<p>Because a &lt; b and so on.</p>"));
         assert!(html.contains("<img src=\"pictures/x.png\" alt=\"x\">"));
+        assert!(html.contains(
+            "<figcaption>x<br><span class=\"runs\">viewer:<a href=\"viewer/x-0.html\">#0</a></span>"
+        ));
         assert!(html.ends_with("</body></html>\n"));
     }
 

@@ -22,6 +22,12 @@ const NOISE_STREAM: &str = "simulator noise";
 /// Runs drawn per scenario picture.
 pub const RUNS_PER_PICTURE: u32 = 8;
 
+/// Of the runs of a scenario picture, how many get a viewer page in the
+/// report (the first ones; `lab replay DIR RUN --html` makes any other's).
+/// A voting run's page is about 65 kB: the first run of each of the 70
+/// scenarios adds 4.5 MB to the report's 4.4 MB, all eight would add 65 MB.
+pub const VIEWER_RUNS_PER_PICTURE: u32 = 1;
+
 /// What a scenario suite adds to the generic machinery.
 #[derive(Clone, Copy)]
 pub struct ScenarioHooks {
@@ -144,8 +150,9 @@ impl ScenarioSuite {
 
     /// The pictures block of a report: the first [`RUNS_PER_PICTURE`] runs
     /// of every scenario drawn over each other (re-simulated), with the
-    /// suite's event markers; `None` when the report is asked without
-    /// pictures.
+    /// suite's event markers, and the viewer pages of the first
+    /// [`VIEWER_RUNS_PER_PICTURE`] linked under each; `None` when the report
+    /// is asked without pictures.
     pub fn pictures(
         &self,
         ctx: &ReportContext<'_>,
@@ -159,14 +166,32 @@ impl ScenarioSuite {
         for prep in &self.scenarios {
             let name = &prep.scenario().name;
             let (path, src) = ctx.picture_path(&format!("{}.png", name.replace('/', "-")))?;
+            // The first run with everything the viewer shows, the others
+            // with their poses only.
             let replays = (0..RUNS_PER_PICTURE.min(self.info.runs))
-                .map(|run| self.replay_run(prep, run, TraceParams::poses()))
+                .map(|run| {
+                    let trace = if run < VIEWER_RUNS_PER_PICTURE {
+                        TraceParams::full()
+                    } else {
+                        TraceParams::poses()
+                    };
+                    self.replay_run(prep, run, trace)
+                })
                 .collect::<Result<Vec<_>>>()?;
             pictures::overlay_picture(&replays, self.hooks.markers, &path)?;
             files.push(path);
+            let mut runs = Vec::new();
+            for (run, replay) in replays.iter().enumerate().take(VIEWER_RUNS_PER_PICTURE as usize) {
+                let key = format!("{name}#{run}");
+                let (page, link) =
+                    ctx.viewer_page(replay, self.hooks.markers, &key, &format!("run {run}"))?;
+                files.push(page);
+                runs.push(link);
+            }
             figures.push(Figure {
                 title: name.clone(),
                 src,
+                runs,
             });
         }
         Ok(Some(Block::Figures {

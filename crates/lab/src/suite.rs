@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use serde_json::Value;
 use sim::TraceParams;
 
-use crate::page::Block;
+use crate::page::{Block, RunLink};
 use crate::pictures::{EventMarker, Replay};
 use crate::record::{self, RunRecord, Runs};
 use crate::runner::{self, BatchParams, BatchSummary, Campaign, Job, Shard};
@@ -118,6 +118,30 @@ impl ReportContext<'_> {
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
         Ok((dir.join(file), format!("pictures/{file}")))
     }
+
+    /// Writes the viewer page of a pictured run (`viewer/` in the results
+    /// folder, named after the run's key) and returns the path written and
+    /// the link for the page's figure, labelled `label`.
+    pub fn viewer_page(
+        &self,
+        replay: &Replay,
+        markers: &[EventMarker],
+        key: &str,
+        label: &str,
+    ) -> Result<(PathBuf, RunLink)> {
+        let dir = self.dir.join("viewer");
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let file = format!("{}.html", key.replace(['/', '#'], "-"));
+        let path = dir.join(&file);
+        crate::viewer::write_page(replay, markers, &self.info.name, key, &path)?;
+        Ok((
+            path,
+            RunLink {
+                label: label.to_string(),
+                href: format!("viewer/{file}"),
+            },
+        ))
+    }
 }
 
 /// A suite's part of the report.
@@ -184,15 +208,17 @@ pub fn find_job(suite: &dyn Suite, key: &str) -> Result<(Job, Vec<String>)> {
     let Some((name, index)) = key.rsplit_once('#') else {
         bail!("`{key}`: a run is SCENARIO#INDEX, e.g. e3/field03#1");
     };
-    if !suite.info().scenarios.iter().any(|s| s == name) {
+    let info = suite.info();
+    if !info.scenarios.iter().any(|s| s == name) {
         bail!(
-            "no scenario `{name}` in this batch; it has: {}",
-            suite.info().scenarios.join(", ")
+            "no scenario `{name}` in this batch of the `{}` suite; it has: {}",
+            info.suite,
+            info.scenarios.join(", ")
         );
     }
     bail!(
         "no run `{index}` of `{name}` in this batch (it has {} runs per scenario)",
-        suite.info().runs
+        info.runs
     )
 }
 

@@ -383,7 +383,26 @@ impl Suite for MapsSuite {
                 let legs = self.tour_legs(s, ctx)?;
                 mission::picture(data.world.grid(), &legs, &data.stops, &path)?;
                 files.push(path);
-                figures.push(Figure { title: name, src });
+                // The tour's first leg in the viewer (a leg's page with the
+                // laser and the crowd is large: one per tour).
+                let mut runs = Vec::new();
+                if let Some(job) = self
+                    .campaigns()
+                    .into_iter()
+                    .find(|c| c.jobs.first().is_some_and(|j| j.scenario == name))
+                    .and_then(|c| c.jobs.first().cloned())
+                    && !legs.is_empty()
+                {
+                    let replay = self.replay(&job, &[], TraceParams::full())?;
+                    let (page, link) = ctx.viewer_page(&replay, self.markers(), &job.key(), "leg 1")?;
+                    files.push(page);
+                    runs.push(link);
+                }
+                figures.push(Figure {
+                    title: name,
+                    src,
+                    runs,
+                });
             }
             blocks.push(Block::Figures {
                 heading: "The first tour of each scenario".into(),

@@ -135,7 +135,7 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
             mean_metric(&ex, metric::RECALIBRATIONS).mean,
         );
         // The size of the first exploration's map over time.
-        if let Some((_, r)) = ex.first() {
+        if let Some((first, r)) = ex.first() {
             let points: Vec<(f64, f64)> = r
                 .events
                 .iter()
@@ -162,6 +162,13 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
                 let (path, src) = ctx.picture_path(&format!("{world}-net.png"))?;
                 topo::picture(suite.world_grid(world)?, &map, Some(&truth), None, &path)?;
                 files.push(path);
+                // The exploration itself in the viewer (first in its
+                // campaign: no earlier runs).
+                let key = format!("{world}/explore#{first}");
+                let (job, _) = crate::suite::find_job(suite, &key)?;
+                let replay = suite.replay(&job, &[], sim::TraceParams::full())?;
+                let (page, link) = ctx.viewer_page(&replay, suite.markers(), &key, "the exploration")?;
+                files.push(page);
                 figures.push(Figure {
                     title: format!(
                         "{world}: the net of exploration 0 ({} places, {} transitions)",
@@ -169,6 +176,7 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
                         map.num_transitions()
                     ),
                     src,
+                    runs: vec![link],
                 });
             }
         }
@@ -193,6 +201,7 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
             figures: vec![Figure {
                 title: "map size over time".into(),
                 src,
+                runs: Vec::new(),
             }],
         });
     }

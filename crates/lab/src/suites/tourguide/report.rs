@@ -121,6 +121,7 @@ fn save_svg(
     Ok(Figure {
         title: title.into(),
         src,
+        runs: Vec::new(),
     })
 }
 
@@ -727,13 +728,16 @@ fn mission_picture(
                 .with_context(|| format!("no record {k}"))
         })
         .collect::<Result<_>>()?;
-    let replay = suite.replay(&job, &earlier, TraceParams::poses())?;
+    let replay = suite.replay(&job, &earlier, TraceParams::full())?;
     let (path, src) = ctx.picture_path("mission.png")?;
     pictures::run_picture(&replay, suite.markers(), &path)?;
     files.push(path);
+    let (page, link) = ctx.viewer_page(&replay, suite.markers(), &key, "the mission")?;
+    files.push(page);
     Ok(Some(Figure {
         title: format!("mission {} of campaign 0 (moderate)", m + 1),
         src,
+        runs: vec![link],
     }))
 }
 
