@@ -117,20 +117,6 @@
 //! 20/20 (99 s), 25 visitors 8/20 → 8/20, 60 visitors 1/20 → 1/20: among
 //! a crowd the tracker still wanders (long contours round groups at the
 //! exhibits, which asking shortens but does not remove) — not solved here.
-//! On 2026-12-03, with the safety layer keeping a point until the robot is a
-//! metre from where it saw it (not a metre of motion summed: see
-//! [`scan::NearbyPoints`]), `lab run maps` gives, among nobody / 20 / 60
-//! people: building_31 0.85 / 0.42 / 0.30, levine 1.00 / 1.00 / 0.82 (the
-//! legs before: 0.70 / 0.33 / 0.21 and 1.00 / 1.00 / 0.64). What still
-//! fails among nobody on building_31: one leg from the middle corridor to
-//! the hall in three (Bug2's following takes the robot round the whole
-//! west block and into a room before the 300 s limit; AutoMove drives
-//! through the passage east in 44 s), the legs after it that start where
-//! it stopped, and the south corridor's lone map cell, which the robot
-//! turns into once the safety layer has forgotten it after 10 s beside it
-//! (tried: seeing through a remembered point forgets it — building_31
-//! among people better, levine among 60 people 27 → 15 legs of 33: not
-//! kept).
 
 use std::collections::VecDeque;
 
