@@ -231,6 +231,38 @@ pub enum Error {
         /// Columns eliminated when it happened.
         eliminated: usize,
     },
+    /// The rates of a solve are too far apart for double precision: scaled
+    /// by the fastest, the slowest would fall below the range in which the
+    /// elimination keeps its accuracy (see [`crate::ctmc::MAX_RATE_SPREAD`]).
+    #[error(
+        "the rates are too far apart for double precision: `{fastest}` = {max:e} is {ratio:.1e} times `{slowest}` = {min:e}, beyond the {limit:.0e} the solver can represent; rescale the time unit or leave the negligible transition out"
+    )]
+    RateSpread {
+        /// The fastest timed transition.
+        fastest: String,
+        /// Its rate.
+        max: f64,
+        /// The slowest timed transition.
+        slowest: String,
+        /// Its rate.
+        min: f64,
+        /// `max / min` (may be infinite).
+        ratio: f64,
+        /// The largest ratio accepted.
+        limit: f64,
+    },
+    /// A computed result (probability, throughput, measure, estimate,
+    /// residual) is not a finite number: it is reported as an error rather
+    /// than printed.
+    #[error("{what} is not a finite number (got {value}): {cause}")]
+    NotFinite {
+        /// Which result, e.g. "the throughput of transition `t3`".
+        what: String,
+        /// The value computed (NaN or ±∞).
+        value: f64,
+        /// The likely cause, or what to change.
+        cause: String,
+    },
     /// A simulation reached its safety cap on transition firings
     /// (`SimParams::max_events`) before the end of its runs.
     #[error(
