@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use nav::supervisor::{Behaviour, Rates, Supervisor};
 use petri::io::Format;
@@ -688,15 +688,14 @@ fn dot(a: &DotArgs) -> Result<()> {
 }
 
 fn family_cmd(family: Family, n: u32, output: Option<&Path>) -> Result<()> {
-    if n == 0 {
-        bail!("the size parameter must be at least 1");
-    }
+    use petri::families::Family as F;
     let net = match family {
-        Family::Kanban => petri::families::kanban(n),
-        Family::Fms => petri::families::fms(n, false),
-        Family::Philosophers => petri::families::philosophers(n),
-        Family::Robots => petri::families::robots_corridors(n, 3),
-    };
+        Family::Kanban => F::Kanban,
+        Family::Fms => F::Fms,
+        Family::Philosophers => F::Philosophers,
+        Family::Robots => F::Robots,
+    }
+    .build(n)?;
     match output {
         Some(path) => {
             Ok(petri::io::write_file(&net, path).with_context(|| format!("writing {}", path.display()))?)

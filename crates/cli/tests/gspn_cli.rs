@@ -379,3 +379,30 @@ fn solve_with_rates_1e200_apart_gives_finite_probabilities() {
     let err = fails(&["gspn", "solve", &supervisor, "-m", "1 / #P0"]);
     assert!(err.contains("not a finite number"), "{err}");
 }
+
+/// Issue 17: `family philosophers 100000000` aborted on a failed allocation
+/// of 3.7 GB (exit 134).
+#[test]
+fn a_family_too_large_is_refused_before_allocating() {
+    let err = fails(&["gspn", "family", "philosophers", "100000000"]);
+    assert!(
+        err.contains("1000000000 places and transitions") && err.contains("limit of 1000000"),
+        "{err}"
+    );
+    let err = fails(&["gspn", "family", "philosophers", "0"]);
+    assert!(err.contains("at least 1"), "{err}");
+    // The largest member accepted is written.
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("philosophers1000.pnml");
+    assert!(
+        petrinav(&[
+            "gspn",
+            "family",
+            "philosophers",
+            "1000",
+            "-o",
+            path.to_str().unwrap()
+        ])
+        .status
+        .success()
+    );
+}

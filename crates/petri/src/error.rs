@@ -263,6 +263,19 @@ pub enum Error {
         /// The likely cause, or what to change.
         cause: String,
     },
+    /// A generator was asked for more than it makes (checked before
+    /// anything is allocated).
+    #[error("{what} would have {size} {unit}, more than the limit of {limit}")]
+    SizeLimit {
+        /// What is too large, e.g. "the net of philosophers 100000000".
+        what: String,
+        /// What is counted, e.g. "places and transitions".
+        unit: &'static str,
+        /// The size asked for.
+        size: u64,
+        /// The largest size accepted.
+        limit: u64,
+    },
     /// A simulation reached its safety cap on transition firings
     /// (`SimParams::max_events`) before the end of its runs.
     #[error(
