@@ -1,6 +1,7 @@
 //! `petrinav gspn …`: the GSPN engine on the command line.
 
 use std::collections::BTreeMap;
+use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -168,6 +169,14 @@ pub struct SimulateArgs {
     /// A measure expression, as for `solve`.
     #[arg(long = "measure", short = 'm', value_name = "EXPR")]
     measures: Vec<String>,
+    /// Stop with an error after this many transition firings (all runs):
+    /// about a minute of simulation at the default.
+    #[arg(long, default_value_t = 1_000_000_000, value_name = "N")]
+    max_events: u64,
+    /// Stop with an error after this many seconds of wall-clock time
+    /// (`inf` for no limit).
+    #[arg(long, default_value_t = 600.0, value_name = "S")]
+    max_wall: f64,
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
@@ -599,7 +608,16 @@ fn simulate(a: &SimulateArgs) -> Result<()> {
     p.warmup = a.warmup;
     p.batches = a.batches;
     p.confidence = a.confidence;
-    let r = petri::simulate(&gspn, &rates, &measures, &p)?;
+    p.max_events = a.max_events;
+    p.max_wall_s = (a.max_wall != f64::INFINITY).then_some(a.max_wall);
+    let r = simulate_with_progress(&gspn, &rates, &measures, &p).map_err(|e| {
+        let hint = match e {
+            petri::Error::EventLimit { .. } => " (--max-events N raises the limit)",
+            petri::Error::WallTimeLimit { .. } => " (--max-wall S raises the limit)",
+            _ => "",
+        };
+        anyhow::anyhow!("{e}{hint}")
+    })?;
     if a.json {
         return print_json(&serde_json::to_value(&r)?);
     }
@@ -642,6 +660,44 @@ fn simulate(a: &SimulateArgs) -> Result<()> {
         outln!("{}", t.render())?;
     }
     Ok(())
+}
+
+/// Simulates with a progress bar on a terminal (simulated time done, firings,
+/// the firings the whole simulation needs at the rate seen so far), quiet
+/// otherwise; Ctrl-C stops the simulation at its next check (some
+/// milliseconds) with an error saying where it was.
+fn simulate_with_progress(
+    gspn: &Gspn,
+    rates: &[f64],
+    measures: &[(String, petri::CompiledExpr)],
+    params: &SimParams,
+) -> petri::Result<petri::SimResult> {
+    let interrupted = crate::interrupt::flag();
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(1000);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {percent:>3}% of simulated time  {msg}  ETA {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let result = petri::simulate_observed(gspn, rates, measures, params, &mut |p| {
+        if let Some(b) = &bar {
+            b.set_position((p.fraction() * 1000.0) as u64);
+            b.set_message(format!("{} firings of ~{:.1e}", p.events, p.projected_events()));
+        }
+        if interrupted.is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed)) {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    result
 }
 
 fn convert(input: &Path, output: &Path) -> Result<()> {

@@ -406,3 +406,34 @@ fn a_family_too_large_is_refused_before_allocating() {
         .success()
     );
 }
+
+/// Issue 17: `simulate models/supervisor.toml --time 1e300` ran with no end
+/// in sight: the event and wall-time bounds end it with a clear message.
+#[test]
+fn an_endless_simulation_stops_at_its_bounds() {
+    let supervisor = format!("{}/../../models/supervisor.toml", env!("CARGO_MANIFEST_DIR"));
+    let base = [
+        "gspn",
+        "simulate",
+        supervisor.as_str(),
+        "--time",
+        "1e300",
+        "--seed",
+        "1",
+    ];
+    let start = std::time::Instant::now();
+    let err = fails(&[&base[..], &["--max-events", "200000"]].concat());
+    assert!(
+        err.contains("200000 transitions, its limit") && err.contains("--max-events"),
+        "{err}"
+    );
+    let err = fails(&[&base[..], &["--max-wall", "0.2"]].concat());
+    assert!(
+        err.contains("0.2 s of wall-clock time") && err.contains("--max-wall"),
+        "{err}"
+    );
+    assert!(err.contains("firings would be needed"), "{err}");
+    assert!(start.elapsed().as_secs_f64() < 30.0);
+    let err = fails(&[&base[..], &["--max-wall", "0"]].concat());
+    assert!(err.contains("max_wall_s"), "{err}");
+}

@@ -276,10 +276,43 @@ pub enum Error {
         /// The largest size accepted.
         limit: u64,
     },
+    /// A simulation ran out of its wall-clock budget
+    /// (`SimParams::max_wall_s`).
+    #[error(
+        "the simulation used its {limit_s} s of wall-clock time after {events} firings, at simulated time {time:.6e} of run {run} (runs end at {end_time:.6e}; about {projected:.1e} firings would be needed); shorten the runs or raise the wall-time limit"
+    )]
+    WallTimeLimit {
+        /// The budget, seconds.
+        limit_s: f64,
+        /// Firings done, all runs.
+        events: u64,
+        /// Simulated time within the current run.
+        time: f64,
+        /// The current run, from 1.
+        run: usize,
+        /// The end time of each run.
+        end_time: f64,
+        /// Firings all runs would need at the rate observed so far.
+        projected: f64,
+    },
+    /// A simulation was stopped by its observer (for example on Ctrl-C).
+    #[error(
+        "the simulation was interrupted after {events} firings, at simulated time {time:.6e} of run {run} (runs end at {end_time:.6e})"
+    )]
+    Interrupted {
+        /// Firings done, all runs.
+        events: u64,
+        /// Simulated time within the current run.
+        time: f64,
+        /// The current run, from 1.
+        run: usize,
+        /// The end time of each run.
+        end_time: f64,
+    },
     /// A simulation reached its safety cap on transition firings
     /// (`SimParams::max_events`) before the end of its runs.
     #[error(
-        "the simulation fired {limit} transitions, its limit, at simulated time {time} (runs end at {end_time}); raise max_events or shorten the runs"
+        "the simulation fired {limit} transitions, its limit, at simulated time {time:.6e} (runs end at {end_time:.6e}); raise max_events or shorten the runs"
     )]
     EventLimit {
         /// The cap on firings, over all runs.
