@@ -246,10 +246,14 @@ fn print_json(v: &Value) -> Result<()> {
 
 fn info(a: &InfoArgs) -> Result<()> {
     let (net, gspn) = load(&a.net)?;
+    let phase = Phase::start("generating the reachability graph");
     let rg = explore(&a.net, &gspn)?;
+    phase.next("behavioural properties");
     let props = Properties::of(&gspn, &rg);
+    phase.next("invariants");
     let pinv = petri::p_invariants(&gspn, &FarkasParams::default());
     let tinv = petri::t_invariants(&gspn, &FarkasParams::default());
+    drop(phase);
     let places = gspn.place_names();
     let trans = gspn.transition_names();
     let tnames = |ts: &[petri::TransitionId]| ts.iter().map(|t| trans[t.index()].clone()).collect::<Vec<_>>();
@@ -423,15 +427,53 @@ fn parse_measures(texts: &[String]) -> Result<Vec<Expr>> {
         .collect()
 }
 
+/// What a long command is doing, on a terminal (a spinner with the phase
+/// and the time spent); nothing when standard error is not a terminal.
+/// Ctrl-C ends these commands at once (no handler is installed for them).
+struct Phase(Option<indicatif::ProgressBar>);
+
+impl Phase {
+    fn start(message: &'static str) -> Phase {
+        Phase(std::io::stderr().is_terminal().then(|| {
+            let b = indicatif::ProgressBar::new_spinner();
+            b.set_style(
+                indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+            );
+            b.set_message(message);
+            b.enable_steady_tick(std::time::Duration::from_millis(120));
+            b
+        }))
+    }
+
+    fn next(&self, message: &'static str) {
+        if let Some(b) = &self.0 {
+            b.set_message(message);
+        }
+    }
+}
+
+impl Drop for Phase {
+    fn drop(&mut self) {
+        if let Some(b) = &self.0 {
+            b.finish_and_clear();
+        }
+    }
+}
+
 fn solve(a: &SolveArgs) -> Result<()> {
     let (_, gspn) = load(&a.net)?;
     let measures = parse_measures(&a.measures)?;
     // Check the rates before the (possibly long) state-space generation.
     let rates = gspn.rates(&Params::new(), a.default_rate)?;
+    let phase = Phase::start("generating the reachability graph");
     let rg = explore(&a.net, &gspn)?;
     let (markings, vanishing) = (rg.num_markings(), rg.num_vanishing());
+    phase.next("eliminating vanishing markings");
     let compiled = CompiledGspn::from_graph(gspn.clone(), rg)?;
+    phase.next("solving the steady state");
     let sol = compiled.solve_rates(&rates, &solve_params(a.method, a.tolerance))?;
+    drop(phase);
     let values: Vec<f64> = measures
         .iter()
         .map(|m| {
