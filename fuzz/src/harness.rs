@@ -16,9 +16,12 @@ use std::sync::OnceLock;
 use petri::io::Format;
 use petri::{CompiledGspn, ExploreParams, Expr, Params, Properties, ReachabilityGraph, SolveParams};
 
+/// What a target does with one input.
+pub type Target = fn(&[u8]);
+
 /// Every target, by the name of its folder in `fuzz/regressions/` and of
 /// its binary in `fuzz/fuzz_targets/`.
-pub const TARGETS: &[(&str, fn(&[u8]))] = &[
+pub const TARGETS: &[(&str, Target)] = &[
     ("pnpro", pnpro),
     ("pnml", pnml),
     ("toml_net", toml_net),
