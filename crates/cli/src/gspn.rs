@@ -1,9 +1,10 @@
 //! `petrinav gspn …`: the GSPN engine on the command line.
 
 use std::collections::BTreeMap;
+use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use nav::supervisor::{Behaviour, Rates, Supervisor};
 use petri::io::Format;
@@ -168,6 +169,14 @@ pub struct SimulateArgs {
     /// A measure expression, as for `solve`.
     #[arg(long = "measure", short = 'm', value_name = "EXPR")]
     measures: Vec<String>,
+    /// Stop with an error after this many transition firings (all runs):
+    /// about a minute of simulation at the default.
+    #[arg(long, default_value_t = 1_000_000_000, value_name = "N")]
+    max_events: u64,
+    /// Stop with an error after this many seconds of wall-clock time
+    /// (`inf` for no limit).
+    #[arg(long, default_value_t = 600.0, value_name = "S")]
+    max_wall: f64,
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
@@ -237,10 +246,14 @@ fn print_json(v: &Value) -> Result<()> {
 
 fn info(a: &InfoArgs) -> Result<()> {
     let (net, gspn) = load(&a.net)?;
+    let phase = Phase::start("generating the reachability graph");
     let rg = explore(&a.net, &gspn)?;
+    phase.next("behavioural properties");
     let props = Properties::of(&gspn, &rg);
+    phase.next("invariants");
     let pinv = petri::p_invariants(&gspn, &FarkasParams::default());
     let tinv = petri::t_invariants(&gspn, &FarkasParams::default());
+    drop(phase);
     let places = gspn.place_names();
     let trans = gspn.transition_names();
     let tnames = |ts: &[petri::TransitionId]| ts.iter().map(|t| trans[t.index()].clone()).collect::<Vec<_>>();
@@ -414,15 +427,53 @@ fn parse_measures(texts: &[String]) -> Result<Vec<Expr>> {
         .collect()
 }
 
+/// What a long command is doing, on a terminal (a spinner with the phase
+/// and the time spent); nothing when standard error is not a terminal.
+/// Ctrl-C ends these commands at once (no handler is installed for them).
+struct Phase(Option<indicatif::ProgressBar>);
+
+impl Phase {
+    fn start(message: &'static str) -> Phase {
+        Phase(std::io::stderr().is_terminal().then(|| {
+            let b = indicatif::ProgressBar::new_spinner();
+            b.set_style(
+                indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+            );
+            b.set_message(message);
+            b.enable_steady_tick(std::time::Duration::from_millis(120));
+            b
+        }))
+    }
+
+    fn next(&self, message: &'static str) {
+        if let Some(b) = &self.0 {
+            b.set_message(message);
+        }
+    }
+}
+
+impl Drop for Phase {
+    fn drop(&mut self) {
+        if let Some(b) = &self.0 {
+            b.finish_and_clear();
+        }
+    }
+}
+
 fn solve(a: &SolveArgs) -> Result<()> {
     let (_, gspn) = load(&a.net)?;
     let measures = parse_measures(&a.measures)?;
     // Check the rates before the (possibly long) state-space generation.
     let rates = gspn.rates(&Params::new(), a.default_rate)?;
+    let phase = Phase::start("generating the reachability graph");
     let rg = explore(&a.net, &gspn)?;
     let (markings, vanishing) = (rg.num_markings(), rg.num_vanishing());
+    phase.next("eliminating vanishing markings");
     let compiled = CompiledGspn::from_graph(gspn.clone(), rg)?;
+    phase.next("solving the steady state");
     let sol = compiled.solve_rates(&rates, &solve_params(a.method, a.tolerance))?;
+    drop(phase);
     let values: Vec<f64> = measures
         .iter()
         .map(|m| {
@@ -599,7 +650,16 @@ fn simulate(a: &SimulateArgs) -> Result<()> {
     p.warmup = a.warmup;
     p.batches = a.batches;
     p.confidence = a.confidence;
-    let r = petri::simulate(&gspn, &rates, &measures, &p)?;
+    p.max_events = a.max_events;
+    p.max_wall_s = (a.max_wall != f64::INFINITY).then_some(a.max_wall);
+    let r = simulate_with_progress(&gspn, &rates, &measures, &p).map_err(|e| {
+        let hint = match e {
+            petri::Error::EventLimit { .. } => " (--max-events N raises the limit)",
+            petri::Error::WallTimeLimit { .. } => " (--max-wall S raises the limit)",
+            _ => "",
+        };
+        anyhow::anyhow!("{e}{hint}")
+    })?;
     if a.json {
         return print_json(&serde_json::to_value(&r)?);
     }
@@ -642,6 +702,44 @@ fn simulate(a: &SimulateArgs) -> Result<()> {
         outln!("{}", t.render())?;
     }
     Ok(())
+}
+
+/// Simulates with a progress bar on a terminal (simulated time done, firings,
+/// the firings the whole simulation needs at the rate seen so far), quiet
+/// otherwise; Ctrl-C stops the simulation at its next check (some
+/// milliseconds) with an error saying where it was.
+fn simulate_with_progress(
+    gspn: &Gspn,
+    rates: &[f64],
+    measures: &[(String, petri::CompiledExpr)],
+    params: &SimParams,
+) -> petri::Result<petri::SimResult> {
+    let interrupted = crate::interrupt::flag();
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(1000);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {percent:>3}% of simulated time  {msg}  ETA {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let result = petri::simulate_observed(gspn, rates, measures, params, &mut |p| {
+        if let Some(b) = &bar {
+            b.set_position((p.fraction() * 1000.0) as u64);
+            b.set_message(format!("{} firings of ~{:.1e}", p.events, p.projected_events()));
+        }
+        if interrupted.is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed)) {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    result
 }
 
 fn convert(input: &Path, output: &Path) -> Result<()> {
@@ -688,15 +786,14 @@ fn dot(a: &DotArgs) -> Result<()> {
 }
 
 fn family_cmd(family: Family, n: u32, output: Option<&Path>) -> Result<()> {
-    if n == 0 {
-        bail!("the size parameter must be at least 1");
-    }
+    use petri::families::Family as F;
     let net = match family {
-        Family::Kanban => petri::families::kanban(n),
-        Family::Fms => petri::families::fms(n, false),
-        Family::Philosophers => petri::families::philosophers(n),
-        Family::Robots => petri::families::robots_corridors(n, 3),
-    };
+        Family::Kanban => F::Kanban,
+        Family::Fms => F::Fms,
+        Family::Philosophers => F::Philosophers,
+        Family::Robots => F::Robots,
+    }
+    .build(n)?;
     match output {
         Some(path) => {
             Ok(petri::io::write_file(&net, path).with_context(|| format!("writing {}", path.display()))?)

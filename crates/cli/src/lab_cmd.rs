@@ -77,8 +77,9 @@ pub struct RunArgs {
     /// list`), or scenario files (.toml).
     #[arg(required = true)]
     what: Vec<String>,
-    /// Runs per scenario (default: the suite's or the file's, 50).
-    #[arg(long)]
+    /// Runs per scenario (default: the suite's or the file's, 50), at most
+    /// 1,000,000.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(lab::scenario::MAX_RUNS)))]
     runs: Option<u32>,
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, short = 'j')]

@@ -3,6 +3,7 @@
 
 mod gspn;
 mod guide_cmd;
+mod interrupt;
 mod lab_cmd;
 mod map;
 mod nav_cmd;

@@ -316,3 +316,124 @@ fn family_writes_a_model_that_solves() {
     let v = json(&["gspn", "solve", path.to_str().unwrap(), "--json"]);
     assert_eq!(v["tangible_markings"], 160);
 }
+
+/// Issue 17: `select --set lambda3=1e200` printed `f_auto NaN` and decided
+/// on it. The answer exists: the localizer leaves Success at once, so
+/// AutoMove never completes and Contour tracking is chosen.
+#[test]
+fn select_with_a_warning_rate_of_1e200_decides_on_finite_numbers() {
+    let v = json(&["gspn", "select", "--set", "lambda3=1e200", "--json"]);
+    for key in [
+        "f_auto",
+        "f_cont",
+        "u_auto",
+        "u_cont",
+        "p_loc_succ",
+        "p_loc_warn",
+        "p_pp_norm",
+        "p_pp_abno",
+    ] {
+        let x = v[key].as_f64().unwrap_or_else(|| panic!("{key} is {}", v[key]));
+        assert!(x.is_finite() && (0.0..=1.0).contains(&x), "{key} = {x}");
+    }
+    assert_eq!(v["choice"], "contour");
+    assert!(v["f_cont"].as_f64().unwrap() > 5e-3);
+    assert!(v["p_loc_succ"].as_f64().unwrap() < 1e-190);
+    let out = petrinav(&["gspn", "select", "--set", "lambda3=1e200"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        !text.contains("NaN") && text.contains("Contour tracking"),
+        "{text}"
+    );
+    // What double precision cannot hold is an error naming the ratio.
+    let err = fails(&["gspn", "select", "--set", "lambda3=1e300"]);
+    assert!(err.contains("too far apart") && err.contains("1.0e303"), "{err}");
+}
+
+/// Issue 17: `solve models/supervisor.toml -p lambda3=1e200` printed all-NaN
+/// probabilities.
+#[test]
+fn solve_with_rates_1e200_apart_gives_finite_probabilities() {
+    let supervisor = format!("{}/../../models/supervisor.toml", env!("CARGO_MANIFEST_DIR"));
+    let v = json(&["gspn", "solve", &supervisor, "-p", "lambda3=1e200", "--json"]);
+    let places = v["places"].as_object().unwrap();
+    assert_eq!(places.len(), 9);
+    for (name, p) in places {
+        for key in ["prob_nonempty", "mean_tokens"] {
+            let x = p[key]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{name}.{key} is {}", p[key]));
+            assert!(x.is_finite() && x >= 0.0, "{name}.{key} = {x}");
+        }
+    }
+    assert!((places["P6"]["prob_nonempty"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    for (name, t) in v["transitions"].as_object().unwrap() {
+        assert!(t["throughput"].as_f64().is_some_and(f64::is_finite), "{name}");
+    }
+    assert!(v["residual"].as_f64().is_some_and(|r| r < 1e-12));
+    let out = petrinav(&["gspn", "solve", &supervisor, "-p", "lambda3=1e200"]);
+    assert!(out.status.success() && !String::from_utf8_lossy(&out.stdout).contains("NaN"));
+    let err = fails(&["gspn", "solve", &supervisor, "-p", "lambda3=1e-300"]);
+    assert!(err.contains("too far apart"), "{err}");
+    let err = fails(&["gspn", "solve", &supervisor, "-m", "1 / #P0"]);
+    assert!(err.contains("not a finite number"), "{err}");
+}
+
+/// Issue 17: `family philosophers 100000000` aborted on a failed allocation
+/// of 3.7 GB (exit 134).
+#[test]
+fn a_family_too_large_is_refused_before_allocating() {
+    let err = fails(&["gspn", "family", "philosophers", "100000000"]);
+    assert!(
+        err.contains("1000000000 places and transitions") && err.contains("limit of 1000000"),
+        "{err}"
+    );
+    let err = fails(&["gspn", "family", "philosophers", "0"]);
+    assert!(err.contains("at least 1"), "{err}");
+    // The largest member accepted is written.
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("philosophers1000.pnml");
+    assert!(
+        petrinav(&[
+            "gspn",
+            "family",
+            "philosophers",
+            "1000",
+            "-o",
+            path.to_str().unwrap()
+        ])
+        .status
+        .success()
+    );
+}
+
+/// Issue 17: `simulate models/supervisor.toml --time 1e300` ran with no end
+/// in sight: the event and wall-time bounds end it with a clear message.
+#[test]
+fn an_endless_simulation_stops_at_its_bounds() {
+    let supervisor = format!("{}/../../models/supervisor.toml", env!("CARGO_MANIFEST_DIR"));
+    let base = [
+        "gspn",
+        "simulate",
+        supervisor.as_str(),
+        "--time",
+        "1e300",
+        "--seed",
+        "1",
+    ];
+    let start = std::time::Instant::now();
+    let err = fails(&[&base[..], &["--max-events", "200000"]].concat());
+    assert!(
+        err.contains("200000 transitions, its limit") && err.contains("--max-events"),
+        "{err}"
+    );
+    let err = fails(&[&base[..], &["--max-wall", "0.2"]].concat());
+    assert!(
+        err.contains("0.2 s of wall-clock time") && err.contains("--max-wall"),
+        "{err}"
+    );
+    assert!(err.contains("firings would be needed"), "{err}");
+    assert!(start.elapsed().as_secs_f64() < 30.0);
+    let err = fails(&[&base[..], &["--max-wall", "0"]].concat());
+    assert!(err.contains("max_wall_s"), "{err}");
+}

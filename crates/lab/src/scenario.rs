@@ -184,6 +184,12 @@ pub struct ControllerSpec {
     pub trace_layer: TraceLayerSpec,
 }
 
+/// Most runs of a scenario in a batch: a million runs of every scenario
+/// is far beyond any experiment here (the suites run 10–200), and keeps
+/// the batch's job list (one entry per run, made before the first run)
+/// small; `runs = 4000000000` would ask for some 200 GB of it.
+pub const MAX_RUNS: u32 = 1_000_000;
+
 fn default_runs() -> u32 {
     50
 }
@@ -213,7 +219,7 @@ pub struct Scenario {
     /// What it is about.
     #[serde(default)]
     pub description: String,
-    /// Runs of a batch. Default 50.
+    /// Runs of a batch, 1 to [`MAX_RUNS`]. Default 50.
     #[serde(default = "default_runs")]
     pub runs: u32,
     /// Base seed. Default 1.
@@ -303,8 +309,8 @@ impl Scenario {
         if let Some(o) = &self.robot.odometry {
             o.validate().context("[robot.odometry]")?;
         }
-        if self.runs == 0 {
-            bail!("`runs` must be at least 1");
+        if !(1..=MAX_RUNS).contains(&self.runs) {
+            bail!("`runs` must be from 1 to {MAX_RUNS}, got {}", self.runs);
         }
         let positive = [
             ("time_limit_s", self.time_limit_s),
@@ -407,6 +413,10 @@ y = 1.0
         let text = "runs = 0\n".to_string() + SMALL;
         let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
         assert!(err.contains("runs"), "{err}");
+        // Issue 17: sizes are checked before anything is allocated.
+        let text = "runs = 4000000000\n".to_string() + SMALL;
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("from 1 to 1000000"), "{err}");
     }
 
     #[test]

@@ -14,6 +14,18 @@
 //! bottom strongly connected components `B`; `P(reach B)` comes from the
 //! expected sojourn times `x` in the transient states, `x(−Q_TT) = π0_T`,
 //! as `π0_B + Σ_{s∈T} x_s Σ_{b∈B} q_sb`.
+//!
+//! # Numbers
+//!
+//! Every number a [`Solution`] holds is finite, or the solve fails: the
+//! chain is solved in the time unit of its fastest rate (divided by a power
+//! of two, exactly), so rates such as 1e200 next to 1e-3 neither overflow
+//! nor lose accuracy (GTH rescales its back substitution, see
+//! [`crate::steady_state`]); rates more than [`MAX_RATE_SPREAD`] apart are
+//! [`Error::RateSpread`], naming both transitions and the ratio; anything
+//! else that comes out NaN or infinite is [`Error::NotFinite`], naming the
+//! number. [`CompiledGspn::measure`] does the same for a measure that
+//! divides by zero.
 
 use std::time::Instant;
 
@@ -31,6 +43,20 @@ use crate::steady_state::{self, SolveInfo, SolveParams};
 use crate::vanishing;
 
 const NONE: u32 = u32::MAX;
+
+/// Largest ratio between the fastest and the slowest rate of the timed
+/// transitions that fire in a chain that [`CompiledGspn::solve_rates`]
+/// accepts ([`Error::RateSpread`] beyond).
+///
+/// The solve works in the time unit of the fastest rate (scaled by a power
+/// of two, which is exact), so every generator entry is at most its
+/// coefficient and nothing overflows; GTH, which subtracts nothing, keeps
+/// every probability accurate to rounding however far apart the rates are,
+/// as long as the scaled rates are normal doubles. `1e300` leaves the
+/// elimination some eight orders of magnitude above the smallest normal
+/// double (2.2e-308) for coefficients (vanishing-path probabilities) and
+/// sums of rates.
+pub const MAX_RATE_SPREAD: f64 = 1e300;
 
 /// Sizes and timings of a compilation.
 #[derive(Debug, Clone, Default, serde::Serialize)]
@@ -66,6 +92,9 @@ pub struct CompiledGspn {
     incoming: Rows,
     imm: ImmediateFlows,
     initial: Vec<(u32, f64)>,
+    /// Timed transitions that label an entry of the chain (the rates that
+    /// matter to a solve), ascending.
+    firing_timed: Vec<u32>,
     /// `None` when the chain is irreducible.
     components: Option<Components>,
     bottoms: Vec<Vec<u32>>,
@@ -314,6 +343,14 @@ impl CompiledGspn {
         }
         drop(fill);
         let dl = dict.pairs.len();
+        let mut fires = vec![false; gspn.num_transitions()];
+        for &id in &ids {
+            fires[dict.pairs[id as usize].0 as usize] = true;
+        }
+        let firing_timed: Vec<u32> = (0..gspn.num_transitions() as u32)
+            .filter(|&t| fires[t as usize] && !gspn.is_immediate(TransitionId(t)))
+            .collect();
+        drop(fires);
         let outgoing = Rows {
             offsets,
             index: dst,
@@ -366,6 +403,7 @@ impl CompiledGspn {
             incoming,
             imm,
             initial,
+            firing_timed,
             components,
             bottoms,
             transient,
@@ -445,6 +483,12 @@ impl CompiledGspn {
 
     /// Solves for a vector of rates indexed by transition (entries of
     /// immediate transitions are ignored). Nothing structural is rebuilt.
+    ///
+    /// Errors: a rate that is not a finite number > 0
+    /// ([`Error::InvalidValue`]), rates more than [`MAX_RATE_SPREAD`] apart
+    /// ([`Error::RateSpread`]), solver failures ([`Error::NoConvergence`],
+    /// [`Error::Singular`]), and a result that is not finite
+    /// ([`Error::NotFinite`]) — never a NaN in the solution.
     pub fn solve_rates(&self, rates: &[f64], params: &SolveParams) -> Result<Solution> {
         let start = Instant::now();
         params.validate()?;
@@ -466,10 +510,15 @@ impl CompiledGspn {
             }
         }
         let n = self.num_tangible();
+        // Solve in the time unit of the fastest rate (spec §4: rates far
+        // apart must not break the solver): every value is then at most its
+        // coefficient, so no exit rate or elimination entry overflows, and
+        // π does not depend on the time unit. Throughputs are scaled back.
+        let scale = self.rate_scale(rates)?;
         let values: Vec<f64> = self
             .dictionary
             .iter()
-            .map(|&(t, c)| rates[t as usize] * c)
+            .map(|&(t, c)| rates[t as usize] / scale * c)
             .collect();
         let exit = self.exit_rates(&values);
         let chain = Chain {
@@ -554,8 +603,18 @@ impl CompiledGspn {
         }
         info.residual = steady_state::residual(&chain, &pi, None);
         info.seconds = start.elapsed().as_secs_f64();
-        let throughput = self.throughputs(&pi, rates, &values);
+        let throughput = self.throughputs(&pi, rates, &values, scale);
         let (mean_tokens, prob_nonempty) = self.place_measures(&pi);
+        self.check_finite(
+            &pi,
+            &throughput,
+            &mean_tokens,
+            &[
+                ("the residual of the balance equations", info.residual),
+                ("the residual of the absorption equations", absorption_residual),
+            ],
+            &bottom_probabilities,
+        )?;
         Ok(Solution {
             pi,
             rates: rates.to_vec(),
@@ -566,6 +625,96 @@ impl CompiledGspn {
             absorption_residual,
             bottom_probabilities,
         })
+    }
+
+    /// The fastest rate of a timed transition that fires in the chain (the
+    /// time unit of the solve), after checking that the slowest is within
+    /// [`MAX_RATE_SPREAD`] of it. 1 when no timed transition fires.
+    fn rate_scale(&self, rates: &[f64]) -> Result<f64> {
+        let (mut fastest, mut slowest) = (None::<usize>, None::<usize>);
+        for t in self.firing_timed.iter().map(|&t| t as usize) {
+            if fastest.is_none_or(|f| rates[t] > rates[f]) {
+                fastest = Some(t);
+            }
+            if slowest.is_none_or(|s| rates[t] < rates[s]) {
+                slowest = Some(t);
+            }
+        }
+        let (Some(f), Some(s)) = (fastest, slowest) else {
+            return Ok(1.0);
+        };
+        let ratio = rates[f] / rates[s];
+        // Both rates are finite and > 0: the ratio is a number (maybe ∞).
+        if ratio > MAX_RATE_SPREAD {
+            let names = self.gspn.transition_names();
+            return Err(Error::RateSpread {
+                fastest: names[f].clone(),
+                max: rates[f],
+                slowest: names[s].clone(),
+                min: rates[s],
+                ratio,
+                limit: MAX_RATE_SPREAD,
+            });
+        }
+        // A power of two: scaling is then exact (π, throughputs: the same
+        // bits as in the rates' own unit, as long as nothing overflows).
+        let e = rates[f].log2().floor().clamp(-1022.0, 1023.0) as i64;
+        Ok(f64::from_bits(((e + 1023) as u64) << 52))
+    }
+
+    /// Every number of a solution is finite, or the error names the first
+    /// that is not.
+    fn check_finite(
+        &self,
+        pi: &[f64],
+        throughput: &[f64],
+        mean_tokens: &[f64],
+        residuals: &[(&str, f64)],
+        bottom_probabilities: &[f64],
+    ) -> Result<()> {
+        let not_finite = |what: String, value: f64, cause: &str| Error::NotFinite {
+            what,
+            value,
+            cause: cause.to_string(),
+        };
+        let solver = "the steady-state solve lost all precision (rates or weights too far apart?)";
+        if let Some(s) = pi.iter().position(|p| !p.is_finite()) {
+            return Err(not_finite(
+                format!("the probability of tangible marking {s}"),
+                pi[s],
+                solver,
+            ));
+        }
+        if let Some(b) = bottom_probabilities.iter().position(|p| !p.is_finite()) {
+            return Err(not_finite(
+                format!("the probability of reaching bottom component {b}"),
+                bottom_probabilities[b],
+                solver,
+            ));
+        }
+        for &(what, r) in residuals {
+            if !r.is_finite() {
+                return Err(not_finite(what.to_string(), r, solver));
+            }
+        }
+        if let Some(t) = throughput.iter().position(|x| !x.is_finite()) {
+            return Err(not_finite(
+                format!(
+                    "the throughput of transition `{}`",
+                    self.gspn.transition_names()[t]
+                ),
+                throughput[t],
+                "a rate times its enabling degree exceeds the largest double",
+            ));
+        }
+        if let Some(p) = mean_tokens.iter().position(|x| !x.is_finite()) {
+            return Err(not_finite(
+                format!("the mean token count of place `{}`", self.gspn.place_names()[p]),
+                mean_tokens[p],
+                solver,
+            ));
+        }
+        Ok(())
     }
 
     fn exit_rates(&self, values: &[f64]) -> Vec<f64> {
@@ -601,7 +750,9 @@ impl CompiledGspn {
         Rows::from_entries(states.len(), entries, self.dictionary.len())
     }
 
-    fn throughputs(&self, pi: &[f64], rates: &[f64], values: &[f64]) -> Vec<f64> {
+    /// Throughputs from `values` (rates divided by `scale`, times their
+    /// coefficients), in the rates' own time unit.
+    fn throughputs(&self, pi: &[f64], rates: &[f64], values: &[f64], scale: f64) -> Vec<f64> {
         let mut x = vec![0.0; self.gspn.num_transitions()];
         let out = &self.outgoing;
         for (s, &p) in pi.iter().enumerate() {
@@ -611,7 +762,7 @@ impl CompiledGspn {
             let (a, b) = out.range(s);
             for k in a..b {
                 let id = out.ids.get(k);
-                x[self.dictionary[id].0 as usize] += p * values[id];
+                x[self.dictionary[id].0 as usize] += p * values[id] * scale;
             }
         }
         let imm = &self.imm;
@@ -666,7 +817,22 @@ impl CompiledGspn {
                 continue;
             }
             self.store.decode(self.tangible_rg[s] as usize, &mut m);
-            sum += p * compiled.eval(&m, &mut stack);
+            let v = compiled.eval(&m, &mut stack);
+            if !v.is_finite() {
+                return Err(Error::NotFinite {
+                    what: format!("the measure `{expr}` in marking {}", self.gspn.format_marking(&m)),
+                    value: v,
+                    cause: "the expression divides by zero or overflows there".into(),
+                });
+            }
+            sum += p * v;
+        }
+        if !sum.is_finite() {
+            return Err(Error::NotFinite {
+                what: format!("the long-run mean of `{expr}`"),
+                value: sum,
+                cause: "its values are too large to sum in double precision".into(),
+            });
         }
         Ok(sum)
     }

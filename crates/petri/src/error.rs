@@ -231,10 +231,88 @@ pub enum Error {
         /// Columns eliminated when it happened.
         eliminated: usize,
     },
+    /// The rates of a solve are too far apart for double precision: scaled
+    /// by the fastest, the slowest would fall below the range in which the
+    /// elimination keeps its accuracy (see [`crate::ctmc::MAX_RATE_SPREAD`]).
+    #[error(
+        "the rates are too far apart for double precision: `{fastest}` = {max:e} is {ratio:.1e} times `{slowest}` = {min:e}, beyond the {limit:.0e} the solver can represent; rescale the time unit or leave the negligible transition out"
+    )]
+    RateSpread {
+        /// The fastest timed transition.
+        fastest: String,
+        /// Its rate.
+        max: f64,
+        /// The slowest timed transition.
+        slowest: String,
+        /// Its rate.
+        min: f64,
+        /// `max / min` (may be infinite).
+        ratio: f64,
+        /// The largest ratio accepted.
+        limit: f64,
+    },
+    /// A computed result (probability, throughput, measure, estimate,
+    /// residual) is not a finite number: it is reported as an error rather
+    /// than printed.
+    #[error("{what} is not a finite number (got {value}): {cause}")]
+    NotFinite {
+        /// Which result, e.g. "the throughput of transition `t3`".
+        what: String,
+        /// The value computed (NaN or ±∞).
+        value: f64,
+        /// The likely cause, or what to change.
+        cause: String,
+    },
+    /// A generator was asked for more than it makes (checked before
+    /// anything is allocated).
+    #[error("{what} would have {size} {unit}, more than the limit of {limit}")]
+    SizeLimit {
+        /// What is too large, e.g. "the net of philosophers 100000000".
+        what: String,
+        /// What is counted, e.g. "places and transitions".
+        unit: &'static str,
+        /// The size asked for.
+        size: u64,
+        /// The largest size accepted.
+        limit: u64,
+    },
+    /// A simulation ran out of its wall-clock budget
+    /// (`SimParams::max_wall_s`).
+    #[error(
+        "the simulation used its {limit_s} s of wall-clock time after {events} firings, at simulated time {time:.6e} of run {run} (runs end at {end_time:.6e}; about {projected:.1e} firings would be needed); shorten the runs or raise the wall-time limit"
+    )]
+    WallTimeLimit {
+        /// The budget, seconds.
+        limit_s: f64,
+        /// Firings done, all runs.
+        events: u64,
+        /// Simulated time within the current run.
+        time: f64,
+        /// The current run, from 1.
+        run: usize,
+        /// The end time of each run.
+        end_time: f64,
+        /// Firings all runs would need at the rate observed so far.
+        projected: f64,
+    },
+    /// A simulation was stopped by its observer (for example on Ctrl-C).
+    #[error(
+        "the simulation was interrupted after {events} firings, at simulated time {time:.6e} of run {run} (runs end at {end_time:.6e})"
+    )]
+    Interrupted {
+        /// Firings done, all runs.
+        events: u64,
+        /// Simulated time within the current run.
+        time: f64,
+        /// The current run, from 1.
+        run: usize,
+        /// The end time of each run.
+        end_time: f64,
+    },
     /// A simulation reached its safety cap on transition firings
     /// (`SimParams::max_events`) before the end of its runs.
     #[error(
-        "the simulation fired {limit} transitions, its limit, at simulated time {time} (runs end at {end_time}); raise max_events or shorten the runs"
+        "the simulation fired {limit} transitions, its limit, at simulated time {time:.6e} (runs end at {end_time:.6e}); raise max_events or shorten the runs"
     )]
     EventLimit {
         /// The cap on firings, over all runs.

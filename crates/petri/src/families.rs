@@ -8,8 +8,82 @@
 //! | [`robots_corridors`] | N robots sharing K one-way corridors (immediate choice of a free corridor) | C(N+K, K)-ish |
 //! | [`mm1k`] | M/M/1/K queue | K + 1 |
 
+use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::net::{ArcKind, Net, ParamKind, PlaceId, Servers, TransitionId};
+
+/// Most places plus transitions [`Family::build`] makes: a million nodes
+/// is a net file of about a hundred megabytes, and far beyond any state
+/// space that can be generated (philosophers: `3^N` markings).
+pub const MAX_NODES: u64 = 1_000_000;
+
+/// The scalable families, for a size chosen by a user: [`Family::build`]
+/// checks the size before anything is allocated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    /// [`kanban`]: `n` kanbans per cell (16 places, 16 transitions).
+    Kanban,
+    /// [`fms`] with immediate choices: `n` pallets (fixed structure).
+    Fms,
+    /// [`philosophers`]: `5n` places, `5n` transitions.
+    Philosophers,
+    /// [`robots_corridors`] with 3 corridors: `n` robots (fixed structure).
+    Robots,
+}
+
+impl Family {
+    /// The family's name as the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Kanban => "kanban",
+            Family::Fms => "fms",
+            Family::Philosophers => "philosophers",
+            Family::Robots => "robots",
+        }
+    }
+
+    /// Places plus transitions of the member of size `n`.
+    pub fn nodes(self, n: u32) -> u64 {
+        match self {
+            Family::Philosophers => 10 * u64::from(n),
+            // The others' structure does not grow with n (only tokens).
+            _ => {
+                let net = self.make(1);
+                (net.places.len() + net.transitions.len()) as u64
+            }
+        }
+    }
+
+    fn make(self, n: u32) -> Net {
+        match self {
+            Family::Kanban => kanban(n),
+            Family::Fms => fms(n, false),
+            Family::Philosophers => philosophers(n),
+            Family::Robots => robots_corridors(n, 3),
+        }
+    }
+
+    /// The member of size `n` (≥ 1): [`Error::SizeLimit`] beyond
+    /// [`MAX_NODES`] places and transitions, [`Error::Invalid`] for 0.
+    pub fn build(self, n: u32) -> Result<Net> {
+        if n == 0 {
+            return Err(Error::Invalid(format!(
+                "the size parameter of {} must be at least 1",
+                self.name()
+            )));
+        }
+        let nodes = self.nodes(n);
+        if nodes > MAX_NODES {
+            return Err(Error::SizeLimit {
+                what: format!("the net of {} {n}", self.name()),
+                unit: "places and transitions",
+                size: nodes,
+                limit: MAX_NODES,
+            });
+        }
+        Ok(self.make(n))
+    }
+}
 
 fn rate(net: &mut Net, name: &str, value: f64) -> Expr {
     net.set_param(name, Some(value), ParamKind::Real);

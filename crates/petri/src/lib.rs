@@ -72,5 +72,5 @@ pub use net::{
 };
 pub use properties::Properties;
 pub use reachability::{Edge, ExploreParams, ExploreStats, MarkingId, ReachabilityGraph};
-pub use simulation::{Estimate, SimParams, SimResult, simulate};
+pub use simulation::{Estimate, SimParams, SimProgress, SimResult, simulate, simulate_observed};
 pub use steady_state::{Method, SolveInfo, SolveParams};

@@ -114,6 +114,9 @@
 
 mod stats;
 
+use std::ops::ControlFlow;
+use std::time::Instant;
+
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -123,6 +126,46 @@ use crate::gspn::{Gspn, MarkingKind};
 use crate::net::TransitionId;
 
 pub use stats::student_t_quantile;
+
+/// Firings between two looks at the clock and at the observer of
+/// [`simulate_observed`] (a power of two; some milliseconds of simulation).
+pub const CHECK_EVERY: u64 = 1 << 16;
+
+/// Where a running simulation is, as reported to the observer of
+/// [`simulate_observed`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimProgress {
+    /// Firings so far, all runs.
+    pub events: u64,
+    /// The current run, from 1.
+    pub run: usize,
+    /// Number of runs ([`SimParams::replications`]).
+    pub runs: usize,
+    /// Simulated time within the current run.
+    pub time: f64,
+    /// End time of each run ([`SimParams::end_time`]).
+    pub end_time: f64,
+}
+
+impl SimProgress {
+    /// Share of the whole simulated time done, in [0, 1].
+    pub fn fraction(&self) -> f64 {
+        let done =
+            (self.run.saturating_sub(1) as f64 + (self.time / self.end_time).min(1.0)) / self.runs as f64;
+        done.clamp(0.0, 1.0)
+    }
+
+    /// Firings the whole simulation would need at the rate seen so far
+    /// (infinite before any simulated time has passed).
+    pub fn projected_events(&self) -> f64 {
+        let f = self.fraction();
+        if f > 0.0 {
+            self.events as f64 / f
+        } else {
+            f64::INFINITY
+        }
+    }
+}
 
 /// The largest [`SimParams::batches`] and [`SimParams::replications`]
 /// accepted: far beyond what makes statistical sense, low enough that a typo
@@ -163,6 +206,12 @@ pub struct SimParams {
     /// This many immediate firings in a row, without time advancing, is taken
     /// to be a timeless trap ([`Error::TimelessTrap`]). Default 10⁶; at least 1.
     pub max_immediate_chain: u64,
+    /// Wall-clock budget of the whole simulation, seconds; `None` (the
+    /// default) for none. Checked every [`CHECK_EVERY`] firings; running
+    /// out is an error, [`Error::WallTimeLimit`], which tells how many
+    /// firings the runs would need at the rate seen so far. Must be finite
+    /// and > 0.
+    pub max_wall_s: Option<f64>,
 }
 
 impl Default for SimParams {
@@ -176,6 +225,7 @@ impl Default for SimParams {
             seed: 0,
             max_events: 1_000_000_000,
             max_immediate_chain: 1_000_000,
+            max_wall_s: None,
         }
     }
 }
@@ -238,6 +288,11 @@ impl SimParams {
         }
         if self.max_immediate_chain == 0 {
             return Err(bad("`max_immediate_chain`", "at least 1", 0.0));
+        }
+        if let Some(w) = self.max_wall_s {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(bad("`max_wall_s`", "a finite number of seconds > 0", w));
+            }
         }
         // Batch boundaries must be distinct numbers (not so with a huge
         // warmup and a tiny window, in floating point).
@@ -356,9 +411,31 @@ pub fn simulate(
     measures: &[(String, CompiledExpr)],
     params: &SimParams,
 ) -> Result<SimResult> {
+    simulate_observed(gspn, rates, measures, params, &mut |_| ControlFlow::Continue(()))
+}
+
+/// [`simulate`], showing `observer` where the simulation is every
+/// [`CHECK_EVERY`] firings (for a progress bar); the observer returning
+/// [`ControlFlow::Break`] stops the simulation with [`Error::Interrupted`]
+/// (for Ctrl-C). A stopped simulation gives no estimates: its batches would
+/// not cover the window they stand for. The results do not depend on the
+/// observer.
+///
+/// Errors: those of [`simulate`], [`Error::Interrupted`],
+/// [`Error::WallTimeLimit`] when [`SimParams::max_wall_s`] runs out, and
+/// [`Error::NotFinite`] when an estimate is not a finite number (token
+/// counts or rates so large that their time integrals overflow, a measure
+/// that divides by zero).
+pub fn simulate_observed(
+    gspn: &Gspn,
+    rates: &[f64],
+    measures: &[(String, CompiledExpr)],
+    params: &SimParams,
+    observer: &mut dyn FnMut(&SimProgress) -> ControlFlow<()>,
+) -> Result<SimResult> {
     params.validate()?;
     let weights = race_weights(gspn, rates)?;
-    let mut sim = Simulator::new(gspn, &weights, measures, params);
+    let mut sim = Simulator::new(gspn, &weights, measures, params, observer);
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     if params.replications == 1 {
         sim.run(&mut rng, params.batches)?;
@@ -375,6 +452,29 @@ pub fn simulate(
         batches: w.n,
     };
     let reps = params.replications as f64;
+    let finite = |what: &str, names: &[String], estimates: &[stats::Welford]| -> Result<()> {
+        for (name, w) in names.iter().zip(estimates) {
+            let e = estimate(w);
+            for (part, v) in [("estimate", e.mean), ("confidence interval", e.half_width)] {
+                if !v.is_finite() {
+                    return Err(Error::NotFinite {
+                        what: format!("the {part} of {what} `{name}`"),
+                        value: v,
+                        cause: "its time integral overflows double precision (huge token counts or run length), or the measure divides by zero".into(),
+                    });
+                }
+            }
+        }
+        Ok(())
+    };
+    finite("the mean tokens of place", gspn.place_names(), &sim.stats.tokens)?;
+    finite(
+        "the throughput of transition",
+        gspn.transition_names(),
+        &sim.stats.throughput,
+    )?;
+    let measure_names: Vec<String> = measures.iter().map(|(n, _)| n.clone()).collect();
+    finite("the measure", &measure_names, &sim.stats.measures)?;
     Ok(SimResult {
         place_names: gspn.place_names().to_vec(),
         transition_names: gspn.transition_names().to_vec(),
@@ -499,6 +599,13 @@ struct Simulator<'a> {
     stats: Observations,
     events: u64,
     absorbed_runs: usize,
+
+    /// The current run, from 1, of `runs`.
+    run: usize,
+    runs: usize,
+    started: Instant,
+    max_wall_s: Option<f64>,
+    observer: &'a mut dyn FnMut(&SimProgress) -> ControlFlow<()>,
 }
 
 impl<'a> Simulator<'a> {
@@ -507,6 +614,7 @@ impl<'a> Simulator<'a> {
         weights: &'a [f64],
         measures: &'a [(String, CompiledExpr)],
         params: &SimParams,
+        observer: &'a mut dyn FnMut(&SimProgress) -> ControlFlow<()>,
     ) -> Self {
         let (np, nt, nm) = (gspn.num_places(), gspn.num_transitions(), measures.len());
         Simulator {
@@ -537,13 +645,53 @@ impl<'a> Simulator<'a> {
             },
             events: 0,
             absorbed_runs: 0,
+            run: 0,
+            runs: params.replications,
+            started: Instant::now(),
+            max_wall_s: params.max_wall_s,
+            observer,
         }
+    }
+
+    /// Every [`CHECK_EVERY`] firings: the wall-clock budget and the
+    /// observer.
+    #[cold]
+    fn checkpoint(&mut self, now: f64) -> Result<()> {
+        let progress = SimProgress {
+            events: self.events,
+            run: self.run,
+            runs: self.runs,
+            time: now,
+            end_time: self.end,
+        };
+        if let Some(limit_s) = self.max_wall_s {
+            if self.started.elapsed().as_secs_f64() > limit_s {
+                return Err(Error::WallTimeLimit {
+                    limit_s,
+                    events: self.events,
+                    time: now,
+                    run: self.run,
+                    end_time: self.end,
+                    projected: progress.projected_events(),
+                });
+            }
+        }
+        if (self.observer)(&progress).is_break() {
+            return Err(Error::Interrupted {
+                events: self.events,
+                time: now,
+                run: self.run,
+                end_time: self.end,
+            });
+        }
+        Ok(())
     }
 
     /// One run from the initial marking over `[0, end]`, adding `batches`
     /// observations.
     fn run(&mut self, rng: &mut ChaCha8Rng, batches: usize) -> Result<()> {
         let window = Window::new(self.warmup, self.end, batches);
+        self.run += 1;
         self.marking.copy_from_slice(self.gspn.initial_marking());
         let mut now = 0.0;
         // Index of the next boundary to cross: 0 is the end of the warmup,
@@ -663,6 +811,9 @@ impl<'a> Simulator<'a> {
         }
         self.gspn.fire(t, &mut self.marking)?;
         self.events += 1;
+        if self.events % CHECK_EVERY == 0 {
+            self.checkpoint(now)?;
+        }
         Ok(())
     }
 

@@ -9,7 +9,9 @@
 //! Methods:
 //! * **direct**: below ~160 states, GTH elimination (no subtractions, so
 //!   every probability is accurate to rounding even when rates span many
-//!   orders of magnitude, as in the supervisor net); above, sparse LU of the
+//!   orders of magnitude, as in the supervisor net; its back substitution
+//!   rescales instead of overflowing when they are very far apart); above,
+//!   sparse LU of the
 //!   system with one equation replaced by fixing `x_k = 1` (then normalised)
 //!   — any principal submatrix of an irreducible generator is non-singular,
 //!   so this is exact and needs no dense normalisation row. `O(fill-in)`
@@ -298,15 +300,36 @@ fn gth(rows: &Chain<'_>) -> Result<Vec<f64>> {
             }
         }
     }
+    // Back substitution, `x_k = Σ_{i<k} x_i q_ik / pivot_k` from `x_0 = 1`.
+    // With rates far apart the unnormalised `x` grows like their ratio to
+    // the power of the chain's depth and would overflow (then ∞/∞ = NaN):
+    // whenever `x_k` would pass [`GTH_RESCALE`], the earlier entries are
+    // multiplied by `pivot_k / s_k` and `x_k` set to 1 — the same vector up
+    // to a common factor, one rounding per entry and rescaling; what falls
+    // below the smallest double then is below it relative to the largest
+    // probability too.
     let mut x = vec![0.0; n];
     x[0] = 1.0;
     for k in 1..n {
-        x[k] = (0..k).map(|i| x[i] * q[i * n + k]).sum::<f64>() / pivot[k];
+        let s: f64 = (0..k).map(|i| x[i] * q[i * n + k]).sum();
+        let xk = s / pivot[k];
+        if xk <= GTH_RESCALE {
+            x[k] = xk;
+        } else {
+            for v in &mut x[..k] {
+                *v = *v * pivot[k] / s;
+            }
+            x[k] = 1.0;
+        }
     }
     let sum: f64 = x.iter().sum();
     x.iter_mut().for_each(|v| *v /= sum);
     Ok(x)
 }
+
+/// Largest unnormalised probability GTH's back substitution lets grow
+/// before rescaling: far from overflow even after summing `n` terms.
+const GTH_RESCALE: f64 = 1e100;
 
 /// The most probable state after `sweeps` Gauss–Seidel sweeps from the
 /// uniform distribution (a cheap guess for the state to pin).
@@ -523,6 +546,27 @@ mod tests {
             );
         }
         assert!(info.residual < 1e-13);
+    }
+
+    #[test]
+    fn gth_rescales_instead_of_overflowing_on_a_deep_stiff_chain() {
+        // π_i ∝ 10^(6 i) over 150 states: unnormalised, 10^894 (∞ before
+        // the rescaling, then ∞/∞ = NaN).
+        let n = 150;
+        let owned = birth_death(n, 1.0, 1e-6);
+        let (x, info) = solve(&owned.chain(), None, &SolveParams::default()).unwrap();
+        assert_eq!(info.method, "direct-gth");
+        assert!(x.iter().all(|v| v.is_finite() && *v >= 0.0));
+        for j in 0..5 {
+            // From the top: 1e-6 per step down (1 − 1e-6 normalisation).
+            let exact = (1.0 - 1e-6) * 1e-6f64.powi(j as i32);
+            let got = x[n - 1 - j];
+            assert!((got - exact).abs() <= 1e-12 * exact, "{j}: {got} vs {exact}");
+        }
+        assert_eq!(
+            x[0], 0.0,
+            "10^-894 relative to the top is below the smallest double"
+        );
     }
 
     #[test]

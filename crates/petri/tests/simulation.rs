@@ -441,6 +441,86 @@ fn a_long_but_finite_immediate_chain_is_not_a_trap() {
 }
 
 #[test]
+fn the_wall_time_bound_stops_an_endless_run_with_a_projection() {
+    // Issue 17: `--time 1e300` ran with no end in sight.
+    let (g, r) = instantiate(&mm1k());
+    let params = SimParams {
+        max_wall_s: Some(0.05),
+        ..SimParams::new(1e300)
+    };
+    let start = std::time::Instant::now();
+    match simulate(&g, &r, &[], &params) {
+        Err(Error::WallTimeLimit {
+            limit_s,
+            events,
+            time,
+            run,
+            end_time,
+            projected,
+        }) => {
+            assert_eq!((limit_s, run, end_time), (0.05, 1, 1e300));
+            assert!(events > 0 && time > 0.0);
+            assert!(projected > 1e290, "{projected}");
+        }
+        other => panic!("expected the wall-time limit, got {other:?}"),
+    }
+    assert!(start.elapsed().as_secs_f64() < 5.0);
+    let bad = SimParams {
+        max_wall_s: Some(0.0),
+        ..SimParams::new(1.0)
+    };
+    assert!(matches!(
+        simulate(&g, &r, &[], &bad),
+        Err(Error::InvalidValue { .. })
+    ));
+}
+
+#[test]
+fn the_observer_sees_progress_and_can_interrupt() {
+    let (g, r) = instantiate(&mm1k());
+    let params = SimParams::new(1e300);
+    let mut seen = Vec::new();
+    let result = petri::simulate_observed(&g, &r, &[], &params, &mut |p| {
+        seen.push(*p);
+        if seen.len() == 3 {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    });
+    match result {
+        Err(Error::Interrupted { events, run, .. }) => {
+            assert_eq!(events, 3 * petri::simulation::CHECK_EVERY);
+            assert_eq!(run, 1);
+        }
+        other => panic!("expected an interruption, got {other:?}"),
+    }
+    assert_eq!(seen.len(), 3);
+    assert!(
+        seen.windows(2)
+            .all(|w| w[0].time < w[1].time && w[0].events < w[1].events)
+    );
+    assert!(seen.iter().all(|p| (0.0..=1e-280).contains(&p.fraction())));
+    // A run that ends: same results as without an observer.
+    let params = SimParams {
+        seed: 4,
+        ..SimParams::new(2e5)
+    };
+    let mut calls = 0;
+    let observed = petri::simulate_observed(&g, &r, &[], &params, &mut |p| {
+        calls += 1;
+        assert!(p.fraction() > 0.0 && p.fraction() <= 1.0);
+        std::ops::ControlFlow::Continue(())
+    })
+    .unwrap();
+    assert_eq!(observed, simulate(&g, &r, &[], &params).unwrap());
+    assert!(
+        calls as u64 == observed.events / petri::simulation::CHECK_EVERY,
+        "{calls}"
+    );
+}
+
+#[test]
 fn the_event_cap_stops_the_run() {
     let (g, r) = instantiate(&mm1k());
     let params = SimParams {
@@ -630,6 +710,7 @@ proptest::proptest! {
         confidence in -0.5f64..1.5,
         seed in proptest::prelude::any::<u64>(),
         max_chain in 0u64..3,
+        max_wall_s in proptest::option::of(proptest::prelude::prop_oneof![-1.0f64..100.0, proptest::prelude::Just(f64::NAN)]),
     ) {
         let (g, r) = instantiate(&choice());
         let measures = [measure(&g, "#a + #c")];
@@ -642,6 +723,7 @@ proptest::proptest! {
             seed,
             max_events: 1_000_000,
             max_immediate_chain: max_chain,
+            max_wall_s,
         };
         if let Ok(res) = simulate(&g, &r, &measures, &params) {
             let tokens: f64 = res.places.iter().map(|e| e.mean).sum();

@@ -328,10 +328,31 @@ pub fn decode_image(bytes: &[u8]) -> std::result::Result<Pixels, String> {
     Ok(pixels)
 }
 
+/// Most pixels an image may have: 2^28 (268 M, e.g. 16,384 × 16,384 —
+/// 820 m square at 5 cm), the generators' largest grid too
+/// ([`crate::generators::MAX_CELLS`]); the real maps have 0.45 M
+/// (building_31) and 4.2 M (levine). Checked from the image's header,
+/// before its pixels are allocated: a header that claims more is refused
+/// with an error naming the limit.
+pub const MAX_PIXELS: usize = 1 << 28;
+
+fn check_size(width: usize, height: usize) -> std::result::Result<(), String> {
+    match width.checked_mul(height) {
+        Some(n) if n <= MAX_PIXELS => Ok(()),
+        _ => Err(format!(
+            "image of {width} × {height} pixels is too large: at most {MAX_PIXELS} pixels (2^28) are read"
+        )),
+    }
+}
+
 fn decode_png(bytes: &[u8]) -> std::result::Result<Pixels, String> {
     use image::DynamicImage as D;
-    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png)
-        .map_err(|e| format!("corrupt PNG image: {e}"))?;
+    use image::ImageDecoder as _;
+    let corrupt = |e: image::ImageError| format!("corrupt PNG image: {e}");
+    let decoder = image::codecs::png::PngDecoder::new(std::io::Cursor::new(bytes)).map_err(corrupt)?;
+    let (w, h) = decoder.dimensions();
+    check_size(w as usize, h as usize)?;
+    let img = D::from_decoder(decoder).map_err(corrupt)?;
     let (width, height) = (img.width() as usize, img.height() as usize);
     let hi = |v: &u16| (v >> 8) as u8;
     let (channels, has_alpha, data) = match img {
@@ -401,9 +422,8 @@ fn decode_pgm(bytes: &[u8]) -> std::result::Result<Pixels, String> {
             "unsupported PGM: 16-bit samples (maxval {maxval}); only 8-bit (maxval ≤ 255) is supported"
         ));
     }
-    let count = width
-        .checked_mul(height)
-        .ok_or("corrupt PGM header: size overflows")?;
+    check_size(width, height)?;
+    let count = width * height;
     let mut data = Vec::new();
     if ascii {
         for k in 0..count {
@@ -505,6 +525,7 @@ pub fn grid_from_pixels(yaml: &MapYaml, pixels: &Pixels) -> Result<(OccupancyGri
     if w == 0 || h == 0 {
         return Err(Error::Geometry(format!("empty image ({w} × {h} pixels)")));
     }
+    check_size(w, h).map_err(Error::Geometry)?;
     if !(1..=4).contains(&n) || pixels.data.len() != w * h * n {
         return Err(Error::Geometry(format!(
             "{} bytes of pixels for {w} × {h} pixels of {n} bytes",

@@ -374,3 +374,72 @@ fn corrupt_and_empty_images_are_refused() {
     let msg = message(load_with("empty_file", YAML, "map.pgm", b""));
     assert!(msg.contains("not a PNG or PGM image"), "{msg}");
 }
+
+/// CRC-32 of PNG chunks (ISO 3309), bit by bit: enough for a test.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 == 1 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// Issue 17: a header claiming a huge image is refused from the header,
+/// before the pixels are allocated (the limit is named).
+#[test]
+fn images_claiming_too_many_pixels_are_refused_before_allocating() {
+    let msg = message(load_with(
+        "huge_pgm",
+        YAML,
+        "map.pgm",
+        b"P5 100000 100000 255\n\0\0\0",
+    ));
+    assert!(
+        msg.contains("100000 × 100000 pixels is too large") && msg.contains("268435456"),
+        "{msg}"
+    );
+    let msg = message(load_with(
+        "overflow_pgm",
+        YAML,
+        "map.pgm",
+        b"P2 18446744073709551615 3 255\n1 2 3",
+    ));
+    assert!(msg.contains("too large"), "{msg}");
+    // A real 1 × 1 PNG whose IHDR is rewritten to 60000 × 60000 (CRC fixed).
+    let mut bytes = Vec::new();
+    image::DynamicImage::ImageLuma8(image::GrayImage::new(1, 1))
+        .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .unwrap();
+    assert_eq!(&bytes[12..16], b"IHDR");
+    bytes[16..20].copy_from_slice(&60_000u32.to_be_bytes());
+    bytes[20..24].copy_from_slice(&60_000u32.to_be_bytes());
+    let crc = crc32(&bytes[12..29]);
+    bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+    let msg = message(load_with(
+        "huge_png",
+        &YAML.replace("map.pgm", "map.png"),
+        "map.png",
+        &bytes,
+    ));
+    assert!(msg.contains("60000 × 60000 pixels is too large"), "{msg}");
+    // At the limit's scale a hand-made pixel buffer is refused too.
+    let yaml = map_server::parse_yaml(YAML, "map.yaml").unwrap();
+    let pixels = map_server::Pixels {
+        width: 1 << 15,
+        height: 1 << 14,
+        channels: 1,
+        has_alpha: false,
+        data: Vec::new(),
+    };
+    let err = map_server::grid_from_pixels(&yaml, &pixels)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("too large"), "{err}");
+}

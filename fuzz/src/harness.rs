@@ -1,0 +1,234 @@
+//! What each fuzz target does with its input: read it with the reader as a
+//! user's file would be read, then use what was read the way the commands
+//! do (write it back, instantiate, explore, solve, plan, learn, decide).
+//! Any outcome is fine — `Ok` or an error — except a panic, an abort
+//! (allocation failures included: libFuzzer's malloc limit catches
+//! them), a hang, or a non-finite number where the engine promises
+//! finite ones (issue 17), which these functions assert.
+//!
+//! Included by the fuzz crate (`fuzz/src/lib.rs`) and, on stable, by the
+//! regression test `crates/lab/tests/fuzz_regressions.rs`; uses only
+//! crates both have.
+
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+use petri::io::Format;
+use petri::{CompiledGspn, ExploreParams, Expr, Params, Properties, ReachabilityGraph, SolveParams};
+
+/// What a target does with one input.
+pub type Target = fn(&[u8]);
+
+/// Every target, by the name of its folder in `fuzz/regressions/` and of
+/// its binary in `fuzz/fuzz_targets/`.
+pub const TARGETS: &[(&str, Target)] = &[
+    ("pnpro", pnpro),
+    ("pnml", pnml),
+    ("toml_net", toml_net),
+    ("expr", expr),
+    ("map_yaml", map_yaml),
+    ("map_image", map_image),
+    ("scenario", scenario),
+    ("places", places),
+    ("mission_log", mission_log),
+    ("fpn_map", fpn_map),
+];
+
+/// Largest state space a fuzzed net is explored to: enough to reach the
+/// solver with vanishing loops and bottom components, fast per input.
+const MAX_STATES: usize = 400;
+
+/// A GreatSPN project file (`petri::io::read_str`, as `read_file` does).
+pub fn pnpro(data: &[u8]) {
+    net(data, Format::Pnpro);
+}
+
+/// A PNML file.
+pub fn pnml(data: &[u8]) {
+    net(data, Format::Pnml);
+}
+
+/// A net in petrinav's TOML format.
+pub fn toml_net(data: &[u8]) {
+    net(data, Format::Toml);
+}
+
+fn net(data: &[u8], format: Format) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(net) = petri::io::read_str(text, format, "fuzz") else {
+        return;
+    };
+    // What `gspn convert` and `gspn dot` do.
+    for f in [Format::Pnpro, Format::Pnml, Format::Toml] {
+        if let Ok(written) = petri::io::write_string(&net, f) {
+            let _ = petri::io::read_str(&written, f, "round trip");
+        }
+    }
+    let _ = petri::io::write_dot(&net);
+    // What `gspn info` and `gspn solve --default-rate 1` do, on a small
+    // state space.
+    let Ok(gspn) = net.instantiate(&Params::new()) else {
+        return;
+    };
+    let Ok(rates) = gspn.rates(&Params::new(), Some(1.0)) else {
+        return;
+    };
+    let Ok(rg) = ReachabilityGraph::explore(
+        &gspn,
+        &ExploreParams {
+            max_states: MAX_STATES,
+        },
+    ) else {
+        return;
+    };
+    let _ = Properties::of(&gspn, &rg);
+    let Ok(compiled) = CompiledGspn::from_graph(gspn, rg) else {
+        return;
+    };
+    if let Ok(sol) = compiled.solve_rates(&rates, &SolveParams::default()) {
+        let all = sol
+            .pi
+            .iter()
+            .chain(&sol.throughput)
+            .chain(&sol.mean_tokens)
+            .chain(&sol.prob_nonempty)
+            .chain(&sol.bottom_probabilities);
+        for &x in all.chain([&sol.info.residual, &sol.absorption_residual]) {
+            assert!(x.is_finite(), "a solution holds {x}");
+        }
+        let sum: f64 = sol.pi.iter().sum();
+        assert!(sol.pi.is_empty() || (sum - 1.0).abs() < 1e-6, "Σπ = {sum}");
+    }
+}
+
+/// An expression (rates, weights, markings, measures): parsed, printed and
+/// parsed again, compiled against a four-place net, evaluated.
+pub fn expr(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(e) = Expr::parse(text) else {
+        return;
+    };
+    let printed = e.to_string();
+    let again = Expr::parse(&printed);
+    assert!(
+        again.is_ok(),
+        "`{text}` printed as `{printed}`, which does not parse: {again:?}"
+    );
+    let places = ["P0", "P1", "P2", "P3"];
+    let lookup = |n: &str| match n {
+        "a" => Some(2.0),
+        "N" => Some(3.0),
+        _ => None,
+    };
+    let _ = e.eval_params(&lookup, "the fuzzed expression");
+    if let Ok(c) = e.compile(&|n| places.iter().position(|p| *p == n), &lookup) {
+        let mut stack = Vec::new();
+        for marking in [[0, 0, 0, 0], [1, 2, 3, 4], [u32::MAX, 0, 7, 1]] {
+            let _ = c.eval(&marking, &mut stack);
+        }
+    }
+}
+
+/// A map_server YAML file.
+pub fn map_yaml(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let _ = sim::map_server::parse_yaml(text, "fuzz.yaml");
+}
+
+/// A map image (PNG or PGM), turned into a grid as `map_server::load` does.
+pub fn map_image(data: &[u8]) {
+    static YAML: OnceLock<sim::map_server::MapYaml> = OnceLock::new();
+    let yaml = YAML.get_or_init(|| {
+        sim::map_server::parse_yaml(
+            "image: m.pgm\nresolution: 0.05\norigin: [-1.0, 2.0, 0.5]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+            "fuzz.yaml",
+        )
+        .expect("the fixed YAML parses")
+    });
+    let Ok(pixels) = sim::map_server::decode_image(data) else {
+        return;
+    };
+    if let Ok((grid, occupancy)) = sim::map_server::grid_from_pixels(yaml, &pixels) {
+        assert_eq!(occupancy.len(), grid.width() * grid.height());
+    }
+}
+
+/// A scenario file (`lab run my_scenario.toml`), with no folder to resolve
+/// a map file against.
+pub fn scenario(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let _ = lab::scenario::Scenario::parse(text, "fuzz.toml", None);
+}
+
+/// A places file (`name: [x, y, theta]`).
+pub fn places(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(places) = sim::places::Places::parse(text, "places.yaml") {
+        for p in places.iter() {
+            assert!(places.get(&p.name).is_some());
+        }
+    }
+}
+
+/// A tour guide's mission log (read from a file, as the log is), then the
+/// rates learnt from it and the supervisor's decision on them — which must
+/// be taken on finite numbers.
+pub fn mission_log(data: &[u8]) {
+    static SUPERVISOR: OnceLock<nav::supervisor::Supervisor> = OnceLock::new();
+    static PATH: OnceLock<PathBuf> = OnceLock::new();
+    let supervisor =
+        SUPERVISOR.get_or_init(|| nav::supervisor::Supervisor::new().expect("the shipped net compiles"));
+    let path = PATH.get_or_init(|| {
+        std::env::temp_dir().join(format!("petrinav-fuzz-mission-log-{}.jsonl", std::process::id()))
+    });
+    if std::fs::write(path, data).is_err() {
+        return;
+    }
+    let Ok(log) = nav::supervisor::log::MissionLog::read(path, supervisor.net_id()) else {
+        return;
+    };
+    let _ = log.missions();
+    let Ok(learned) = nav::supervisor::learning::learn_or_prior(log.entries()) else {
+        return;
+    };
+    if let Ok(d) = supervisor.decide(&learned.rates) {
+        for x in [d.f_auto, d.f_cont, d.u_auto, d.u_cont, d.p_loc_succ, d.p_loc_warn] {
+            assert!(x.is_finite(), "the decision {d:?} holds {x}");
+        }
+    }
+}
+
+/// A topological map file (fuzzy Petri net, JSON): read, written back and
+/// read again, exported, and a route planned in both modes from the first
+/// place to the last.
+pub fn fpn_map(data: &[u8]) {
+    use nav::topo::{FuzzyPetriNet, PlaceId, PlanMode};
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(net) = FuzzyPetriNet::from_json(text) else {
+        return;
+    };
+    let written = net.to_json();
+    let again = FuzzyPetriNet::from_json(&written);
+    assert!(again.is_ok(), "a map written back does not read: {again:?}");
+    let _ = nav::topo::to_dot(&net, None);
+    if net.num_places() > 0 {
+        let last = PlaceId(net.num_places() as u32 - 1);
+        for mode in [PlanMode::Optimal, PlanMode::Paper] {
+            if let Ok(plan) = nav::topo::plan(&net, PlaceId(0), &[last], mode) {
+                let _ = nav::topo::to_dot(&net, Some(&plan));
+            }
+        }
+    }
+}
