@@ -1,6 +1,6 @@
 //! Byte encodings shared by the run viewer and the MCAP export: base64
-//! (RFC 4648, with padding) and an occupancy grid as a grey PNG, one pixel
-//! per cell.
+//! (RFC 4648, with padding; the simulator's) and an occupancy grid as a
+//! grey PNG, one pixel per cell.
 
 use anyhow::{Context, Result};
 use sim::{Cell, OccupancyGrid};
@@ -12,23 +12,9 @@ pub const OCCUPIED_GREY: u8 = 0;
 /// Grey level of an unknown cell in [`grid_png`].
 pub const UNKNOWN_GREY: u8 = 205;
 
-/// Base64 with the standard alphabet and `=` padding (RFC 4648 §4).
-pub fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ALPHABET[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
+/// Base64 with the standard alphabet and `=` padding (RFC 4648 §4): the
+/// simulator's, which its SVG pictures embed PNGs with.
+pub use sim::render::base64;
 
 /// The grid's cells as grey levels, row `j = 0` (the map's bottom, next to
 /// its origin) first: free [`FREE_GREY`], occupied [`OCCUPIED_GREY`],
@@ -73,21 +59,6 @@ pub fn grid_png(grid: &OccupancyGrid) -> Result<Vec<u8>> {
 mod tests {
     use super::*;
     use sim::CellIndex;
-
-    #[test]
-    fn base64_matches_the_rfc_examples() {
-        for (plain, coded) in [
-            ("", ""),
-            ("f", "Zg=="),
-            ("fo", "Zm8="),
-            ("foo", "Zm9v"),
-            ("foob", "Zm9vYg=="),
-            ("fooba", "Zm9vYmE="),
-            ("foobar", "Zm9vYmFy"),
-        ] {
-            assert_eq!(base64(plain.as_bytes()), coded);
-        }
-    }
 
     #[test]
     fn the_png_is_the_grid_upside_down() {

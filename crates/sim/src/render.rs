@@ -686,7 +686,9 @@ fn grid_png(g: &OccupancyGrid) -> Result<Vec<u8>> {
     encode_png(&data, w as u32, h as u32, image::ExtendedColorType::L8)
 }
 
-fn base64(bytes: &[u8]) -> String {
+/// Base64 with the standard alphabet and `=` padding (RFC 4648 §4), as
+/// data URIs want it.
+pub fn base64(bytes: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {
