@@ -161,6 +161,12 @@ fn the_viewer_loads_without_errors_and_the_slider_moves_the_robot() {
     assert_eq!(at0.get("data-errors").map(String::as_str), Some("0"), "{errors0}");
     assert_eq!(at0.get("data-ready").map(String::as_str), Some("1"), "{at0:?}");
     assert_eq!(number(&at0, "data-tick"), 0.0);
+    // One run on the page: `lab replay --html` shows the run asked for.
+    assert_eq!(number(&at0, "data-runs"), 1.0);
+    assert_eq!(
+        at0.get("data-run-key").map(String::as_str),
+        Some("e4/field12#0")
+    );
     let (at20, errors20) = page_state(&profile, &url(&html, "t=20"), 2000);
     assert_eq!(
         at20.get("data-errors").map(String::as_str),
@@ -252,7 +258,7 @@ fn a_script_error_is_reported_in_the_page() {
     let dir = fresh("broken");
     let html = voting_page(&dir);
     let text = std::fs::read_to_string(&html).unwrap();
-    let (good, bad) = ("const T = D.ticks;", "const T = D.no_such_thing.ticks;");
+    let (good, bad) = ("T = D.ticks;", "T = D.no_such_thing.ticks;");
     assert!(text.contains(good));
     let broken = dir.join("broken.html");
     std::fs::write(&broken, text.replacen(good, bad, 1)).unwrap();
