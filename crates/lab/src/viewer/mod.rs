@@ -22,19 +22,26 @@
 //! Nothing here knows a controller: what a controller wants shown it puts
 //! in its trace notes ([`robot::Notes`]: behaviour, values, events).
 //!
-//! The page's state is readable from the DOM (`<body data-ready
-//! data-tick data-time data-robot-x data-robot-y data-robot-page-x
-//! data-robot-page-y>`), script errors are listed in `#errors` and counted
-//! in `<html data-errors>`, and the URL hash sets the time (`#t=40`,
-//! `#tick=400`, `&play=1`, `&speed=5`), so a headless browser can check a
-//! page (`crates/cli/tests/viewer_browser.rs`).
+//! The page's state is readable from the DOM (`<body data-ready data-runs
+//! data-run data-run-key data-tick data-time data-robot-x data-robot-y
+//! data-robot-page-x data-robot-page-y>`), script errors are listed in
+//! `#errors` and counted in `<html data-errors>`, and the URL hash sets the
+//! run and the time (`#run=3`, `#t=40`, `#tick=400`, `&play=1`,
+//! `&speed=5`), so a headless browser can check a page
+//! (`crates/cli/tests/viewer_browser.rs`). The runs are listed in the HTML
+//! too: one `<script class="run-data" data-run="K" data-key="SCENARIO#I">`
+//! each.
 //!
-//! Size: the ticks are columns of rounded numbers ([`data`]), embedded as
+//! Size: what the runs share (the suite, the distinct maps, the view, the
+//! markers, the behaviours' labels: [`data::PageData`]) is written once;
+//! each run's ticks are columns of rounded numbers ([`data::RunData`]) in a
+//! block of its own, inflated when the run is first shown. Every block is
 //! zlib-compressed JSON in base64 (a fifth of the JSON's size; the page
 //! inflates it with the browser's `DecompressionStream`, in every current
-//! browser since 2023). A voting run of 37.5 s takes 49 kB (22 kB of
-//! them the script and style); a 300 s museum mission with a 181-beam
-//! laser among 25 visitors 1.2 MB.
+//! browser since 2023). A voting run of 37.5 s takes 52 kB (22 kB of
+//! them the script and style), the 8 pictured runs of its scenario
+//! (`e4/field12`) 270 kB; a 300 s museum mission with a 181-beam laser
+//! among 25 visitors 1.2 MB.
 
 pub mod data;
 
