@@ -256,6 +256,81 @@ fn a_replay_explains_an_unknown_run_another_suites_folder_and_an_unwritable_outp
     assert!(std::fs::read_to_string(&html).unwrap().contains("e4/field12#0"));
 }
 
+/// The value of `name="…"` in `tag` (an opening tag's text).
+fn attr<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+    let open = format!(" {name}=\"");
+    let start = tag.find(&open)? + open.len();
+    Some(&tag[start..start + tag[start..].find('"')?])
+}
+
+/// The run blocks of a viewer page: (`data-run`, `data-key`, the block's
+/// text), in the page's order.
+fn run_blocks(page: &str) -> Vec<(String, String, String)> {
+    page.split("<script ")
+        .skip(1)
+        .filter(|s| s.starts_with("type=\"application/octet-stream\" class=\"run-data\""))
+        .map(|s| {
+            let (tag, rest) = s.split_once('>').unwrap();
+            (
+                attr(tag, "data-run").unwrap().to_string(),
+                attr(tag, "data-key").unwrap().to_string(),
+                rest[..rest.find("</script>").unwrap()].to_string(),
+            )
+        })
+        .collect()
+}
+
+/// A viewer page's block (zlib-compressed JSON in base64) as JSON.
+fn inflate(block: &str) -> serde_json::Value {
+    use std::io::Read as _;
+    let digit = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        b'/' => 63,
+        _ => panic!("not base64: {c}"),
+    };
+    let digits: Vec<u8> = block.trim().bytes().filter(|&c| c != b'=').map(digit).collect();
+    let mut bytes = Vec::new();
+    for chunk in digits.chunks(4) {
+        let n = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |n, (i, &d)| n | u32::from(d) << (18 - 6 * i));
+        bytes.extend_from_slice(&n.to_be_bytes()[1..chunk.len()]);
+    }
+    let mut json = String::new();
+    flate2::read::ZlibDecoder::new(&bytes[..])
+        .read_to_string(&mut json)
+        .expect("a zlib stream");
+    serde_json::from_str(&json).expect("JSON")
+}
+
+/// The `k`th run of a viewer page as the page shows it: its data with its
+/// map and its behaviours' labels in place of their indices into what the
+/// page's runs share.
+fn shown_run(page: &str, k: usize) -> serde_json::Value {
+    let shared_start = page.find("id=\"page-data\"").expect("page data");
+    let shared = &page[shared_start..];
+    let shared = &shared[shared.find('>').unwrap() + 1..shared.find("</script>").unwrap()];
+    let shared = inflate(shared);
+    let mut run = inflate(&run_blocks(page)[k].2);
+    let map = run["map"].as_u64().unwrap() as usize;
+    run["map"] = shared["maps"][map].clone();
+    let labels: Vec<serde_json::Value> = run["ticks"]["behaviour"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| match b.as_i64().unwrap() {
+            -1 => serde_json::Value::Null,
+            b => shared["behaviours"][b as usize].clone(),
+        })
+        .collect();
+    run["ticks"]["behaviour"] = labels.into();
+    run
+}
+
 #[test]
 fn the_report_links_each_pictured_run_to_its_viewer_page() {
     let dir = fresh("report_viewer");
@@ -264,7 +339,7 @@ fn the_report_links_each_pictured_run_to_its_viewer_page() {
         "run",
         "voting",
         "--runs",
-        "1",
+        "3",
         "--jobs",
         "2",
         "--out",
@@ -272,34 +347,70 @@ fn the_report_links_each_pictured_run_to_its_viewer_page() {
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let index = std::fs::read_to_string(dir.join("index.html")).unwrap();
-    let links: Vec<&str> = index
-        .split("<a href=\"")
-        .skip(1)
-        .filter_map(|s| s.split('"').next())
-        .filter(|href| href.starts_with("viewer/"))
-        .collect();
-    // One figure per scenario, its run drawn and linked.
-    assert_eq!(links.len(), 5 * 14, "{links:?}");
-    assert!(links.contains(&"viewer/e4-field12-0.html"));
-    for href in &links {
-        let page = std::fs::read_to_string(dir.join(href)).unwrap();
-        assert!(page.contains("id=\"run-data\""), "{href}");
+    let mut links = 0;
+    for figure in index.split("<figure>").skip(1) {
+        let figure = &figure[..figure.find("</figure>").unwrap()];
+        let scenario = attr(figure, "alt").unwrap();
+        let hrefs: Vec<&str> = figure
+            .split("<a ")
+            .skip(1)
+            .filter_map(|a| a.strip_prefix("href=\"")?.split('"').next())
+            .collect();
+        // The picture opens its page at the first run; the caption links
+        // each of the three runs it draws.
+        let page_href = format!("viewer/{}.html", scenario.replace('/', "-"));
+        let runs: Vec<String> = (0..3).map(|k| format!("{page_href}#run={k}")).collect();
+        assert_eq!(hrefs[0], runs[0], "{figure}");
+        assert_eq!(&hrefs[1..], &runs[..], "{figure}");
+        let page = std::fs::read_to_string(dir.join(&page_href)).unwrap();
+        let blocks = run_blocks(&page);
+        for (k, href) in runs.iter().enumerate() {
+            let (_, fragment) = href.split_once('#').unwrap();
+            let run = fragment.strip_prefix("run=").unwrap();
+            let block = blocks.iter().find(|b| b.0 == run);
+            assert_eq!(
+                block.map(|b| b.1.as_str()),
+                Some(format!("{scenario}#{k}").as_str()),
+                "{href}: no run {scenario}#{k} at data-run={run}"
+            );
+            links += 1;
+        }
+        assert_eq!(blocks.len(), 3, "{page_href}");
     }
-    // The report's page is the one `lab replay --html` writes.
-    let replayed = dir.join("replayed.html");
-    let out = petrinav(&[
-        "lab",
-        "replay",
-        dir.to_str().unwrap(),
-        "e4/field12#0",
-        "--html",
-        replayed.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(
-        std::fs::read(&replayed).unwrap() == std::fs::read(dir.join("viewer/e4-field12-0.html")).unwrap(),
-        "the report's viewer page and the replayed one differ"
-    );
+    assert_eq!(links, 5 * 14 * 3);
+    // Each run on the report's page is the one `lab replay --html` writes
+    // (the first byte for byte; the others' behaviours and maps are
+    // numbered among the page's).
+    let report_page = std::fs::read_to_string(dir.join("viewer/e4-field12.html")).unwrap();
+    let report_blocks = run_blocks(&report_page);
+    assert_eq!(report_blocks.len(), 3);
+    for (k, (_, _, report_block)) in report_blocks.iter().enumerate() {
+        let key = format!("e4/field12#{k}");
+        let replayed = dir.join(format!("replayed{k}.html"));
+        let out = petrinav(&[
+            "lab",
+            "replay",
+            dir.to_str().unwrap(),
+            &key,
+            "--html",
+            replayed.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let replayed = std::fs::read_to_string(&replayed).unwrap();
+        let single = run_blocks(&replayed);
+        assert_eq!(single.len(), 1);
+        assert_eq!((single[0].0.as_str(), single[0].1.as_str()), ("0", key.as_str()));
+        if k == 0 {
+            assert!(
+                single[0].2 == *report_block,
+                "the report's page and the replayed one differ on {key}"
+            );
+        }
+        assert!(
+            shown_run(&replayed, 0) == shown_run(&report_page, k),
+            "the report's page and the replayed one show {key} differently"
+        );
+    }
 }
 
 #[test]

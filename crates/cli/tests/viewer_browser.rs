@@ -148,6 +148,35 @@ fn voting_page(dir: &Path) -> PathBuf {
     html
 }
 
+/// A voting batch of three runs per scenario with its report, and the
+/// viewer page of `e4/field12`'s three pictured runs in it.
+fn voting_runs_page(dir: &Path) -> PathBuf {
+    let results = dir.join("voting");
+    let out = petrinav(&[
+        "lab",
+        "run",
+        "voting",
+        "--runs",
+        "3",
+        "--out",
+        results.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    results.join("viewer/e4-field12.html")
+}
+
+/// A copy of the page at `html` that runs `script` once the viewer is
+/// ready (the DOM says so), to act as a user would.
+fn with_script(html: &Path, script: &str, name: &str) -> PathBuf {
+    let text = std::fs::read_to_string(html).unwrap();
+    let act = format!(
+        "<script>(function wait(){{if(document.body.dataset.ready!==\"1\")return setTimeout(wait,50);{script}}})();</script>\n</body>"
+    );
+    let out = html.with_file_name(name);
+    std::fs::write(&out, text.replacen("</body>", &act, 1)).unwrap();
+    out
+}
+
 fn url(path: &Path, hash: &str) -> String {
     format!("file://{}#{hash}", path.canonicalize().unwrap().display())
 }
@@ -161,6 +190,9 @@ fn the_viewer_loads_without_errors_and_the_slider_moves_the_robot() {
     assert_eq!(at0.get("data-errors").map(String::as_str), Some("0"), "{errors0}");
     assert_eq!(at0.get("data-ready").map(String::as_str), Some("1"), "{at0:?}");
     assert_eq!(number(&at0, "data-tick"), 0.0);
+    // One run on the page: `lab replay --html` shows the run asked for.
+    assert_eq!(number(&at0, "data-runs"), 1.0);
+    assert_eq!(at0.get("data-run-key").map(String::as_str), Some("e4/field12#0"));
     let (at20, errors20) = page_state(&profile, &url(&html, "t=20"), 2000);
     assert_eq!(
         at20.get("data-errors").map(String::as_str),
@@ -252,7 +284,7 @@ fn a_script_error_is_reported_in_the_page() {
     let dir = fresh("broken");
     let html = voting_page(&dir);
     let text = std::fs::read_to_string(&html).unwrap();
-    let (good, bad) = ("const T = D.ticks;", "const T = D.no_such_thing.ticks;");
+    let (good, bad) = ("T = D.ticks;", "T = D.no_such_thing.ticks;");
     assert!(text.contains(good));
     let broken = dir.join("broken.html");
     std::fs::write(&broken, text.replacen(good, bad, 1)).unwrap();
@@ -261,4 +293,113 @@ fn a_script_error_is_reported_in_the_page() {
     assert!(n >= 1, "no error reported: {state:?}");
     assert!(errors.contains("<li>the viewer failed: "), "{errors}");
     assert_ne!(state.get("data-ready").map(String::as_str), Some("1"));
+}
+
+#[test]
+fn a_page_of_several_runs_draws_the_run_its_url_names() {
+    let dir = fresh("runs");
+    let html = voting_runs_page(&dir);
+    let profile = dir.join("profile");
+    // Every run at its end: the whole trajectory drawn.
+    let shots: Vec<(image::RgbImage, BTreeMap<String, String>)> = (0..3)
+        .map(|k| {
+            let hash = format!("run={k}&tick=100000");
+            let png = dir.join(format!("run{k}.png"));
+            headless(
+                &profile,
+                &url(&html, &hash),
+                2000,
+                &[format!("--screenshot={}", png.display())],
+            );
+            let (state, errors) = page_state(&profile, &url(&html, &hash), 2000);
+            assert_eq!(
+                state.get("data-errors").map(String::as_str),
+                Some("0"),
+                "{errors}"
+            );
+            assert_eq!(
+                state.get("data-ready").map(String::as_str),
+                Some("1"),
+                "{state:?}"
+            );
+            (image::open(&png).expect("a screenshot").to_rgb8(), state)
+        })
+        .collect();
+    for (k, (_, state)) in shots.iter().enumerate() {
+        assert_eq!(number(state, "data-runs"), 3.0);
+        assert_eq!(number(state, "data-run"), k as f64);
+        assert_eq!(
+            state.get("data-run-key").map(String::as_str),
+            Some(format!("e4/field12#{k}").as_str())
+        );
+        assert!(number(state, "data-tick") > 100.0, "{state:?}");
+    }
+    // The runs' trajectories differ on the map (the canvas: left of the
+    // panel, under the header).
+    for k in 1..3 {
+        let (a, b) = (&shots[0].0, &shots[k].0);
+        let mut differ = 0;
+        for y in 70..640 {
+            for x in 15..810 {
+                if a.get_pixel(x, y) != b.get_pixel(x, y) {
+                    differ += 1;
+                }
+            }
+        }
+        assert!(differ > 300, "run {k} is drawn as run 0 ({differ} pixels differ)");
+    }
+}
+
+#[test]
+fn another_run_chosen_by_its_hash_or_the_selector_starts_at_its_first_tick() {
+    let dir = fresh("switch");
+    let html = voting_runs_page(&dir);
+    let profile = dir.join("profile");
+    // The URL's hash changes on the open page.
+    let by_hash = with_script(&html, "location.hash=\"run=2\";", "by_hash.html");
+    let (state, errors) = page_state(&profile, &url(&by_hash, "run=1&t=20"), 3000);
+    assert_eq!(
+        state.get("data-errors").map(String::as_str),
+        Some("0"),
+        "{errors}"
+    );
+    assert_eq!(
+        state.get("data-run-key").map(String::as_str),
+        Some("e4/field12#2"),
+        "{state:?}"
+    );
+    assert_eq!(
+        number(&state, "data-tick"),
+        0.0,
+        "the slider was not reset: {state:?}"
+    );
+    // The selector.
+    let by_select = with_script(
+        &html,
+        "var s=document.getElementById(\"run\");s.value=\"1\";s.dispatchEvent(new Event(\"change\"));",
+        "by_select.html",
+    );
+    let (state, errors) = page_state(&profile, &url(&by_select, "run=0&t=20"), 3000);
+    assert_eq!(
+        state.get("data-errors").map(String::as_str),
+        Some("0"),
+        "{errors}"
+    );
+    assert_eq!(
+        state.get("data-run-key").map(String::as_str),
+        Some("e4/field12#1"),
+        "{state:?}"
+    );
+    assert_eq!(
+        number(&state, "data-tick"),
+        0.0,
+        "the slider was not reset: {state:?}"
+    );
+    // Without a switch the page stays where its URL put it.
+    let (state, _) = page_state(&profile, &url(&html, "run=1&t=20"), 3000);
+    assert_eq!(
+        state.get("data-run-key").map(String::as_str),
+        Some("e4/field12#1")
+    );
+    assert_eq!(number(&state, "data-tick"), 200.0, "{state:?}");
 }

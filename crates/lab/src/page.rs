@@ -1,7 +1,8 @@
 //! The report page as a list of blocks, written twice: as Markdown
 //! (`tables.md`) and as an HTML page that opens offline (`index.html`: no
 //! script, no network, pictures as relative links, and under a picture the
-//! links to the run viewer's pages of the runs it draws).
+//! links to the run viewer's pages of the runs it draws; the picture itself
+//! opens the first).
 
 use std::fmt::Write as _;
 
@@ -13,7 +14,9 @@ pub struct Figure {
     /// Path relative to the report folder (e.g. `pictures/e1-field01.png`).
     pub src: String,
     /// The runs it draws, each linked to its viewer page
-    /// ([`crate::suite::ReportContext::viewer_page`]).
+    /// ([`crate::suite::ReportContext::viewer_page`]; a scenario's runs are
+    /// on one page, [`crate::suite::ReportContext::viewer_runs_page`], each
+    /// at its `#run=K`). The picture links the first.
     pub runs: Vec<RunLink>,
 }
 
@@ -203,10 +206,14 @@ impl Page {
                                 .collect();
                             format!("<br><span class=\"runs\">viewer:{}</span>", links.join(""))
                         };
+                        // The picture opens its first run's viewer page, if it
+                        // has one, else the picture itself.
+                        let target = f.runs.first().map_or(&f.src, |r| &r.href);
                         let _ = writeln!(
                             html,
-                            "<figure{class}><a href=\"{src}\"><img src=\"{src}\" alt=\"{0}\"></a><figcaption>{0}{runs}</figcaption></figure>",
+                            "<figure{class}><a href=\"{target}\"><img src=\"{src}\" alt=\"{0}\"></a><figcaption>{0}{runs}</figcaption></figure>",
                             html_escape(&f.title),
+                            target = html_escape(target),
                             src = html_escape(&f.src),
                         );
                     }
@@ -255,7 +262,7 @@ mod tests {
         assert!(html.contains("<h1>demo &lt;1&gt;</h1>"));
         assert!(html.contains("<tr><td>x</td><td>1.00</td></tr>"));
         assert!(html.contains("<p>Because a &lt; b and so on.</p>"));
-        assert!(html.contains("<img src=\"pictures/x.png\" alt=\"x\">"));
+        assert!(html.contains("<a href=\"viewer/x-0.html\"><img src=\"pictures/x.png\" alt=\"x\"></a>"));
         assert!(html.contains(
             "<figcaption>x<br><span class=\"runs\">viewer:<a href=\"viewer/x-0.html\">#0</a></span>"
         ));

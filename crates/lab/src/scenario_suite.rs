@@ -6,14 +6,16 @@
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
+use rayon::prelude::*;
 use sim::TraceParams;
 
 use crate::experiment::{Prepared, RunOutput, RunSeeds};
-use crate::page::{Block, Figure};
+use crate::page::{Block, Figure, RunLink};
 use crate::pictures::{self, EventMarker, Replay};
 use crate::record::RunRecord;
 use crate::runner::{self, Campaign, Job};
 use crate::suite::{ReportContext, Suite, SuiteInfo, SuiteReport};
+use crate::viewer::PageRun;
 
 /// The name from which every run's simulator seed is derived
 /// ([`ScenarioSuite::seeds`]).
@@ -21,12 +23,6 @@ const NOISE_STREAM: &str = "simulator noise";
 
 /// Runs drawn per scenario picture.
 pub const RUNS_PER_PICTURE: u32 = 8;
-
-/// Of the runs of a scenario picture, how many get a viewer page in the
-/// report (the first ones; `lab replay DIR RUN --html` makes any other's).
-/// A voting run's page is about 65 kB: the first run of each of the 70
-/// scenarios adds 4.5 MB to the report's 4.4 MB, all eight would add 65 MB.
-pub const VIEWER_RUNS_PER_PICTURE: u32 = 1;
 
 /// What a scenario suite adds to the generic machinery.
 #[derive(Clone, Copy)]
@@ -148,11 +144,49 @@ impl ScenarioSuite {
         self.record(&prep.run_detailed(self.seeds(run), TraceParams::default())?)
     }
 
+    /// The picture of `prep`'s first runs and their viewer page: the figure,
+    /// and the files written.
+    fn scenario_figure(
+        &self,
+        ctx: &ReportContext<'_>,
+        prep: &Prepared,
+    ) -> Result<(Figure, Vec<std::path::PathBuf>)> {
+        let name = &prep.scenario().name;
+        let (path, src) = ctx.picture_path(&format!("{}.png", name.replace('/', "-")))?;
+        // Every run with everything the viewer shows: the picture's page
+        // holds them all.
+        let replays = (0..RUNS_PER_PICTURE.min(self.info.runs))
+            .map(|run| self.replay_run(prep, run, TraceParams::full()))
+            .collect::<Result<Vec<_>>>()?;
+        pictures::overlay_picture(&replays, self.hooks.markers, &path)?;
+        let keys: Vec<String> = (0..replays.len()).map(|run| format!("{name}#{run}")).collect();
+        let page_runs: Vec<PageRun<'_>> = replays
+            .iter()
+            .zip(&keys)
+            .map(|(replay, key)| PageRun { replay, key })
+            .collect();
+        let (page, href) = ctx.viewer_runs_page(&page_runs, self.hooks.markers, name)?;
+        let runs = (0..replays.len())
+            .map(|run| RunLink {
+                label: format!("#{run}"),
+                href: format!("{href}#run={run}"),
+            })
+            .collect();
+        Ok((
+            Figure {
+                title: name.clone(),
+                src,
+                runs,
+            },
+            vec![path, page],
+        ))
+    }
+
     /// The pictures block of a report: the first [`RUNS_PER_PICTURE`] runs
     /// of every scenario drawn over each other (re-simulated), with the
-    /// suite's event markers, and the viewer pages of the first
-    /// [`VIEWER_RUNS_PER_PICTURE`] linked under each; `None` when the report
-    /// is asked without pictures.
+    /// suite's event markers, and under each the links to its runs on one
+    /// viewer page (`viewer/SCENARIO.html#run=K`); `None` when the report is
+    /// asked without pictures.
     pub fn pictures(
         &self,
         ctx: &ReportContext<'_>,
@@ -162,37 +196,17 @@ impl ScenarioSuite {
         if !ctx.pictures {
             return Ok(None);
         }
+        // A scenario at a time on every core (the replays dominate); the
+        // figures in the suite's order whatever the thread count.
+        let drawn = self
+            .scenarios
+            .par_iter()
+            .map(|prep| self.scenario_figure(ctx, prep))
+            .collect::<Result<Vec<_>>>()?;
         let mut figures = Vec::new();
-        for prep in &self.scenarios {
-            let name = &prep.scenario().name;
-            let (path, src) = ctx.picture_path(&format!("{}.png", name.replace('/', "-")))?;
-            // The first run with everything the viewer shows, the others
-            // with their poses only.
-            let replays = (0..RUNS_PER_PICTURE.min(self.info.runs))
-                .map(|run| {
-                    let trace = if run < VIEWER_RUNS_PER_PICTURE {
-                        TraceParams::full()
-                    } else {
-                        TraceParams::poses()
-                    };
-                    self.replay_run(prep, run, trace)
-                })
-                .collect::<Result<Vec<_>>>()?;
-            pictures::overlay_picture(&replays, self.hooks.markers, &path)?;
-            files.push(path);
-            let mut runs = Vec::new();
-            for (run, replay) in replays.iter().enumerate().take(VIEWER_RUNS_PER_PICTURE as usize) {
-                let key = format!("{name}#{run}");
-                let (page, link) =
-                    ctx.viewer_page(replay, self.hooks.markers, &key, &format!("run {run}"))?;
-                files.push(page);
-                runs.push(link);
-            }
-            figures.push(Figure {
-                title: name.clone(),
-                src,
-                runs,
-            });
+        for (figure, written) in drawn {
+            figures.push(figure);
+            files.extend(written);
         }
         Ok(Some(Block::Figures {
             heading: "Trajectories".into(),

@@ -19,6 +19,7 @@ use crate::pictures::{EventMarker, Replay};
 use crate::record::{self, RunRecord, Runs};
 use crate::runner::{self, BatchParams, BatchSummary, Campaign, Job, Shard};
 use crate::summary::Summary;
+use crate::viewer::PageRun;
 
 /// What a results folder says about the suite that produced it
 /// (`suite.json`), so that a report can be recomputed, a batch resumed or
@@ -129,18 +130,32 @@ impl ReportContext<'_> {
         key: &str,
         label: &str,
     ) -> Result<(PathBuf, RunLink)> {
-        let dir = self.dir.join("viewer");
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        let file = format!("{}.html", key.replace(['/', '#'], "-"));
-        let path = dir.join(&file);
-        crate::viewer::write_page(replay, markers, &self.info.name, key, &path)?;
+        let (path, href) = self.viewer_runs_page(&[PageRun { replay, key }], markers, key)?;
         Ok((
             path,
             RunLink {
                 label: label.to_string(),
-                href: format!("viewer/{file}"),
+                href,
             },
         ))
+    }
+
+    /// Writes the viewer page of the runs a picture draws (`viewer/` in the
+    /// results folder, named after `title`: a scenario's name) and returns
+    /// the path written and the page's link (`#run=K` on it opens the
+    /// run of index K in `runs`).
+    pub fn viewer_runs_page(
+        &self,
+        runs: &[PageRun<'_>],
+        markers: &[EventMarker],
+        title: &str,
+    ) -> Result<(PathBuf, String)> {
+        let dir = self.dir.join("viewer");
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let file = format!("{}.html", title.replace(['/', '#'], "-"));
+        let path = dir.join(&file);
+        crate::viewer::write_runs_page(runs, markers, &self.info.name, title, &path)?;
+        Ok((path, format!("viewer/{file}")))
     }
 }
 

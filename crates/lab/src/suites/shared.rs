@@ -65,6 +65,6 @@ pub const ACTIVITY_MARKERS: [EventMarker; 3] = [
 /// What the trajectory pictures of these suites show.
 pub fn pictures_caption() -> String {
     format!(
-        "The first {RUNS_PER_PICTURE} runs of each scenario, re-simulated from their seeds, coloured by the action or behaviour in control (legend in each picture); start green, goal red, detected dead-locks as magenta rings at the centroid of their `CP2, CP3, CP2` chunk. `petrinav lab replay` draws a single run with its whole activity trace: `CP2` orange squares, `CP3` purple."
+        "The first {RUNS_PER_PICTURE} runs of each scenario, re-simulated from their seeds, coloured by the action or behaviour in control (legend in each picture); start green, goal red, detected dead-locks as magenta rings at the centroid of their `CP2, CP3, CP2` chunk. `petrinav lab replay` draws a single run with its whole activity trace: `CP2` orange squares, `CP3` purple. A picture opens the run viewer, which holds the runs it draws; `#0`, `#1` … under it open each run."
     )
 }

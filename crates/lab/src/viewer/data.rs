@@ -1,6 +1,7 @@
-//! What a viewer page embeds: a replayed run as compact JSON, column by
-//! column (one array per quantity, one entry per tick), numbers rounded to
-//! what a screen shows.
+//! What a viewer page embeds: what its runs share ([`PageData`]: maps,
+//! view, markers, behaviours, the list of runs) and each replayed run
+//! ([`RunData`]) as compact JSON, column by column (one array per quantity,
+//! one entry per tick), numbers rounded to what a screen shows.
 //!
 //! Rounding: positions to the millimetre, angles to the milliradian, times
 //! to the millisecond, speeds to the mm/s, the controller's values and
@@ -70,7 +71,7 @@ fn pose(p: Pose) -> [f64; 3] {
 }
 
 /// The map: the grid as a PNG data URI and where it lies.
-#[derive(Debug, Serialize)]
+#[derive(Debug, PartialEq, Serialize)]
 pub struct MapData {
     /// `data:image/png;base64,…`, one pixel per cell, top row the map's last.
     pub png: String,
@@ -197,7 +198,7 @@ pub struct Ticks {
     pub wheels: Vec<[f64; 2]>,
     /// What the controller answered: `run`, `done`, `give_up`.
     pub step: Vec<&'static str>,
-    /// Index into [`RunData::behaviours`], `-1` for none.
+    /// Index into [`PageData::behaviours`], `-1` for none.
     pub behaviour: Vec<i32>,
     /// 1 when the footprint touched something during the tick.
     pub contact: Vec<u8>,
@@ -248,33 +249,62 @@ pub struct MarkerStyle {
     pub shape: &'static str,
 }
 
-/// Everything a viewer page shows.
+/// What the runs of a page share: the suite, the maps, the area shown
+/// and how events are drawn.
 #[derive(Debug, Serialize)]
-pub struct RunData {
+pub struct PageData {
     /// The suite's name.
     pub suite: String,
+    /// What the page shows (a run's key, or a scenario's name when it
+    /// shows several of its runs).
+    pub title: String,
+    /// The distinct maps of the runs (a run names its own by index: runs
+    /// of a scenario differ when its world varies per run).
+    pub maps: Vec<MapData>,
+    /// The area to show first `[xmin, ymin, xmax, ymax]`, metres: every
+    /// map and every run's poses, a margin of a robot radius.
+    pub view: [f64; 4],
+    /// People's radius, metres.
+    pub person_radius_m: f64,
+    /// How the suite draws its event kinds.
+    pub markers: BTreeMap<String, MarkerStyle>,
+    /// Labels of the behaviour in control, in order of first appearance
+    /// over the runs (so that a behaviour keeps its colour from run to
+    /// run).
+    pub behaviours: Vec<&'static str>,
+    /// The runs, in the page's order (its `#run=K`).
+    pub runs: Vec<RunEntry>,
+}
+
+/// A run as the page's run selector lists it (its ticks are elsewhere:
+/// [`RunData`]).
+#[derive(Debug, Serialize)]
+pub struct RunEntry {
+    /// The run's key (`SCENARIO#INDEX`).
+    pub key: String,
+    /// One line: outcome, time, path.
+    pub summary: String,
+}
+
+/// Everything a viewer page shows of one run.
+#[derive(Debug, Serialize)]
+pub struct RunData {
     /// The run's key (`SCENARIO#INDEX`).
     pub key: String,
     /// One line: outcome, time, path.
     pub summary: String,
     /// The record's numbers (outcome first, then measures and metrics).
     pub record: Vec<(String, serde_json::Value)>,
-    /// The map.
-    pub map: MapData,
-    /// The area to show first `[xmin, ymin, xmax, ymax]`, metres.
-    pub view: [f64; 4],
+    /// Index into [`PageData::maps`].
+    pub map: usize,
     /// Robot footprint radius, metres.
     pub robot_radius_m: f64,
-    /// People's radius, metres.
-    pub person_radius_m: f64,
     /// Control period, seconds.
     pub dt_s: f64,
     /// Start pose.
     pub start: [f64; 3],
     /// Goal.
     pub goal: Option<[f64; 2]>,
-    /// Labels of the behaviour in control, in order of first appearance.
-    pub behaviours: Vec<&'static str>,
     /// Names of the controller's values, in order of first appearance.
     pub keys: Vec<&'static str>,
     /// Distinct sensor geometries.
@@ -283,8 +313,6 @@ pub struct RunData {
     pub ticks: Ticks,
     /// Every event.
     pub events: Vec<EventData>,
-    /// How the suite draws its event kinds.
-    pub markers: BTreeMap<String, MarkerStyle>,
 }
 
 fn hex(c: [u8; 3]) -> String {
@@ -321,14 +349,9 @@ fn command(c: Option<Command>) -> Option<CommandData> {
     })
 }
 
-/// The map's corners and the run's poses, a margin of a robot radius.
-fn view(replay: &Replay) -> [f64; 4] {
-    let g = &replay.grid;
-    let o = g.origin();
-    let (w, h) = (
-        g.width() as f64 * g.resolution_m(),
-        g.height() as f64 * g.resolution_m(),
-    );
+/// Every map's corners and every run's poses, a margin of the largest
+/// robot radius.
+fn view(replays: &[&Replay]) -> [f64; 4] {
     let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
     let mut add = |x: f64, y: f64| {
         b[0] = b[0].min(x);
@@ -336,14 +359,24 @@ fn view(replay: &Replay) -> [f64; 4] {
         b[2] = b[2].max(x);
         b[3] = b[3].max(y);
     };
-    for (cx, cy) in [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)] {
-        let p = o.transform(robot::Vec2::new(cx, cy));
-        add(p.x, p.y);
+    let mut margin: f64 = 0.0;
+    for replay in replays {
+        let g = &replay.grid;
+        let o = g.origin();
+        let (w, h) = (
+            g.width() as f64 * g.resolution_m(),
+            g.height() as f64 * g.resolution_m(),
+        );
+        for (cx, cy) in [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)] {
+            let p = o.transform(robot::Vec2::new(cx, cy));
+            add(p.x, p.y);
+        }
+        for t in &replay.trace.ticks {
+            add(t.true_pose.x_m, t.true_pose.y_m);
+        }
+        margin = margin.max(replay.robot_radius_m);
     }
-    for t in &replay.trace.ticks {
-        add(t.true_pose.x_m, t.true_pose.y_m);
-    }
-    let m = replay.robot_radius_m;
+    let m = margin;
     [mm(b[0] - m), mm(b[1] - m), mm(b[2] + m), mm(b[3] + m)]
 }
 
@@ -381,26 +414,107 @@ fn record_rows(replay: &Replay) -> Vec<(String, serde_json::Value)> {
     rows
 }
 
-/// The data of `replay` for a page titled by `suite` and `key`; events are
-/// placed as `markers` say (an event of another kind at its own position,
-/// or the robot's).
-pub fn run_data(replay: &Replay, markers: &[EventMarker], suite: &str, key: &str) -> Result<RunData> {
-    let g = &replay.grid;
-    let map = MapData {
+/// One run of a page: its replay and its key.
+#[derive(Debug, Clone, Copy)]
+pub struct PageRun<'a> {
+    /// The replayed run.
+    pub replay: &'a Replay,
+    /// Its key (`SCENARIO#INDEX`).
+    pub key: &'a str,
+}
+
+fn map_data(g: &sim::OccupancyGrid) -> Result<MapData> {
+    Ok(MapData {
         png: format!("data:image/png;base64,{}", encode::base64(&encode::grid_png(g)?)),
         width: g.width(),
         height: g.height(),
         resolution_m: g.resolution_m(),
         origin: pose(g.origin()),
+    })
+}
+
+fn summary(r: &crate::record::RunRecord) -> String {
+    format!(
+        "{} after {:.1} s, path {:.2} m, {} collisions",
+        r.outcome.replace('_', " "),
+        r.time_s,
+        r.path_length_m,
+        r.collisions
+    )
+}
+
+/// The data of a page titled `title` for `suite` showing `runs`: what they
+/// share, and each run's own; events are placed as `markers` say (an event
+/// of another kind at its own position, or the robot's).
+pub fn page_data(
+    runs: &[PageRun<'_>],
+    markers: &[EventMarker],
+    suite: &str,
+    title: &str,
+) -> Result<(PageData, Vec<RunData>)> {
+    let replays: Vec<&Replay> = runs.iter().map(|r| r.replay).collect();
+    let behaviours = behaviours_of(&replays);
+    let mut maps: Vec<MapData> = Vec::new();
+    let mut data = Vec::new();
+    for run in runs {
+        let map = map_data(&run.replay.grid)?;
+        let index = match maps.iter().position(|m| *m == map) {
+            Some(i) => i,
+            None => {
+                maps.push(map);
+                maps.len() - 1
+            }
+        };
+        data.push(run_data(run.replay, markers, run.key, index, &behaviours));
+    }
+    let page = PageData {
+        suite: suite.to_string(),
+        title: title.to_string(),
+        maps,
+        view: view(&replays),
+        person_radius_m: person_radius_m(),
+        markers: markers
+            .iter()
+            .map(|m| (m.kind.to_string(), marker_style(m.marker)))
+            .collect(),
+        behaviours,
+        runs: data
+            .iter()
+            .map(|d| RunEntry {
+                key: d.key.clone(),
+                summary: d.summary.clone(),
+            })
+            .collect(),
     };
+    Ok((page, data))
+}
+
+/// The labels of the behaviours in control over `replays`, in order of
+/// first appearance.
+fn behaviours_of(replays: &[&Replay]) -> Vec<&'static str> {
     let mut behaviours: Vec<&'static str> = Vec::new();
-    let mut keys: Vec<&'static str> = Vec::new();
-    for t in &replay.trace.ticks {
+    for t in replays.iter().flat_map(|r| &r.trace.ticks) {
         if let Some(b) = t.behaviour
             && !behaviours.contains(&b)
         {
             behaviours.push(b);
         }
+    }
+    behaviours
+}
+
+/// The data of `replay`, keyed `key`, on the map of index `map`, its
+/// behaviours counted in `behaviours` (the page's); events are placed as
+/// `markers` say.
+pub fn run_data(
+    replay: &Replay,
+    markers: &[EventMarker],
+    key: &str,
+    map: usize,
+    behaviours: &[&'static str],
+) -> RunData {
+    let mut keys: Vec<&'static str> = Vec::new();
+    for t in &replay.trace.ticks {
         for (k, _) in &t.values {
             if !keys.contains(k) {
                 keys.push(k);
@@ -486,36 +600,21 @@ pub fn run_data(replay: &Replay, markers: &[EventMarker], suite: &str, key: &str
             });
         }
     }
-    let markers: BTreeMap<String, MarkerStyle> = markers
-        .iter()
-        .map(|m| (m.kind.to_string(), marker_style(m.marker)))
-        .collect();
     let r = &replay.record;
-    Ok(RunData {
-        suite: suite.to_string(),
+    RunData {
         key: key.to_string(),
-        summary: format!(
-            "{} after {:.1} s, path {:.2} m, {} collisions",
-            r.outcome.replace('_', " "),
-            r.time_s,
-            r.path_length_m,
-            r.collisions
-        ),
+        summary: summary(r),
         record: record_rows(replay),
         map,
-        view: view(replay),
         robot_radius_m: replay.robot_radius_m,
-        person_radius_m: person_radius_m(),
         dt_s: replay.control_period_s,
         start: [mm(r.start[0]), mm(r.start[1]), mm(r.start[2])],
         goal: replay.goal.map(|g| [mm(g.x), mm(g.y)]),
-        behaviours,
         keys,
         geometries,
         ticks,
         events,
-        markers,
-    })
+    }
 }
 
 #[cfg(test)]

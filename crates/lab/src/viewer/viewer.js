@@ -1,12 +1,13 @@
-// petrinav run viewer: draws one replayed run (the JSON in #run-data) on a
-// canvas and shows the current tick's notes. Hand-written, no library.
-// State for tests and scripts: <body data-ready data-tick data-time
-// data-robot-x data-robot-y data-robot-page-x data-robot-page-y>.
-// URL hash: #t=SECONDS, #tick=N, &play=1, &speed=K.
+// petrinav run viewer: draws replayed runs (the JSON in #page-data, shared
+// by the runs, and in one .run-data block per run) on a canvas and shows
+// the current tick's notes. Hand-written, no library.
+// State for tests and scripts: <body data-ready data-runs data-run
+// data-run-key data-tick data-time data-robot-x data-robot-y
+// data-robot-page-x data-robot-page-y>.
+// URL hash: #run=K (from 0), t=SECONDS, tick=N, play=1, speed=K.
 "use strict";
-// The data: JSON, zlib-compressed and in base64 (data-encoding), or plain.
-async function petrinavRunData() {
-  const el = document.getElementById("run-data");
+// A block's JSON, zlib-compressed and in base64 (data-encoding), or plain.
+async function petrinavInflate(el) {
   if (el.dataset.encoding !== "zlib+base64") return JSON.parse(el.textContent);
   const bin = atob(el.textContent.trim());
   const bytes = new Uint8Array(bin.length);
@@ -14,14 +15,18 @@ async function petrinavRunData() {
   const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
   return JSON.parse(await new Response(stream).text());
 }
-petrinavRunData()
+petrinavInflate(document.getElementById("page-data"))
   .then(petrinavViewer)
   .catch((e) => console.error("the viewer failed: " + (e && e.message ? e.message : e)));
 
-function petrinavViewer(D) {
-  const T = D.ticks;
-  const N = T.t.length;
-  if (N === 0) throw new Error("the run has no ticks");
+function petrinavViewer(P) {
+  const blocks = document.querySelectorAll("script.run-data");
+  const R = blocks.length;
+  if (R === 0) throw new Error("the page has no run");
+  const loaded = [];
+  // Each run is inflated when first chosen.
+  const loadRun = (k) => (loaded[k] = loaded[k] || petrinavInflate(blocks[k]));
+  let D = null, T = null, N = 0, run = -1;
   const $ = (id) => document.getElementById(id);
   const canvas = $("map");
   const ctx = canvas.getContext("2d");
@@ -30,7 +35,7 @@ function petrinavViewer(D) {
     "#17becf", "#bcbd22", "#d62728", "#7f7f7f"];
   const colourOf = (b) => (b < 0 ? "#888888" : PALETTE[b % PALETTE.length]);
   const kindColour = (kind) => {
-    const m = D.markers[kind];
+    const m = P.markers[kind];
     if (m) return m.colour;
     let h = 0;
     for (const c of kind) h = (h * 31 + c.charCodeAt(0)) >>> 0;
@@ -41,11 +46,18 @@ function petrinavViewer(D) {
 
   let cur = 0, playing = false, speed = 1, timer = null, carry = 0;
   let zoom = 1, centre = null, follow = false, drag = null;
-  const img = new Image();
-  let imgReady = false;
+  // The maps, decoded once each.
+  const images = P.maps.map((m) => {
+    const img = new Image();
+    img.ready = false;
+    img.onload = () => { img.ready = true; if (D) draw(); };
+    img.onerror = () => console.error("the viewer failed: the map image could not be decoded");
+    img.src = m.png;
+    return img;
+  });
 
   // ---- geometry -------------------------------------------------------
-  const V = D.view;
+  const V = P.view;
   let W = 0, H = 0, S = 1;
   function layout() {
     W = Math.max(200, canvas.parentElement.clientWidth);
@@ -88,7 +100,7 @@ function petrinavViewer(D) {
     ctx.strokeStyle = colour; ctx.lineWidth = width || 1; ctx.stroke();
   }
   function marker(at, kind, big) {
-    const m = D.markers[kind];
+    const m = P.markers[kind];
     const shape = m ? m.shape : "square";
     const colour = kindColour(kind);
     const [X, Y] = px(at[0], at[1]);
@@ -108,8 +120,9 @@ function petrinavViewer(D) {
   function drawMap() {
     ctx.fillStyle = "#cdcdcd";
     ctx.fillRect(0, 0, W, H);
-    if (!imgReady) return;
-    const c = viewCentre(), m = D.map;
+    const img = images[D.map];
+    if (!img.ready) return;
+    const c = viewCentre(), m = P.maps[D.map];
     ctx.save();
     ctx.setTransform(S, 0, 0, -S, W / 2 - c[0] * S, H / 2 + c[1] * S);
     ctx.translate(m.origin[0], m.origin[1]);
@@ -176,6 +189,7 @@ function petrinavViewer(D) {
     });
   }
   function draw() {
+    if (!D) return;
     layoutIfNeeded();
     S = scale();
     drawMap();
@@ -193,7 +207,7 @@ function petrinavViewer(D) {
     }
     const people = T.people[cur] || [];
     for (let i = 0; i + 1 < people.length; i += 2) {
-      circle(people[i] / 100, people[i + 1] / 100, D.person_radius_m, "rgba(240,150,30,0.75)", "#a05a00", 1);
+      circle(people[i] / 100, people[i + 1] / 100, P.person_radius_m, "rgba(240,150,30,0.75)", "#a05a00", 1);
     }
     const p = T.pose[cur], q = T.estimate[cur];
     drawSensors(p);
@@ -217,22 +231,29 @@ function petrinavViewer(D) {
     b.robotPageX = String(Math.round(rect.left + window.scrollX + X));
     b.robotPageY = String(Math.round(rect.top + window.scrollY + Y));
     b.playing = playing ? "1" : "0";
-    if (imgReady) b.ready = "1";
+    b.run = String(run);
+    b.runKey = D.key;
+    if (images[D.map].ready) b.ready = "1";
   }
   let laidOut = false;
   function layoutIfNeeded() {
     if (!laidOut) { layout(); laidOut = true; }
   }
-  window.addEventListener("resize", () => { laidOut = false; draw(); });
+  window.addEventListener("resize", () => { laidOut = false; if (D) draw(); });
 
   // ---- panel ----------------------------------------------------------
-  const valueRows = [];
+  let valueRows = [];
   function buildPanel() {
-    $("title").textContent = D.suite + " — " + D.key;
     $("summary").textContent = D.summary;
-    document.title = D.key + " — petrinav run viewer";
+    document.title = (R > 1 ? D.key : P.title) + " — " + P.suite + " — petrinav run viewer";
+    for (const id of ["legend", "values", "events", "record"]) $(id).textContent = "";
+    valueRows = [];
     const legend = $("legend");
-    D.behaviours.forEach((b, i) => {
+    // The page's behaviours (one colour each on every run) that this run
+    // has.
+    const has = new Set(T.behaviour);
+    P.behaviours.forEach((b, i) => {
+      if (!has.has(i)) return;
       const s = document.createElement("span");
       s.innerHTML = '<i style="background:' + colourOf(i) + '"></i>';
       s.appendChild(document.createTextNode(b));
@@ -247,7 +268,7 @@ function petrinavViewer(D) {
       legend.appendChild(s);
     }
     const vt = $("values");
-    if (D.keys.length === 0) $("values-box").hidden = true;
+    $("values-box").hidden = D.keys.length === 0;
     D.keys.forEach((k, i) => {
       let lo = 0, hi = 0;
       for (const row of T.values) {
@@ -261,7 +282,7 @@ function petrinavViewer(D) {
       valueRows.push({ value: tr.children[1], bar: tr.children[2].firstChild, lo, hi });
     });
     const list = $("events");
-    if (D.events.length === 0) $("events-box").hidden = true;
+    $("events-box").hidden = D.events.length === 0;
     D.events.forEach((e) => {
       const li = document.createElement("li");
       li.textContent = fmt(e.t, 1) + " s  " + e.kind + payloadText(e);
@@ -289,7 +310,7 @@ function petrinavViewer(D) {
     setRow("clock", "t = " + fmt(T.t[cur], 1) + " s · tick " + cur + " / " + (N - 1));
     const b = T.behaviour[cur];
     $("behaviour").innerHTML = '<i style="background:' + colourOf(b) + '"></i>';
-    $("behaviour").appendChild(document.createTextNode(b < 0 ? "–" : D.behaviours[b]));
+    $("behaviour").appendChild(document.createTextNode(b < 0 ? "–" : P.behaviours[b]));
     setRow("step", T.step[cur] + (T.contact[cur] ? " · contact" : ""));
     const c = T.command[cur];
     setRow("command", !c ? "none" : c[0] === "stop" ? "stop"
@@ -357,9 +378,10 @@ function petrinavViewer(D) {
     while (k + 1 < N && T.t[k + 1] <= t + 1e-9) k++;
     return k;
   }
-  function setPlaying(on) {
+  function setPlaying(on, quiet) {
     playing = on && N > 1;
     if (timer) { clearInterval(timer); timer = null; }
+    if (quiet) return;
     if (playing) {
       if (cur >= N - 1) cur = 0;
       carry = 0;
@@ -374,30 +396,56 @@ function petrinavViewer(D) {
     draw();
     updatePanel();
   }
-  function readHash() {
+  // The run k: its data inflated, the panel rebuilt, the slider at 0.
+  async function chooseRun(k) {
+    const data = await loadRun(k);
+    setPlaying(false, true);
+    D = data; T = D.ticks; N = T.t.length; run = k; cur = 0;
+    if (N === 0) throw new Error("run " + D.key + " has no ticks");
+    $("run").value = String(k);
+    buildPanel();
+  }
+  let hashes = 0;
+  async function readHash() {
+    const mine = ++hashes;
     const h = new URLSearchParams(location.hash.replace(/^#/, ""));
+    const k = h.has("run") ? Math.max(0, Math.min(R - 1, Math.round(Number(h.get("run")) || 0))) : Math.max(0, run);
+    if (k !== run) {
+      await chooseRun(k);
+      if (mine !== hashes) return;
+    }
     if (h.has("speed")) { speed = Math.max(0.1, Number(h.get("speed")) || 1); $("speed").value = String(speed); }
     if (h.has("tick")) cur = Math.max(0, Math.min(N - 1, Number(h.get("tick")) || 0));
     else if (h.has("t")) cur = tickAt(Number(h.get("t")) || 0);
     setPlaying(h.get("play") === "1");
   }
+  // Another run: through the URL, so that it can be shared and reloaded.
+  function goRun(k) {
+    k = Math.max(0, Math.min(R - 1, k));
+    if (k !== run) location.hash = "run=" + k;
+  }
 
   // ---- input ----------------------------------------------------------
   slider.addEventListener("input", () => { setPlaying(false); go(Number(slider.value)); });
   $("play").addEventListener("click", () => setPlaying(!playing));
+  $("run").addEventListener("change", () => goRun(Number($("run").value)));
+  $("prev-run").addEventListener("click", () => goRun(run - 1));
+  $("next-run").addEventListener("click", () => goRun(run + 1));
   $("prev").addEventListener("click", () => { setPlaying(false); go(cur - 1); });
   $("next").addEventListener("click", () => { setPlaying(false); go(cur + 1); });
   $("speed").addEventListener("change", () => { speed = Number($("speed").value); });
   $("follow").addEventListener("change", () => { follow = $("follow").checked; draw(); });
   $("reset").addEventListener("click", () => { zoom = 1; centre = null; draw(); });
   document.addEventListener("keydown", (e) => {
-    if (e.target.tagName === "SELECT") return;
+    if (!D || e.target.tagName === "SELECT") return;
     const big = e.shiftKey ? Math.round(1 / D.dt_s) : 1;
     if (e.key === " ") setPlaying(!playing);
     else if (e.key === "ArrowRight") { setPlaying(false); go(cur + big); }
     else if (e.key === "ArrowLeft") { setPlaying(false); go(cur - big); }
     else if (e.key === "Home") { setPlaying(false); go(0); }
     else if (e.key === "End") { setPlaying(false); go(N - 1); }
+    else if (e.key === "[") goRun(run - 1);
+    else if (e.key === "]") goRun(run + 1);
     else if (e.key === "+" || e.key === "=") { zoom *= 1.5; draw(); }
     else if (e.key === "-") { zoom = Math.max(0.2, zoom / 1.5); draw(); }
     else return;
@@ -423,11 +471,7 @@ function petrinavViewer(D) {
     draw();
   });
   canvas.addEventListener("dblclick", () => { zoom = 1; centre = null; draw(); });
-  window.addEventListener("hashchange", readHash);
-
-  buildPanel();
-  img.onload = () => { imgReady = true; draw(); };
-  img.onerror = () => { throw new Error("the map image could not be decoded"); };
-  img.src = D.map.png;
-  readHash();
+  const failed = (e) => console.error("the viewer failed: " + (e && e.message ? e.message : e));
+  window.addEventListener("hashchange", () => readHash().catch(failed));
+  return readHash();
 }
