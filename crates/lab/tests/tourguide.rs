@@ -22,21 +22,22 @@ fn setup(people: usize) -> MissionSetup {
     s
 }
 
+/// The museum mission from the start to the goal.
+fn spec(policy: Policy, seed: u64) -> LegSpec<'static> {
+    LegSpec {
+        from: "start",
+        to: "goal",
+        start: START,
+        believed: START,
+        goal: GOAL,
+        policy,
+        seed,
+        trace: TraceParams::default(),
+    }
+}
+
 fn run(policy: Policy, seed: u64) -> Vec<Event> {
-    let leg = mission::run_leg(
-        &setup(40),
-        &LegSpec {
-            from: "start",
-            to: "goal",
-            start: START,
-            believed: START,
-            goal: GOAL,
-            policy,
-            seed,
-            trace: TraceParams::default(),
-        },
-    )
-    .unwrap();
+    let leg = mission::run_leg(&setup(40), &spec(policy, seed)).unwrap();
     leg.trace.events
 }
 
@@ -163,16 +164,7 @@ fn the_supervisor_decides_at_the_start_and_on_returns_to_success_only() {
 /// and a prepared setup whose parameters changed since prepares its own.
 #[test]
 fn a_prepared_map_runs_the_same_mission() {
-    let spec = |policy| LegSpec {
-        from: "start",
-        to: "goal",
-        start: START,
-        believed: START,
-        goal: GOAL,
-        policy,
-        seed: 11,
-        trace: TraceParams::default(),
-    };
+    let spec = |policy| spec(policy, 11);
     let raw = setup(25);
     let mut prepared = setup(25);
     prepared.prepare().unwrap();
