@@ -16,6 +16,7 @@
 //! | `/scan` (`/scan1`…) | `foxglove.LaserScan` | each laser's scan in `base_link`, its mount as `pose`; no return or a drop-out is 0 |
 //! | `/ranges` | `foxglove.SceneUpdate` | sonar cones to their echo and IR beams (red when triggered) in `base_link`, for robots with sonar or IR |
 //! | `/people` | `foxglove.SceneUpdate` | people as cylinders in `map`, when the trace has people |
+//! | `/particles` (`/NAME`) | `foxglove.PosesInFrame` | each point set the controller noted (the localizer's particle cloud, as RViz shows AMCL's `particlecloud`), at the ticks it noted one, in `map` |
 //! | `/notes` | `petrinav.Notes` | the controller's notes: behaviour, named values, events, command, wheels, contact |
 //! | `/events` | `foxglove.Log` | one line per event (kind and payload), at its tick |
 //!
@@ -184,6 +185,13 @@ mod schema {
             "foxglove.PoseInFrame",
             "A timestamped pose for an object or reference frame in 3D space",
             json!({"timestamp": time(), "frame_id": text(), "pose": pose()}),
+        )
+    }
+    pub fn poses_in_frame() -> Value {
+        top(
+            "foxglove.PosesInFrame",
+            "An array of timestamped poses for an object or reference frame in 3D space",
+            json!({"timestamp": time(), "frame_id": text(), "poses": array(pose())}),
         )
     }
     pub fn frame_transform() -> Value {
@@ -549,6 +557,22 @@ pub fn write<W: Write + Seek>(
     if people {
         ch.add(&mut w, "/people", "foxglove.SceneUpdate", &schema::scene_update())?;
     }
+    let mut clouds: Vec<&'static str> = Vec::new();
+    for t in ticks {
+        for (name, _) in &t.clouds {
+            if !clouds.contains(name) {
+                clouds.push(name);
+            }
+        }
+    }
+    for name in &clouds {
+        ch.add(
+            &mut w,
+            &format!("/{name}"),
+            "foxglove.PosesInFrame",
+            &schema::poses_in_frame(),
+        )?;
+    }
     ch.add(&mut w, "/notes", "petrinav.Notes", &schema::notes())?;
     ch.add(&mut w, "/events", "foxglove.Log", &schema::log())?;
 
@@ -613,6 +637,15 @@ pub fn write<W: Write + Seek>(
             if ranges {
                 ch.write(&mut w, "/ranges", ns, &ranges_message(ns, perception))?;
             }
+        }
+        for (name, cloud) in &t.clouds {
+            let poses: Vec<Value> = cloud.iter().map(|&q| pose(q)).collect();
+            ch.write(
+                &mut w,
+                &format!("/{name}"),
+                ns,
+                &json!({"timestamp": stamp(ns), "frame_id": "map", "poses": poses}),
+            )?;
         }
         if people {
             let radius = crate::viewer::data::person_radius_m();
@@ -699,7 +732,7 @@ pub fn write_file(replay: &Replay, suite: &str, key: &str, path: &Path) -> Resul
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::record::RunRecord;
     use robot::{Event, LaserScan, Perception};
@@ -727,6 +760,14 @@ mod tests {
                     values: vec![("w", 0.25), ("inf", f64::INFINITY)],
                     events: if k == 2 {
                         vec![Event::new("stuck", t).at(Vec2::new(1.0, 1.0)).with("events", 3.0)]
+                    } else {
+                        Vec::new()
+                    },
+                    clouds: if k == 1 {
+                        vec![(
+                            "particles",
+                            vec![Pose::new(1.1, 1.0, 0.5), Pose::new(1.2, 0.9, 0.4)],
+                        )]
                     } else {
                         Vec::new()
                     },
@@ -786,6 +827,7 @@ mod tests {
             ("/map", 1),
             ("/markers", 1),
             ("/notes", 3),
+            ("/particles", 1),
             ("/people", 3),
             ("/pose", 3),
             ("/pose_estimate", 3),
@@ -798,7 +840,7 @@ mod tests {
         assert_eq!(counts, expected);
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
         let stats = summary.stats.unwrap();
-        assert_eq!(stats.message_count, 21);
+        assert_eq!(stats.message_count, 22);
         assert_eq!(
             (stats.message_start_time, stats.message_end_time),
             (0, 200_000_000)
@@ -816,6 +858,11 @@ mod tests {
                     assert_eq!(v["data"].as_str().unwrap().len(), (40 * 30usize).div_ceil(3) * 4);
                 }
                 "/events" => assert_eq!(v["message"], "stuck: events 3"),
+                "/particles" => {
+                    assert_eq!(m.log_time, 100_000_000, "at the tick that noted it");
+                    assert_eq!(v["poses"].as_array().unwrap().len(), 2);
+                    assert_eq!(v["poses"][1]["position"]["x"], json!(1.2));
+                }
                 _ => {}
             }
         }

@@ -324,6 +324,9 @@ pub struct Notes {
     pub values: Vec<(&'static str, f64)>,
     /// Events this tick (e.g. a dead-lock, a localizer warning).
     pub events: Vec<Event>,
+    /// Named sets of poses this tick (a localizer's particle cloud), in
+    /// the controller's frame.
+    pub clouds: Vec<(&'static str, Vec<Pose>)>,
 }
 
 impl Notes {
@@ -350,6 +353,7 @@ impl Notes {
         self.behaviour = None;
         self.values.clear();
         self.events.clear();
+        self.clouds.clear();
     }
 
     /// Records the behaviour in control.
@@ -377,12 +381,21 @@ impl Notes {
         }
         to.values.extend_from_slice(&self.values);
         to.events.extend(self.events.iter().cloned());
+        to.clouds.extend(self.clouds.iter().cloned());
     }
 
     /// Records an event.
     pub fn event(&mut self, event: Event) {
         if self.enabled {
             self.events.push(event);
+        }
+    }
+
+    /// Records a named set of poses (e.g. `particles`); the iterator is
+    /// not consumed when the notes are disabled.
+    pub fn cloud(&mut self, name: &'static str, poses: impl IntoIterator<Item = Pose>) {
+        if self.enabled {
+            self.clouds.push((name, poses.into_iter().collect()));
         }
     }
 }

@@ -506,6 +506,7 @@ impl Simulation {
                 behaviour: self.notes.behaviour,
                 values: self.notes.values.clone(),
                 events: self.notes.events.clone(),
+                clouds: self.notes.clouds.clone(),
                 request,
                 perception: self.run.trace.perception.then(|| self.perception.clone()),
                 people: people_at_sensing,

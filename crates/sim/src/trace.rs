@@ -88,6 +88,9 @@ pub struct TraceTick {
     /// Events (warnings, dead-locks…) from the notes.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub events: Vec<Event>,
+    /// Named sets of poses (a particle cloud) from the notes.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub clouds: Vec<(&'static str, Vec<Pose>)>,
     /// What the controller asked of the people around the robot.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub request: Option<Request>,

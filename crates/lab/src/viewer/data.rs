@@ -6,8 +6,9 @@
 //! Rounding: positions to the millimetre, angles to the milliradian, times
 //! to the millisecond, speeds to the mm/s, the controller's values and
 //! event payloads to 4 significant digits; ranges as whole centimetres
-//! (`-1`: nothing within range, `-2`: a drop-out), people's positions in
-//! centimetres. Sensor geometry (mounts, cones, beam angles) is written
+//! (`-1`: nothing within range, `-2`: a drop-out), people's positions and
+//! the controller's point sets (a particle cloud, thinned to at most
+//! [`CLOUD_POINTS`]) in centimetres. Sensor geometry (mounts, cones, beam angles) is written
 //! once per distinct geometry, each tick naming its own by index.
 //!
 //! Order is the trace's (labels and value names in order of first
@@ -313,6 +314,39 @@ pub struct RunData {
     pub ticks: Ticks,
     /// Every event.
     pub events: Vec<EventData>,
+    /// The controller's point sets (a particle cloud), at the ticks it
+    /// noted them; the page shows each name's latest at or before the
+    /// current tick.
+    pub clouds: Vec<CloudData>,
+}
+
+/// Most points of a cloud a page keeps (every k-th of a larger cloud):
+/// enough to show its spread and shape, a 500-particle filter noted at
+/// every iteration would otherwise outweigh the rest of the page.
+pub const CLOUD_POINTS: usize = 200;
+
+/// A point set the controller noted at one tick.
+#[derive(Debug, Serialize)]
+pub struct CloudData {
+    /// Tick index.
+    pub tick: usize,
+    /// The set's name (`particles`).
+    pub name: &'static str,
+    /// How many poses the controller noted (before thinning).
+    pub size: usize,
+    /// Positions, centimetres, `[x0, y0, x1, y1, …]`: at most
+    /// [`CLOUD_POINTS`], every k-th pose.
+    pub points: Vec<i32>,
+}
+
+/// `cloud` thinned to at most [`CLOUD_POINTS`] positions in centimetres.
+fn cloud_points(cloud: &[Pose]) -> Vec<i32> {
+    let stride = cloud.len().div_ceil(CLOUD_POINTS).max(1);
+    cloud
+        .iter()
+        .step_by(stride)
+        .flat_map(|p| [(p.x_m * 100.0).round() as i32, (p.y_m * 100.0).round() as i32])
+        .collect()
 }
 
 fn hex(c: [u8; 3]) -> String {
@@ -524,6 +558,7 @@ pub fn run_data(
     let mut ticks = Ticks::default();
     let mut geometries: Vec<Geometry> = Vec::new();
     let mut events = Vec::new();
+    let mut clouds = Vec::new();
     for (n, t) in replay.trace.ticks.iter().enumerate() {
         ticks.t.push(round_to(t.time_s, 3));
         ticks.pose.push(pose(t.true_pose));
@@ -578,6 +613,14 @@ pub fn run_data(
                 .flat_map(|p| [(p.x * 100.0).round() as i32, (p.y * 100.0).round() as i32])
                 .collect(),
         );
+        for (name, cloud) in &t.clouds {
+            clouds.push(CloudData {
+                tick: n,
+                name,
+                size: cloud.len(),
+                points: cloud_points(cloud),
+            });
+        }
         for e in &t.events {
             let place = markers
                 .iter()
@@ -614,6 +657,7 @@ pub fn run_data(
         geometries,
         ticks,
         events,
+        clouds,
     }
 }
 
@@ -631,5 +675,36 @@ mod tests {
         assert_eq!(round_sig4(0.0), 0.0);
         assert!(round_sig4(f64::NAN).is_nan());
         assert_eq!((cm(1.234), cm(f64::INFINITY), cm(f64::NAN)), (123, -1, -2));
+    }
+
+    #[test]
+    fn a_cloud_is_thinned_to_every_kth_pose() {
+        let cloud: Vec<Pose> = (0..500)
+            .map(|i| Pose::new(f64::from(i) * 0.01, -0.5, 0.0))
+            .collect();
+        let points = cloud_points(&cloud);
+        // 500 poses → every 3rd: 167 positions.
+        assert_eq!(points.len(), 2 * 167);
+        assert_eq!(&points[..4], &[0, -50, 3, -50]);
+        assert!(points.len() / 2 <= CLOUD_POINTS);
+        assert_eq!(cloud_points(&cloud[..10]).len(), 20);
+        assert!(cloud_points(&[]).is_empty());
+    }
+
+    #[test]
+    fn a_noted_cloud_reaches_the_page_at_its_tick() {
+        let mut replay = crate::foxglove::tests::laser_replay();
+        let big: Vec<Pose> = (0..450)
+            .map(|i| Pose::new(1.0, f64::from(i) * 0.001, 0.0))
+            .collect();
+        replay.trace.ticks[2].clouds.push(("particles", big));
+        let d = run_data(&replay, &[], "toy#0", 0, &["go"]);
+        let at: Vec<(usize, &str, usize, usize)> = d
+            .clouds
+            .iter()
+            .map(|c| (c.tick, c.name, c.size, c.points.len() / 2))
+            .collect();
+        assert_eq!(at, vec![(1, "particles", 2, 2), (2, "particles", 450, 150)]);
+        assert_eq!(&d.clouds[0].points, &[110, 100, 120, 90]);
     }
 }

@@ -10,9 +10,10 @@
 //! The page draws the map, the trajectory so far coloured by the behaviour
 //! in control (the whole path dashed), the footprint and heading (the
 //! controller's own estimate dashed where it differs), the current tick's
-//! laser beams, sonar cones and IR beams, people, start, goal and the
-//! events so far as the suite's markers draw them; a slider with
-//! play/pause and step keys; and a panel with the tick's behaviour,
+//! laser beams, sonar cones and IR beams, people, start, goal, the
+//! controller's latest point sets (a particle cloud) and the events so far
+//! as the suite's markers draw them; a slider with play/pause and step
+//! keys; and a panel with the tick's behaviour,
 //! command, poses, the controller's named values (a key → value table with
 //! bars over the run's range: votes and weights for voting, activations
 //! for priority arbitration, localizer state for the guide), the tick's
@@ -20,7 +21,10 @@
 //! with `f_auto`/`f_cont`…), every event of the run, and the run's record.
 //!
 //! Nothing here knows a controller: what a controller wants shown it puts
-//! in its trace notes ([`robot::Notes`]: behaviour, values, events).
+//! in its trace notes ([`robot::Notes`]: behaviour, values, events, and
+//! named pose sets — the guide's localizer notes its particle cloud at
+//! every filter iteration, drawn as teal dots until the next, thinned to
+//! [`data::CLOUD_POINTS`]).
 //!
 //! The page's state is readable from the DOM (`<body data-ready data-runs
 //! data-run data-run-key data-tick data-time data-robot-x data-robot-y
@@ -116,13 +120,14 @@ data-encoding=\"zlib+base64\">{}</script>",
 <option value=\"2\">2×</option><option value=\"5\">5×</option><option value=\"10\">10×</option></select>\
 <label><input id=\"follow\" type=\"checkbox\"> follow</label><button id=\"reset\" type=\"button\">fit</button></div>\n\
 <p class=\"help\">space play/pause · ←/→ one tick (shift: one second) · Home/End · wheel or +/− zoom, drag to pan, double-click to fit · \
-{run_help}URL <code>#t=SECONDS</code> opens at a time. Dashed purple: the controller's own pose estimate; blue cones: sonar; lines: IR (red when triggered) and laser beams.</p>\n\
+{run_help}URL <code>#t=SECONDS</code> opens at a time. Dashed purple: the controller's own pose estimate; teal dots: its latest particle cloud; blue cones: sonar; lines: IR (red when triggered) and laser beams.</p>\n\
 <div id=\"legend\"></div></div>\n\
 <aside><h2 id=\"clock-h\">This tick</h2><table>\
 <tr><td>behaviour</td><td id=\"behaviour\"></td></tr><tr><td>step</td><td id=\"step\"></td></tr>\
 <tr><td>command</td><td id=\"command\"></td></tr><tr><td>wheels</td><td id=\"wheels\"></td></tr>\
 <tr><td>true pose</td><td id=\"pose\"></td></tr><tr><td>estimate</td><td id=\"estimate\"></td></tr>\
-<tr><td>request</td><td id=\"request\"></td></tr></table>\n\
+<tr><td>request</td><td id=\"request\"></td></tr>\
+<tr id=\"cloud-row\"><td>cloud</td><td id=\"cloud\"></td></tr></table>\n\
 <h2>Sensors</h2><pre id=\"sensors\"></pre>\n\
 <div id=\"values-box\"><h2>Controller's values</h2><table id=\"values\"></table></div>\n\
 <h2>Events this tick</h2><ul id=\"now\"></ul>\n\

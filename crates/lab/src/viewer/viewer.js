@@ -188,6 +188,27 @@ function petrinavViewer(P) {
       line(m, e, on ? "rgba(220,20,20,0.9)" : "rgba(20,150,60,0.45)", on ? 2 : 1);
     });
   }
+  // The latest cloud of each name at or before the current tick.
+  function cloudsNow() {
+    const latest = {};
+    for (const c of D.clouds || []) {
+      if (c.tick > cur) break;
+      latest[c.name] = c;
+    }
+    return Object.values(latest);
+  }
+  function drawClouds() {
+    ctx.fillStyle = "rgba(0,150,150,0.8)";
+    let drawn = 0;
+    for (const c of cloudsNow()) {
+      drawn += c.points.length / 2;
+      for (let i = 0; i + 1 < c.points.length; i += 2) {
+        const [X, Y] = px(c.points[i] / 100, c.points[i + 1] / 100);
+        ctx.fillRect(X - 1, Y - 1, 2, 2);
+      }
+    }
+    document.body.dataset.cloudPoints = String(drawn);
+  }
   function draw() {
     if (!D) return;
     layoutIfNeeded();
@@ -210,6 +231,7 @@ function petrinavViewer(P) {
       circle(people[i] / 100, people[i + 1] / 100, P.person_radius_m, "rgba(240,150,30,0.75)", "#a05a00", 1);
     }
     const p = T.pose[cur], q = T.estimate[cur];
+    drawClouds();
     drawSensors(p);
     if (T.request[cur]) circle(p[0], p[1], T.request[cur], null, "#e07000", 1.5, [6, 4]);
     if (Math.hypot(p[0] - q[0], p[1] - q[1]) > 0.01 || Math.abs(p[2] - q[2]) > 0.01) {
@@ -332,6 +354,9 @@ function petrinavViewer(P) {
       r.bar.className = v < 0 ? "bar neg" : "bar";
     });
     setRow("sensors", sensorText());
+    $("cloud-row").hidden = !(D.clouds && D.clouds.length);
+    setRow("cloud", cloudsNow().map((c) => c.name + " " + c.size + " (tick " + c.tick + ", " +
+      (c.points.length / 2) + " drawn)").join(" · ") || "–");
     const now = $("now");
     now.textContent = "";
     for (const e of D.events) {

@@ -219,6 +219,17 @@ pub struct GuideStats {
 }
 
 /// The tour-guide controller (module docs).
+///
+/// Its notes (traces, the run viewer, MCAP): the behaviour in control;
+/// every tick the localizer's estimate (`estimate_x_m`, `_y_m`,
+/// `_theta_rad`), `warning` (0/1) and the last filter iteration's
+/// `score_estimate`, `score_odometry`, `effective_sample_size`; contour
+/// tracking's `contour_mode`, `contour_m`, `contour_centred`, `contour_gap`;
+/// at each filter iteration the particle cloud (`particles`); events for
+/// status changes (`warning`, `success` with both scores), switches,
+/// supervisor decisions (`decision` with `f_auto`, `f_cont`, the choice,
+/// `p_loc_succ`, `p_loc_warn` and the rates λ3…λ10), requests and
+/// arrival.
 pub struct GuideController {
     p: GuideParams,
     localizer: Localizer,
@@ -229,6 +240,9 @@ pub struct GuideController {
     goal: Vec2,
     last_time_s: Option<f64>,
     status: LocalizationStatus,
+    /// The scores of the last filter iteration (estimate, odometry) and
+    /// its effective sample size, for the notes.
+    last_scores: Option<[f64; 3]>,
     abnormal: bool,
     asking: bool,
     request: Option<Request>,
@@ -290,6 +304,7 @@ impl GuideController {
             goal,
             last_time_s: None,
             status: LocalizationStatus::Success,
+            last_scores: None,
             abnormal: false,
             asking: false,
             request: None,
@@ -472,6 +487,14 @@ impl Controller for GuideController {
         match self.localizer.update(p.odometry, scan) {
             Ok(Some(info)) => {
                 self.stats.filter_iterations += 1;
+                self.last_scores = Some([
+                    info.score_estimate,
+                    info.score_odometry,
+                    info.effective_sample_size,
+                ]);
+                if notes.is_enabled() {
+                    notes.cloud("particles", self.localizer.particles().map(|p| p.pose));
+                }
                 if info.status != self.status {
                     let kind = match info.status {
                         LocalizationStatus::Warning => {
@@ -537,6 +560,11 @@ impl Controller for GuideController {
                 "warning",
                 f64::from(u8::from(self.status == LocalizationStatus::Warning)),
             );
+            if let Some([estimate, odometry, ess]) = self.last_scores {
+                notes.value("score_estimate", estimate);
+                notes.value("score_odometry", odometry);
+                notes.value("effective_sample_size", ess);
+            }
         }
         if estimate.position().dist(self.goal) <= self.p.arrive_m {
             notes.event(Event::new("arrived", t).at(estimate.position()));
