@@ -13,7 +13,13 @@
 //! (`warnings`, `time_in_warning_s`) and AutoMove's abnormal episodes
 //! (`abnormal_episodes`, `time_abnormal_s`). The report puts side by side,
 //! per map, what crowds do to the localizer and to each behaviour, and
-//! explains it from the numbers.
+//! explains it from the numbers. Its pictures draw each scenario's first
+//! tour; under each, one link per leg opens the tour's viewer page at that
+//! leg (`viewer/MAP-BEHAVIOUR-Np.html#run=K`, leg K + 1; a leg not run
+//! because the robot was lost before it has none). The pages hold every
+//! tick's laser scan, crowd and particle cloud: about 0.25–0.3 MB per
+//! minute of a leg, 44 MB for the suite's twelve tours (the largest, contour
+//! tracking among 60 people with six 300 s time-outs, 11 MB).
 
 mod explanation;
 
@@ -26,12 +32,13 @@ use nav::supervisor::Behaviour;
 use sim::{CrowdParams, Places, TraceParams, World};
 
 use crate::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop, Whereabouts};
-use crate::page::{Block, Figure};
+use crate::page::{Block, Figure, RunLink};
 use crate::pictures::{EventMarker, MarkerPlace, Replay};
 use crate::record::RunRecord;
 use crate::runner::{Campaign, Job, derive_seed};
 use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, SuiteReport};
 use crate::tables::{self, MetricColumn};
+use crate::viewer::PageRun;
 
 /// The suite in the registry.
 pub const REGISTRATION: Registration = Registration {
@@ -321,22 +328,8 @@ impl Suite for MapsSuite {
             enabled: true,
             ..trace
         };
-        let (leg, before) = self.leg(job, earlier, trace)?;
-        let record = self.record(job, &leg, &before)?;
-        let s = self.scenario(&job.scenario)?;
-        let data = self.map(s.map)?;
-        let k = (job.run % self.legs(s.map)?) as usize;
-        Ok(Replay {
-            record,
-            trace: leg
-                .sim
-                .and_then(|s| s.trace)
-                .context("a leg that could not run has no trace")?,
-            grid: data.world.grid().clone(),
-            goal: Some(data.stops[k + 1].pose.position()),
-            robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
-            control_period_s: 0.1,
-        })
+        let (mut leg, before) = self.leg(job, earlier, trace)?;
+        self.replay_of(job, &mut leg, &before)
     }
 
     fn markers(&self) -> &[EventMarker] {
@@ -380,23 +373,27 @@ impl Suite for MapsSuite {
                 let name = s.name();
                 let data = self.map(s.map)?;
                 let (path, src) = ctx.picture_path(&format!("{}.png", name.replace('/', "-")))?;
-                let legs = self.tour_legs(s, ctx)?;
+                let (legs, replays) = self.first_tour(s, ctx)?;
                 mission::picture(data.world.grid(), &legs, &data.stops, &path)?;
                 files.push(path);
-                // The tour's first leg in the viewer (a leg's page with the
-                // laser and the crowd is large: one per tour).
+                // Every leg of the tour in the viewer, one page (`#run=K`
+                // opens leg K + 1).
+                let page_runs: Vec<PageRun<'_>> = replays
+                    .iter()
+                    .map(|(_, key, replay)| PageRun { replay, key })
+                    .collect();
                 let mut runs = Vec::new();
-                if let Some(job) = self
-                    .campaigns()
-                    .into_iter()
-                    .find(|c| c.jobs.first().is_some_and(|j| j.scenario == name))
-                    .and_then(|c| c.jobs.first().cloned())
-                    && !legs.is_empty()
-                {
-                    let replay = self.replay(&job, &[], TraceParams::full())?;
-                    let (page, link) = ctx.viewer_page(&replay, self.markers(), &job.key(), "leg 1")?;
+                if !page_runs.is_empty() {
+                    let (page, href) = ctx.viewer_runs_page(&page_runs, self.markers(), &name)?;
                     files.push(page);
-                    runs.push(link);
+                    runs = replays
+                        .iter()
+                        .enumerate()
+                        .map(|(k, (leg, _, _))| RunLink {
+                            label: format!("leg {leg}"),
+                            href: format!("{href}#run={k}"),
+                        })
+                        .collect();
                 }
                 figures.push(Figure {
                     title: name,
@@ -406,7 +403,7 @@ impl Suite for MapsSuite {
             }
             blocks.push(Block::Figures {
                 heading: "The first tour of each scenario".into(),
-                caption: "Re-simulated from their seeds: the true trajectory of every leg coloured by the behaviour and the localizer's state (automove, contour, asking people to step aside, in Warning), the particle cloud (teal) at each warning, the places in tour order.".into(),
+                caption: "Re-simulated from their seeds: the true trajectory of every leg coloured by the behaviour and the localizer's state (automove, contour, asking people to step aside, in Warning), the particle cloud (teal) at each warning, the places in tour order. Under each picture, one link per leg opens the tour's viewer page at that leg (laser, crowd, the particle cloud at every filter iteration).".into(),
                 figures,
             });
         }
@@ -431,9 +428,14 @@ const MARKERS: [EventMarker; 1] = [EventMarker {
     single_run_only: false,
 }];
 
+/// A leg's replay: its number in the tour (from 1), its key, the replay.
+type LegReplay = (usize, String, Replay);
+
 impl MapsSuite {
-    /// The legs of the first tour of `s`, re-run from the records on file.
-    fn tour_legs(&self, s: &Scenario, ctx: &ReportContext<'_>) -> Result<Vec<LegRun>> {
+    /// The legs of the first tour of `s`, re-run with full traces from the
+    /// records on file, and the replays of the legs that ran (for the
+    /// viewer), with their leg numbers from 1.
+    fn first_tour(&self, s: &Scenario, ctx: &ReportContext<'_>) -> Result<(Vec<LegRun>, Vec<LegReplay>)> {
         let campaign = self
             .campaigns()
             .into_iter()
@@ -446,13 +448,40 @@ impl MapsSuite {
             .unwrap_or_default();
         let mut earlier: Vec<RunRecord> = Vec::new();
         let mut legs = Vec::new();
+        let mut replays = Vec::new();
         for job in &campaign.jobs {
             let Some(&recorded) = on_file.get(&job.run) else {
                 break;
             };
-            legs.push(self.leg(job, &earlier, TraceParams::default())?.0);
+            let (mut leg, before) = self.leg(job, &earlier, TraceParams::full())?;
+            // A leg not run (the robot was lost before it) has no trace.
+            if leg.sim.is_some() {
+                replays.push((legs.len() + 1, job.key(), self.replay_of(job, &mut leg, &before)?));
+            }
+            legs.push(leg);
             earlier.push(recorded.clone());
         }
-        Ok(legs)
+        Ok((legs, replays))
+    }
+
+    /// The replay of `leg`, run from `before` with a trace (taken out of
+    /// the leg).
+    fn replay_of(&self, job: &Job, leg: &mut LegRun, before: &Whereabouts) -> Result<Replay> {
+        let record = self.record(job, leg, before)?;
+        let s = self.scenario(&job.scenario)?;
+        let data = self.map(s.map)?;
+        let k = (job.run % self.legs(s.map)?) as usize;
+        Ok(Replay {
+            record,
+            trace: leg
+                .sim
+                .as_mut()
+                .and_then(|s| s.trace.take())
+                .context("a leg that could not run has no trace")?,
+            grid: data.world.grid().clone(),
+            goal: Some(data.stops[k + 1].pose.position()),
+            robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
+            control_period_s: 0.1,
+        })
     }
 }
