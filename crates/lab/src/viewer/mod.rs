@@ -44,8 +44,10 @@
 //! inflates it with the browser's `DecompressionStream`, in every current
 //! browser since 2023). A voting run of 37.5 s takes 52 kB (22 kB of
 //! them the script and style), the 8 pictured runs of its scenario
-//! (`e4/field12`) 270 kB; a 300 s museum mission with a 181-beam laser
-//! among 25 visitors 1.2 MB.
+//! (`e4/field12`) 270 kB; a 116 s museum mission with a 181-beam laser
+//! among 25 visitors, its particle cloud at 128 filter iterations, 0.58 MB
+//! (`lab run tourguide`'s mission page); a minute of a maps-suite leg
+//! 0.25–0.3 MB.
 
 pub mod data;
 
