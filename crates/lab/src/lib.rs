@@ -31,6 +31,8 @@ pub mod suite;
 pub mod suites;
 pub mod summary;
 pub mod tables;
+#[cfg(test)]
+mod test_replays;
 pub mod topo;
 pub mod traps;
 pub mod viewer;

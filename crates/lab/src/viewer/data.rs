@@ -693,7 +693,7 @@ mod tests {
 
     #[test]
     fn a_noted_cloud_reaches_the_page_at_its_tick() {
-        let mut replay = crate::foxglove::tests::laser_replay();
+        let mut replay = crate::test_replays::laser_replay();
         let big: Vec<Pose> = (0..450)
             .map(|i| Pose::new(1.0, f64::from(i) * 0.001, 0.0))
             .collect();
