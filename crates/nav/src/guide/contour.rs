@@ -442,6 +442,40 @@ fn nearest_to(points: &[Vec2], q: Vec2) -> Option<Vec2> {
         .map(|(a, _)| a)
 }
 
+/// Projections onto the offset curve [`offset_point`] makes at most.
+const OFFSET_STEPS: usize = 4;
+
+/// The point of the offset curve — `d` from the contour, no nearer to any
+/// of its points — near `q`: `q` moved to `d` from the contour point
+/// nearest it (towards or away from it); if that lands behind the robot
+/// (`x < 0` in its frame), then away from the point nearest it while one
+/// is nearer than `d`, up to [`OFFSET_STEPS`] moves. One step puts a look-ahead spot near a wall onto the
+/// parallel at `d`. In a concave corner met with the robot already within
+/// `d` of the wall ahead, it lands behind the robot, still too near the
+/// side wall: its bearing is then about ±180° and the robot turned towards
+/// the corner as often as away from it (building_31's room north of the
+/// middle corridor: wedged in the corner for 12 s, then a stall and a turn
+/// round). The next moves push it off the side wall, to the corner of the
+/// offset curve, away from the followed side. Pushing ahead of the robot
+/// too (whenever a point is nearer than `d`) was measured and not kept:
+/// the maps suite's contour legs 138 → 120 of 198 (crowds: 60 people 34
+/// → 21), against 138 → 142 for the rule as it is (`lab run maps`,
+/// 2026-12-03, tours carried on after failures as they were then).
+fn offset_point(contour: &[Vec2], q: Vec2, d: f64) -> Vec2 {
+    let mut at = q;
+    for step in 0..OFFSET_STEPS {
+        match nearest_to(contour, at) {
+            // The first step pulls or pushes onto the parallel; later
+            // ones only push away from a point still too near.
+            Some(m) if m.dist(at) > 1e-9 && (step == 0 || (at.x < 0.0 && m.dist(at) < d - 1e-6)) => {
+                at = m + (at - m).scale(d / m.dist(at));
+            }
+            _ => break,
+        }
+    }
+    at
+}
+
 /// Whether a corridor of half-width `half_m` along bearing `bearing` is
 /// free of points up to `length_m`.
 fn clear_along(points: &[Vec2], bearing: f64, half_m: f64, length_m: f64) -> bool {
@@ -1114,11 +1148,7 @@ impl ContourTracker {
         let normal = n.scale(-1.0 / d); // from the contour to the robot
         let tangent = Vec2::new(-s * normal.y, s * normal.x);
         let ahead = tangent.scale(p.lookahead_m);
-        let target = match nearest_to(&contour, ahead) {
-            Some(m) if m.dist(ahead) > 1e-9 => m + (ahead - m).scale(p.distance_m / m.dist(ahead)),
-            _ => ahead,
-        };
-        (target.angle(), d, false)
+        (offset_point(&contour, ahead, p.distance_m).angle(), d, false)
     }
 }
 
@@ -1320,6 +1350,37 @@ mod tests {
             omega_radps < -0.75 && v_mps < 0.05,
             "turn right on the spot: {v_mps} {omega_radps}"
         );
+    }
+
+    #[test]
+    fn a_corner_target_behind_the_robot_is_pushed_off_the_side_wall() {
+        // Robot at the origin heading +x, following the wall on its left
+        // (y = 0.43) into a corner with the wall ahead at x = 0.7.
+        let d = 0.8;
+        let mut contour = Vec::new();
+        for k in 0..=34 {
+            contour.push(Vec2::new(-1.0 + 0.05 * f64::from(k), 0.43));
+        }
+        for k in 0..=48 {
+            contour.push(Vec2::new(0.7, 0.43 - 0.05 * f64::from(k)));
+        }
+        // One move only: to d from the wall ahead, straight behind the
+        // robot (bearing ±180°: no side to turn to).
+        let one = Vec2::new(0.7, 0.0) + (Vec2::new(0.4, 0.0) - Vec2::new(0.7, 0.0)).scale(d / 0.3);
+        assert!(one.x < 0.0 && one.y.abs() < 1e-9, "{one:?}");
+        let t = offset_point(&contour, Vec2::new(0.4, 0.0), d);
+        let nearest = contour.iter().map(|q| q.dist(t)).fold(f64::INFINITY, f64::min);
+        assert!(nearest >= d - 1e-6, "on the offset curve: {nearest}");
+        assert!(
+            t.angle() < -std::f64::consts::FRAC_PI_2,
+            "behind and to the right, away from the wall followed: {t:?}"
+        );
+        // Along a straight wall, farther than d: pulled onto the parallel.
+        let wall: Vec<Vec2> = (0..40)
+            .map(|k| Vec2::new(-1.0 + 0.1 * f64::from(k), 1.2))
+            .collect();
+        let on = offset_point(&wall, Vec2::new(0.4, 0.0), d);
+        assert!((on.y - 0.4).abs() < 1e-9 && (on.x - 0.4).abs() < 1e-9, "{on:?}");
     }
 
     #[test]
