@@ -13,6 +13,18 @@
 //! *estimate* — localization errors carry over, as on a real robot. People
 //! are placed anew for each leg.
 //!
+//! **Decision — a leg that ends without arriving (`timeout`, `lost`,
+//! `unreachable`, `gave_up`).** The guide's operator takes the robot to the
+//! place it was heading for and gives it its pose there (ROS users: drive it
+//! over, then "2D Pose Estimate"): the next leg starts at that place,
+//! estimate = truth. Before, the next leg started where the robot had
+//! stopped, and one failure cascaded: a contour leg timed out in a corner of
+//! building_31's south-west, where the static map has no route for the
+//! 0.70 m robot, so the tour's nine remaining legs were all `unreachable`
+//! at 0 s; timed-out robots left deep in a room timed out again on the next
+//! leg. A leg's outcome now measures that leg (`petrinav lab run maps`,
+//! numbers in the maps suite's docs).
+//!
 //! **Outcomes.** `reached` (within the goal tolerance of the true position
 //! when the controller declared arrival), `lost` (the controller declared
 //! arrival elsewhere, or its estimate was more than `lost_error_m` from the
@@ -535,28 +547,31 @@ impl Whereabouts {
         }
     }
 
-    /// After `leg` towards `to`: where it stopped; after a collision where
-    /// it was a second before (an operator's nudge off the wall); after an
-    /// unreachable leg where it was.
+    /// After `leg` towards `to`: where it stopped when it arrived; after a
+    /// collision where it was a second before (an operator's nudge off the
+    /// wall); after any other end (time-out, lost, unreachable, gave up) at
+    /// `to`, knowing it (the operator took it there: module docs).
     pub fn after(&self, leg: &LegRun, to: &Stop) -> Whereabouts {
         match leg.result.outcome {
-            LegOutcome::Unreachable => self.clone(),
             LegOutcome::Reached => Whereabouts {
                 name: to.name.clone(),
                 pose: leg.final_pose,
                 estimate: leg.final_estimate,
             },
-            outcome => {
+            LegOutcome::Collision => {
                 let back = leg.trace.poses.len().saturating_sub(11);
-                let (pose, estimate) = match (outcome, leg.trace.poses.get(back)) {
-                    (LegOutcome::Collision, Some(&p)) => (p, leg.trace.estimates[back]),
-                    _ => (leg.final_pose, leg.final_estimate),
+                let (pose, estimate) = match leg.trace.poses.get(back) {
+                    Some(&p) => (p, leg.trace.estimates[back]),
+                    None => (leg.final_pose, leg.final_estimate),
                 };
                 Whereabouts {
                     name: format!("{:.2},{:.2},{:.2}", pose.x_m, pose.y_m, pose.theta_rad),
                     pose,
                     estimate,
                 }
+            }
+            LegOutcome::Timeout | LegOutcome::Lost | LegOutcome::Unreachable | LegOutcome::GaveUp => {
+                Whereabouts::at(to)
             }
         }
     }
