@@ -24,6 +24,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let t0 = Instant::now();
     let gspn = net.instantiate(&Params::new())?;
+    if args.get(2).map(String::as_str) == Some("explore") {
+        // State-space generation only.
+        let rg = petri::ReachabilityGraph::explore(&gspn, &ExploreParams::default())?;
+        let st = rg.stats();
+        println!(
+            "{family} {n}: {} markings ({} tangible), {} edges, explore {:.3} s ({:.2} M markings/s, {:.2} M tangible/s, {:.1} B/marking)",
+            st.markings,
+            st.tangible,
+            st.edges,
+            st.seconds,
+            st.markings as f64 / st.seconds / 1e6,
+            st.tangible as f64 / st.seconds / 1e6,
+            st.bytes_per_marking
+        );
+        return Ok(());
+    }
     let compiled = CompiledGspn::build(
         &gspn,
         &ExploreParams {

@@ -98,6 +98,7 @@ impl ReachabilityGraph {
         let mut key = vec![0u64; store.layout().words()];
         store.layout().encode(&m0, &mut key);
         store.insert(&key);
+        drop(key);
 
         let mut vanishing = Vec::new();
         let mut offsets = vec![0u64];
@@ -108,74 +109,94 @@ impl ReachabilityGraph {
         let mut relayouts = 0;
 
         let mut cur = vec![0u32; np];
-        let mut cur_key = key.clone();
-        let mut succ_key = key;
         let mut firable: Vec<TransitionId> = Vec::new();
+        // Markings are expanded in batches: the successors of a batch are
+        // computed first, their hash slots loaded together (overlapping the
+        // cache misses), then inserted in order — the numbering is exactly
+        // that of expanding one marking after the other.
+        let mut batch = Batch::default();
         let mut i = 0usize;
         while i < store.len() {
-            store.decode(i, &mut cur);
-            for (mx, &c) in max_tokens.iter_mut().zip(&cur) {
-                *mx = (*mx).max(c);
-            }
-            cur_key.clear();
-            cur_key.extend_from_slice(store.key(i));
-            let kind = gspn.firable(&cur, &mut firable);
-            vanishing.push(kind == MarkingKind::Vanishing);
-            let total_weight: f64 = if kind == MarkingKind::Vanishing {
-                firable.iter().map(|&t| gspn.weight(t).unwrap_or(1.0)).sum()
-            } else {
-                1.0
-            };
-            for &t in &firable {
-                // Widen fields that the firing would overflow.
-                let mut widen: Option<Vec<u8>> = None;
-                for &(p, d) in gspn.delta(t) {
-                    if d > 0 {
-                        let p = p as usize;
-                        let new = u64::from(cur[p]) + d as u64;
-                        if new > u64::from(u32::MAX) {
-                            return Err(Error::TokenOverflow {
-                                place: gspn.place_names()[p].clone(),
-                                limit: u64::from(u32::MAX),
-                            });
-                        }
-                        if new > u64::from(store.layout().max_value(p)) {
-                            let w = widen.get_or_insert_with(|| store.layout().widths().to_vec());
-                            w[p] = (bits_for(new as u32) + 1).min(32);
-                        }
+            let end = (i + BATCH).min(store.len());
+            'build: loop {
+                batch.clear();
+                let w = store.layout().words();
+                for m in i..end {
+                    store.decode(m, &mut cur);
+                    for (mx, &c) in max_tokens.iter_mut().zip(&cur) {
+                        *mx = (*mx).max(c);
                     }
+                    let kind = gspn.firable(&cur, &mut firable);
+                    batch.vanishing.push(kind == MarkingKind::Vanishing);
+                    let total_weight: f64 = if kind == MarkingKind::Vanishing {
+                        firable.iter().map(|&t| gspn.weight(t).unwrap_or(1.0)).sum()
+                    } else {
+                        1.0
+                    };
+                    for &t in &firable {
+                        // Widen fields that the firing would overflow, then
+                        // compute the batch again in the new layout.
+                        let mut widen: Option<Vec<u8>> = None;
+                        for &(p, d) in gspn.delta(t) {
+                            if d > 0 {
+                                let p = p as usize;
+                                let new = u64::from(cur[p]) + d as u64;
+                                if new > u64::from(u32::MAX) {
+                                    return Err(Error::TokenOverflow {
+                                        place: gspn.place_names()[p].clone(),
+                                        limit: u64::from(u32::MAX),
+                                    });
+                                }
+                                if new > u64::from(store.layout().max_value(p)) {
+                                    let w = widen.get_or_insert_with(|| store.layout().widths().to_vec());
+                                    w[p] = (bits_for(new as u32) + 1).min(32);
+                                }
+                            }
+                        }
+                        if let Some(w) = widen {
+                            store.relayout(Layout::new(w));
+                            relayouts += 1;
+                            continue 'build;
+                        }
+                        let at = batch.keys.len();
+                        batch.keys.extend_from_slice(store.key(m));
+                        for &(p, d) in gspn.delta(t) {
+                            store.layout().add(&mut batch.keys[at..at + w], p as usize, d);
+                        }
+                        let c = if kind == MarkingKind::Vanishing {
+                            gspn.weight(t).unwrap_or(1.0) / total_weight
+                        } else {
+                            gspn.server_factor(t, &cur)
+                        };
+                        batch.edges.push((t.0, c));
+                    }
+                    batch.ends.push(batch.edges.len());
                 }
-                if let Some(w) = widen {
-                    store.relayout(Layout::new(w));
-                    relayouts += 1;
-                    cur_key.clear();
-                    cur_key.extend_from_slice(store.key(i));
-                    succ_key.resize(store.layout().words(), 0);
-                }
-                succ_key.copy_from_slice(&cur_key);
-                for &(p, d) in gspn.delta(t) {
-                    store.layout().add(&mut succ_key, p as usize, d);
-                }
-                let (j, new) = store.insert(&succ_key);
-                if new && store.len() > params.max_states {
-                    return Err(state_limit(gspn, params.max_states, i, &max_tokens));
-                }
-                let c = if kind == MarkingKind::Vanishing {
-                    gspn.weight(t).unwrap_or(1.0) / total_weight
-                } else {
-                    gspn.server_factor(t, &cur)
-                };
-                if c != 1.0 && coeffs.is_none() {
-                    coeffs = Some(vec![1.0; targets.len()]);
-                }
-                if let Some(cs) = coeffs.as_mut() {
-                    cs.push(c);
-                }
-                targets.push(j);
-                transitions.push(t.0);
+                break;
             }
-            offsets.push(targets.len() as u64);
-            i += 1;
+            store.touch(&batch.keys);
+            let w = store.layout().words();
+            let mut e = 0;
+            for (m, (&end_m, &v)) in batch.ends.iter().zip(&batch.vanishing).enumerate() {
+                for &(t, c) in &batch.edges[e..end_m] {
+                    let (j, new) = store.insert(&batch.keys[e * w..(e + 1) * w]);
+                    if new && store.len() > params.max_states {
+                        return Err(state_limit(gspn, params.max_states, i + m, &max_tokens));
+                    }
+                    if c != 1.0 && coeffs.is_none() {
+                        coeffs = Some(vec![1.0; targets.len()]);
+                    }
+                    if let Some(cs) = coeffs.as_mut() {
+                        cs.push(c);
+                    }
+                    targets.push(j);
+                    transitions.push(t);
+                    e += 1;
+                }
+                vanishing.push(v);
+                offsets.push(targets.len() as u64);
+            }
+            i = end;
         }
         let n = store.len();
         let nv = vanishing.iter().filter(|&&v| v).count();
@@ -290,6 +311,33 @@ impl Successors for ReachabilityGraph {
     fn successors(&self, v: u32) -> &[u32] {
         let (a, b) = self.range(v as usize);
         &self.targets[a..b]
+    }
+}
+
+/// Markings expanded per batch (see [`ReachabilityGraph::explore`]): their
+/// ~10 successors each are a few hundred slot loads in flight, which fit the
+/// L1 cache.
+const BATCH: usize = 32;
+
+/// The successors of a batch of markings, before insertion.
+#[derive(Default)]
+struct Batch {
+    /// Packed successor keys, `words` each.
+    keys: Vec<u64>,
+    /// `(transition, coefficient)` per successor.
+    edges: Vec<(u32, f64)>,
+    /// End of each marking's successors in `edges`.
+    ends: Vec<usize>,
+    /// Whether each marking is vanishing.
+    vanishing: Vec<bool>,
+}
+
+impl Batch {
+    fn clear(&mut self) {
+        self.keys.clear();
+        self.edges.clear();
+        self.ends.clear();
+        self.vanishing.clear();
     }
 }
 
