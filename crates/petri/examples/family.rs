@@ -40,16 +40,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         return Ok(());
     }
-    let compiled = CompiledGspn::build(
-        &gspn,
-        &ExploreParams {
-            max_states: 50_000_000,
-        },
-    )?;
+    let compiled = CompiledGspn::build(&gspn, &ExploreParams::default())?;
     let t1 = Instant::now();
     let st = compiled.stats();
     println!(
-        "{family} {n}: {} markings ({} tangible, {} vanishing), {} edges, explore {:.3} s ({:.2} M markings/s, {:.1} B/marking), compile {:.3} s, {:.1} MB",
+        "{family} {n}: {} markings ({} tangible, {} vanishing), {} edges, explore {:.3} s ({:.2} M markings/s, {:.1} B/marking), compile {:.3} s, {:.1} MB (matrix {:.2} B/entry, markings {:.1} B/marking)",
         st.explore.markings,
         st.explore.tangible,
         st.explore.vanishing,
@@ -58,7 +53,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         st.explore.markings as f64 / st.explore.seconds / 1e6,
         st.explore.bytes_per_marking,
         st.compile_seconds,
-        compiled.heap_bytes() as f64 / 1e6
+        compiled.heap_bytes() as f64 / 1e6,
+        st.matrix_bytes as f64 / st.entries as f64,
+        st.marking_bytes as f64 / st.explore.markings as f64
     );
     let omega: f64 = std::env::var("OMEGA")
         .ok()

@@ -207,6 +207,23 @@ impl WordTable {
         }
     }
 
+    /// The index of `key`, if present.
+    #[inline]
+    fn find(&self, key: u64) -> Option<u32> {
+        let mask = self.capacity() - 1;
+        let mut s = (hash_word(key) >> self.shift) as usize;
+        loop {
+            let slot = &self.slots[s];
+            if slot.index == EMPTY {
+                return None;
+            }
+            if slot.key == key {
+                return Some(slot.index);
+            }
+            s = (s + 1) & mask;
+        }
+    }
+
     /// Loads the home slot of `key` and returns its key: a hint that brings
     /// the slot into the cache ahead of [`WordTable::find_or_insert`]. Such
     /// loads are independent, so the processor overlaps their misses.
@@ -338,6 +355,27 @@ impl MarkingStore {
                 let acc = keys.iter().fold(0u64, |acc, &k| acc ^ t.touch(k));
                 std::hint::black_box(acc);
             }
+        }
+    }
+
+    /// The index of a packed key, if stored (read-only: safe to call from
+    /// several threads at once).
+    ///
+    /// # Panics
+    ///
+    /// After [`MarkingStore::drop_index`] (a bug).
+    #[inline]
+    pub(crate) fn find(&self, key: &[u64]) -> Option<u32> {
+        let w = self.layout.words;
+        match &self.table {
+            Index::Word(t) => t.find(key[0]),
+            Index::Words(table) => table
+                .find(hash_words(key), |&i| {
+                    let i = i as usize;
+                    &self.data[i * w..(i + 1) * w] == key
+                })
+                .copied(),
+            Index::None => unreachable!("lookup in a store whose index was dropped"),
         }
     }
 
