@@ -81,5 +81,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (t2 - t1).as_secs_f64(),
         (t2 - t0).as_secs_f64()
     );
+    // The benchmark measure of the Kanban family (issue 16, Storm's
+    // `S=? [ Pm1 >= 1 ]`).
+    if family == "kanban" {
+        let expr = petri::Expr::parse("#Pm1 >= 1")?;
+        println!("P(Pm1 >= 1) = {:.12}", compiled.measure(&sol, &expr)?);
+    }
     Ok(())
 }

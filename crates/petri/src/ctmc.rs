@@ -210,7 +210,10 @@ impl Dictionary {
 
 /// Whether every state reaches and is reached from state 0 (one forward
 /// and one backward search; cheaper than Tarjan for the common ergodic case).
-fn irreducible(outgoing: &Rows, incoming: &Rows) -> bool {
+/// When `M0` is tangible (state 0), every state is reachable from it by
+/// construction (breadth-first search from `M0`, positive rates and
+/// weights), and only the backward search is needed.
+fn irreducible(outgoing: &Rows, incoming: &Rows, m0_tangible: bool) -> bool {
     let n = outgoing.len();
     let all_reached = |g: &Rows| {
         let mut seen = vec![false; n];
@@ -228,7 +231,7 @@ fn irreducible(outgoing: &Rows, incoming: &Rows) -> bool {
         }
         count == n
     };
-    n > 0 && all_reached(outgoing) && all_reached(incoming)
+    n > 0 && (m0_tangible || all_reached(outgoing)) && all_reached(incoming)
 }
 
 impl CompiledGspn {
@@ -376,7 +379,7 @@ impl CompiledGspn {
         };
         incoming.split_diagonal();
 
-        let (components, bottoms, transient) = if irreducible(&outgoing, &incoming) {
+        let (components, bottoms, transient) = if irreducible(&outgoing, &incoming, initial == [(0, 1.0)]) {
             (None, Vec::new(), Vec::new())
         } else {
             let c = Components::of(&outgoing);
