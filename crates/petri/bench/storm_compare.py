@@ -7,8 +7,10 @@ script writes the PNPRO file with `petrinav gspn family NAME N -o FILE`, then
 * runs `petrinav gspn solve FILE -m MEASURE --json` and times the whole
   process (reading the file, generation, elimination, solve, output);
 * loads the same file in Storm through stormpy (`load_gspn_file`,
-  `build_jani_model`, `build_sparse_model`, `model_checking` of
-  `S=? [ MEASURE ]`, Storm's default engine and solver settings), in a child
+  `build_jani_model`, `build_model` (`build_sparse_model` in stormpy 1.x),
+  `model_checking` of
+  `S=? [ MEASURE ]` (`LRAmin=? [ MEASURE ]` for nets with immediate
+  transitions, which Storm turns into Markov automata), Storm's default engine and solver settings), in a child
   process with a timeout, and times those calls (the interpreter's start and
   `import stormpy` are not counted);
 
@@ -56,14 +58,24 @@ def storm_child(path, formula):
     t0 = time.perf_counter()
     gspn = stormpy.gspn.load_gspn_file(path)
     jani, _ = stormpy.gspn.build_jani_model(gspn)
-    props = stormpy.parse_properties_for_jani_model(f"S=? [ {formula} ]", jani)
+    # A GSPN with immediate transitions becomes a Markov automaton, on which
+    # Storm wants the optimisation direction stated (the weights resolve
+    # every choice, so min = max).
+    has_immediate = any(True for _ in gspn.get_immediate_transitions())
+    text = f"LRAmin=? [ {formula} ]" if has_immediate else f"S=? [ {formula} ]"
+    parse = getattr(stormpy, "parse_properties_for_jani_model", None)  # stormpy 1.x
+    props = parse(text, jani) if parse else stormpy.parse_properties(text, jani)
     t_parse = time.perf_counter() - t0
     t0 = time.perf_counter()
-    model = stormpy.build_sparse_model(jani, props)
+    if hasattr(stormpy, "build_sparse_model"):  # stormpy 1.x
+        model = stormpy.build_sparse_model(jani, props)
+    else:  # stormpy 2.x
+        model = stormpy.build_model(jani, props)
     t_build = time.perf_counter() - t0
     t0 = time.perf_counter()
     result = stormpy.model_checking(model, props[0])
-    value = result.at(model.initial_states[0])
+    s0 = model.initial_states[0]
+    value = result.at(s0) if hasattr(result, "at") else result.get_value(s0)
     t_check = time.perf_counter() - t0
     print(
         json.dumps(

@@ -346,8 +346,9 @@ impl CompiledGspn {
         let mut in_src = vec![0u32; m];
         let mut in_ids = Ids::zeros(m, dl);
         for s in 0..n {
-            for k in offsets[s] as usize..offsets[s + 1] as usize {
-                let d = dst[k] as usize;
+            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
+            for (k, &d) in (a..b).zip(&dst[a..b]) {
+                let d = d as usize;
                 if d != s {
                     let pos = fill[d] as usize;
                     fill[d] += 1;

@@ -426,6 +426,11 @@ impl MarkingStore {
             }
     }
 
+    /// Heap bytes of the index alone (freed by [`MarkingStore::drop_index`]).
+    pub(crate) fn index_bytes(&self) -> usize {
+        self.heap_bytes() - self.data.capacity() * 8
+    }
+
     /// Frees the hash table (lookups are no longer possible).
     pub(crate) fn drop_index(&mut self) {
         self.table = Index::None;
@@ -466,15 +471,23 @@ mod tests {
     #[test]
     fn word_table_grows_and_keeps_indices() {
         let mut t = WordTable::with_capacity(0);
+        // Keys 0 and u64::MAX included: no key value is reserved.
+        let key_of = |k: u64| {
+            if k == 7 {
+                u64::MAX
+            } else {
+                k.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            }
+        };
         for k in 0..100_000u64 {
-            // Keys 0 and u64::MAX included: no key value is reserved.
-            let key = k.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ u64::from(k == 7) * u64::MAX;
+            let key = key_of(k);
             assert_eq!(t.find_or_insert(key, k as u32), (k as u32, true));
         }
         assert!(t.len * 4 <= t.capacity() * 3);
         for k in (0..100_000u64).rev() {
-            let key = k.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ u64::from(k == 7) * u64::MAX;
+            let key = key_of(k);
             assert_eq!(t.find_or_insert(key, 0), (k as u32, false));
+            assert_eq!(t.find(key), Some(k as u32));
         }
     }
 
