@@ -11,9 +11,13 @@
 //! Successors are computed on the packed marking: the transition's token
 //! changes are added to the bit fields directly, widening a field first if a
 //! count would not fit (see the `marking` module). Cost: `O(|T|)` enabling tests
-//! per marking plus one hash probe per edge. Memory: the packed marking (often
-//! 8 bytes) + ~5 bytes of hash table per marking, 8 bytes per edge (+8 when
-//! some coefficient differs from 1).
+//! per marking plus one hash probe per edge (see the `marking` module for the
+//! table; lookups run in parallel rounds, see [`ReachabilityGraph::explore`]).
+//! Memory: the packed marking (often 8 bytes) + 21–43 bytes of hash table per
+//! marking (5 for markings wider than a word), 8 bytes per edge (+8 when some
+//! coefficient differs from 1). The memory guard
+//! ([`ExploreParams::max_memory`]) stops generation before the whole pipeline
+//! (generation, compilation, solve) would need more than the limit.
 
 use std::time::Instant;
 
@@ -137,6 +141,13 @@ pub struct Edge {
 
 impl ReachabilityGraph {
     /// Generates the reachability graph of `gspn` from its initial marking.
+    ///
+    /// Markings are numbered in breadth-first discovery order (successors in
+    /// transition order), the same on any number of threads: rounds of
+    /// markings are expanded and looked up in parallel, the new successors
+    /// inserted in order. Errors: [`Error::MemoryLimit`] (see
+    /// [`ExploreParams::max_memory`]), [`Error::StateLimit`],
+    /// [`Error::TokenOverflow`].
     pub fn explore(gspn: &Gspn, params: &ExploreParams) -> Result<ReachabilityGraph> {
         let start = Instant::now();
         let m0 = gspn.initial_marking().to_vec();
