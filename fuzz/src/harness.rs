@@ -79,6 +79,7 @@ fn net(data: &[u8], format: Format) {
         &gspn,
         &ExploreParams {
             max_states: MAX_STATES,
+            ..ExploreParams::default()
         },
     ) else {
         return;

@@ -86,9 +86,36 @@ pub struct NetArgs {
     /// value may be an expression over numbers, e.g. lambda=1/3.
     #[arg(long = "param", short = 'p', value_name = "NAME=VALUE")]
     pub params: Vec<String>,
-    /// Stop with an error beyond this many markings (tangible + vanishing).
-    #[arg(long, default_value_t = 10_000_000, value_name = "N")]
-    pub max_states: usize,
+    /// Stop with an error beyond this many markings (tangible + vanishing);
+    /// no limit by default: the memory guard decides.
+    #[arg(long, value_name = "N")]
+    pub max_states: Option<usize>,
+    /// Stop with an error as soon as generating, compiling and solving the
+    /// state space found so far would need more memory than this: bytes, or
+    /// a number with K, M, G (powers of 1024), e.g. 12G. Default: 85 % of the
+    /// memory available when the command starts (MemAvailable).
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub max_memory: Option<u64>,
+}
+
+/// `12G`, `800M`, `1.5GiB`, `65536`: bytes, with K/M/G/T (powers of 1024).
+fn parse_size(s: &str) -> std::result::Result<u64, String> {
+    let t = s.trim();
+    let lower = t.to_ascii_lowercase();
+    let body = lower.trim_end_matches("ib").trim_end_matches('b');
+    let (num, mult) = match body.chars().last() {
+        Some('k') => (&body[..body.len() - 1], 1u64 << 10),
+        Some('m') => (&body[..body.len() - 1], 1 << 20),
+        Some('g') => (&body[..body.len() - 1], 1 << 30),
+        Some('t') => (&body[..body.len() - 1], 1 << 40),
+        _ => (body, 1),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v * (mult as f64) < 1.8e19 => Ok((v * mult as f64) as u64),
+        _ => Err(format!(
+            "`{t}` is not a memory size (e.g. 12G, 800M, 1.5GiB or a number of bytes)"
+        )),
+    }
 }
 
 #[derive(Args, Debug)]
@@ -231,12 +258,15 @@ fn load(args: &NetArgs) -> Result<(Net, Gspn)> {
 }
 
 fn explore(args: &NetArgs, gspn: &Gspn) -> Result<ReachabilityGraph> {
-    Ok(ReachabilityGraph::explore(
-        gspn,
-        &ExploreParams {
-            max_states: args.max_states,
-        },
-    )?)
+    Ok(ReachabilityGraph::explore(gspn, &explore_params(args))?)
+}
+
+fn explore_params(args: &NetArgs) -> ExploreParams {
+    let defaults = ExploreParams::default();
+    ExploreParams {
+        max_states: args.max_states.unwrap_or(defaults.max_states),
+        max_memory: args.max_memory.unwrap_or(defaults.max_memory),
+    }
 }
 
 fn print_json(v: &Value) -> Result<()> {
@@ -799,5 +829,20 @@ fn family_cmd(family: Family, n: u32, output: Option<&Path>) -> Result<()> {
             Ok(petri::io::write_file(&net, path).with_context(|| format!("writing {}", path.display()))?)
         }
         None => write_out(&petri::io::write_string(&net, Format::Toml)?, None),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn memory_sizes_parse_in_powers_of_1024() {
+        assert_eq!(parse_size("12G"), Ok(12 << 30));
+        assert_eq!(parse_size("1.5GiB"), Ok(3 << 29));
+        assert_eq!(parse_size("800m"), Ok(800 << 20));
+        assert_eq!(parse_size("65536"), Ok(65536));
+        assert!(parse_size("lots").is_err());
+        assert!(parse_size("-1G").is_err());
     }
 }

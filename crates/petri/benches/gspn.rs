@@ -78,11 +78,9 @@ fn instantiate(net: &Net) -> Gspn {
     net.instantiate(&Params::new()).unwrap()
 }
 
-/// Room for Kanban N = 5 (2.5 M markings) and FMS N = 6 (2.5 M).
+/// No state limit: the default memory guard decides.
 fn explore_params() -> ExploreParams {
-    ExploreParams {
-        max_states: 50_000_000,
-    }
+    ExploreParams::default()
 }
 
 /// State-space generation. Throughput counts every marking found (tangible

@@ -24,16 +24,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let t0 = Instant::now();
     let gspn = net.instantiate(&Params::new())?;
-    let compiled = CompiledGspn::build(
-        &gspn,
-        &ExploreParams {
-            max_states: 50_000_000,
-        },
-    )?;
+    if args.get(2).map(String::as_str) == Some("explore") {
+        // State-space generation only.
+        let rg = petri::ReachabilityGraph::explore(&gspn, &ExploreParams::default())?;
+        let st = rg.stats();
+        println!(
+            "{family} {n}: {} markings ({} tangible), {} edges, explore {:.3} s ({:.2} M markings/s, {:.2} M tangible/s, {:.1} B/marking)",
+            st.markings,
+            st.tangible,
+            st.edges,
+            st.seconds,
+            st.markings as f64 / st.seconds / 1e6,
+            st.tangible as f64 / st.seconds / 1e6,
+            st.bytes_per_marking
+        );
+        return Ok(());
+    }
+    let compiled = CompiledGspn::build(&gspn, &ExploreParams::default())?;
     let t1 = Instant::now();
     let st = compiled.stats();
     println!(
-        "{family} {n}: {} markings ({} tangible, {} vanishing), {} edges, explore {:.3} s ({:.2} M markings/s, {:.1} B/marking), compile {:.3} s, {:.1} MB",
+        "{family} {n}: {} markings ({} tangible, {} vanishing), {} edges, explore {:.3} s ({:.2} M markings/s, {:.1} B/marking), compile {:.3} s, {:.1} MB (matrix {:.2} B/entry, markings {:.1} B/marking)",
         st.explore.markings,
         st.explore.tangible,
         st.explore.vanishing,
@@ -42,7 +53,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         st.explore.markings as f64 / st.explore.seconds / 1e6,
         st.explore.bytes_per_marking,
         st.compile_seconds,
-        compiled.heap_bytes() as f64 / 1e6
+        compiled.heap_bytes() as f64 / 1e6,
+        st.matrix_bytes as f64 / st.entries as f64,
+        st.marking_bytes as f64 / st.explore.markings as f64
     );
     let omega: f64 = std::env::var("OMEGA")
         .ok()
@@ -68,5 +81,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (t2 - t1).as_secs_f64(),
         (t2 - t0).as_secs_f64()
     );
+    // The benchmark measure of the Kanban family (issue 16, Storm's
+    // `S=? [ Pm1 >= 1 ]`).
+    if family == "kanban" {
+        let expr = petri::Expr::parse("#Pm1 >= 1")?;
+        println!("P(Pm1 >= 1) = {:.12}", compiled.measure(&sol, &expr)?);
+    }
     Ok(())
 }

@@ -67,6 +67,11 @@ pub struct CompileStats {
     pub entries: usize,
     /// Distinct `(transition, coefficient)` values among them.
     pub distinct_values: usize,
+    /// Heap bytes of the generator's rows (outgoing and incoming: offsets,
+    /// 4-byte indices, 2- or 4-byte value ids).
+    pub matrix_bytes: usize,
+    /// Heap bytes of the packed tangible and vanishing markings kept.
+    pub marking_bytes: usize,
     /// Seconds spent eliminating vanishing markings and building the chain.
     pub compile_seconds: f64,
     /// Number of strongly connected components of the tangible chain.
@@ -205,7 +210,10 @@ impl Dictionary {
 
 /// Whether every state reaches and is reached from state 0 (one forward
 /// and one backward search; cheaper than Tarjan for the common ergodic case).
-fn irreducible(outgoing: &Rows, incoming: &Rows) -> bool {
+/// When `M0` is tangible (state 0), every state is reachable from it by
+/// construction (breadth-first search from `M0`, positive rates and
+/// weights), and only the backward search is needed.
+fn irreducible(outgoing: &Rows, incoming: &Rows, m0_tangible: bool) -> bool {
     let n = outgoing.len();
     let all_reached = |g: &Rows| {
         let mut seen = vec![false; n];
@@ -223,7 +231,7 @@ fn irreducible(outgoing: &Rows, incoming: &Rows) -> bool {
         }
         count == n
     };
-    n > 0 && all_reached(outgoing) && all_reached(incoming)
+    n > 0 && (m0_tangible || all_reached(outgoing)) && all_reached(incoming)
 }
 
 impl CompiledGspn {
@@ -247,18 +255,25 @@ impl CompiledGspn {
         let n = tangible_rg.len();
         let mut dict = Dictionary::new(gspn.num_transitions());
         let mut imm = ImmediateFlows::default();
-        let (offsets, dst, ids, initial) = if rg.stats.vanishing == 0 {
-            // Tangible ids are RG indices: the RG's edges are the chain.
-            let ids: Vec<u32> = match &rg.coeffs {
-                None => rg.transitions.clone(),
-                Some(cs) => rg
-                    .transitions
-                    .iter()
-                    .zip(cs)
-                    .map(|(&t, &c)| dict.id(t, c))
-                    .collect(),
-            };
-            (rg.offsets.clone(), rg.targets.clone(), ids, vec![(0u32, 1.0)])
+        let explore = rg.stats.clone();
+        let (offsets, dst, ids, initial, mut store) = if rg.stats.vanishing == 0 {
+            // Tangible ids are RG indices: the RG's edges are the chain,
+            // moved, not copied.
+            let ReachabilityGraph {
+                store,
+                offsets,
+                targets,
+                transitions,
+                coeffs,
+                ..
+            } = rg;
+            let mut ids = transitions;
+            if let Some(cs) = coeffs {
+                for (id, &c) in ids.iter_mut().zip(&cs) {
+                    *id = dict.id(*id, c);
+                }
+            }
+            (offsets, targets, ids, vec![(0u32, 1.0)], store)
         } else {
             let el = vanishing::eliminate(&gspn, &rg, &tangible_id)?;
             let mut offsets = Vec::with_capacity(n + 1);
@@ -306,10 +321,8 @@ impl CompiledGspn {
             } else {
                 vec![(tangible_id[0], 1.0)]
             };
-            (offsets, dst, ids, initial)
+            (offsets, dst, ids, initial, rg.store)
         };
-        let explore = rg.stats.clone();
-        let mut store = rg.store;
         store.drop_index();
         drop(tangible_id);
 
@@ -327,25 +340,27 @@ impl CompiledGspn {
             in_offsets[j + 1] += in_offsets[j];
         }
         let m = in_offsets[n] as usize;
+        let dl = dict.pairs.len();
+        let ids = Ids::new(ids, dl);
         let mut fill: Vec<u64> = in_offsets[..n].to_vec();
         let mut in_src = vec![0u32; m];
-        let mut in_ids = vec![0u32; m];
+        let mut in_ids = Ids::zeros(m, dl);
         for s in 0..n {
-            for k in offsets[s] as usize..offsets[s + 1] as usize {
-                let d = dst[k] as usize;
+            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
+            for (k, &d) in (a..b).zip(&dst[a..b]) {
+                let d = d as usize;
                 if d != s {
                     let pos = fill[d] as usize;
                     fill[d] += 1;
                     in_src[pos] = s as u32;
-                    in_ids[pos] = ids[k];
+                    in_ids.set(pos, ids.get(k));
                 }
             }
         }
         drop(fill);
-        let dl = dict.pairs.len();
         let mut fires = vec![false; gspn.num_transitions()];
-        for &id in &ids {
-            fires[dict.pairs[id as usize].0 as usize] = true;
+        for k in 0..dst.len() {
+            fires[dict.pairs[ids.get(k)].0 as usize] = true;
         }
         let firing_timed: Vec<u32> = (0..gspn.num_transitions() as u32)
             .filter(|&t| fires[t as usize] && !gspn.is_immediate(TransitionId(t)))
@@ -354,18 +369,18 @@ impl CompiledGspn {
         let outgoing = Rows {
             offsets,
             index: dst,
-            ids: Ids::new(ids, dl),
+            ids,
             below: Vec::new(),
         };
         let mut incoming = Rows {
             offsets: in_offsets,
             index: in_src,
-            ids: Ids::new(in_ids, dl),
+            ids: in_ids,
             below: Vec::new(),
         };
         incoming.split_diagonal();
 
-        let (components, bottoms, transient) = if irreducible(&outgoing, &incoming) {
+        let (components, bottoms, transient) = if irreducible(&outgoing, &incoming, initial == [(0, 1.0)]) {
             (None, Vec::new(), Vec::new())
         } else {
             let c = Components::of(&outgoing);
@@ -388,6 +403,8 @@ impl CompiledGspn {
             explore,
             entries: outgoing.index.len(),
             distinct_values: dl,
+            matrix_bytes: outgoing.heap_bytes() + incoming.heap_bytes(),
+            marking_bytes: store.heap_bytes(),
             compile_seconds: start.elapsed().as_secs_f64(),
             components: components.as_ref().map_or(1, |c| c.len()),
             bottom_components: if components.is_some() { bottoms.len() } else { 1 },

@@ -147,6 +147,24 @@ pub enum Error {
         /// Diagnosis, e.g. places whose token counts keep growing.
         hint: String,
     },
+    /// The state space would need more memory than allowed (see
+    /// [`crate::ExploreParams::max_memory`]): generation stopped before
+    /// allocating it.
+    #[error(
+        "the state space needs more memory than the limit: about {} to generate, compile and solve the {markings} markings and {edges} edges found so far, against a limit of {} (by default 85 % of the memory available when generation started); raise it with --max-memory if the machine has more free memory",
+        crate::error::format_bytes(*.estimate),
+        crate::error::format_bytes(*.limit)
+    )]
+    MemoryLimit {
+        /// Estimated bytes for what was found so far.
+        estimate: u64,
+        /// The limit in bytes.
+        limit: u64,
+        /// Markings found so far.
+        markings: usize,
+        /// Edges found so far.
+        edges: usize,
+    },
     /// A place's token count does not fit the engine's counters.
     #[error("place `{place}` would hold more than {limit} tokens")]
     TokenOverflow {
@@ -326,3 +344,19 @@ pub enum Error {
 
 /// Shorthand for `Result<T, petri::Error>`.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// `1.5 GiB`, `820 MiB`, `12 kiB`, `100 B`.
+pub(crate) fn format_bytes(b: u64) -> String {
+    const UNITS: [&str; 4] = ["B", "kiB", "MiB", "GiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} B")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
+}

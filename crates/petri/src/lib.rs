@@ -71,6 +71,9 @@ pub use net::{
     TransitionKind,
 };
 pub use properties::Properties;
-pub use reachability::{Edge, ExploreParams, ExploreStats, MarkingId, ReachabilityGraph};
+pub use reachability::{
+    COMPILE_BYTES_PER_EDGE, Edge, ExploreParams, ExploreStats, FALLBACK_MAX_MEMORY, MarkingId,
+    ReachabilityGraph, SOLVE_BYTES_PER_STATE, default_max_memory, estimated_bytes,
+};
 pub use simulation::{Estimate, SimParams, SimProgress, SimResult, simulate, simulate_observed};
 pub use steady_state::{Method, SolveInfo, SolveParams};

@@ -11,11 +11,17 @@
 //! Successors are computed on the packed marking: the transition's token
 //! changes are added to the bit fields directly, widening a field first if a
 //! count would not fit (see the `marking` module). Cost: `O(|T|)` enabling tests
-//! per marking plus one hash probe per edge. Memory: the packed marking (often
-//! 8 bytes) + ~5 bytes of hash table per marking, 8 bytes per edge (+8 when
-//! some coefficient differs from 1).
+//! per marking plus one hash probe per edge (see the `marking` module for the
+//! table; lookups run in parallel rounds, see [`ReachabilityGraph::explore`]).
+//! Memory: the packed marking (often 8 bytes) + 21–43 bytes of hash table per
+//! marking (5 for markings wider than a word), 8 bytes per edge (+8 when some
+//! coefficient differs from 1). The memory guard
+//! ([`ExploreParams::max_memory`]) stops generation before the whole pipeline
+//! (generation, compilation, solve) would need more than the limit.
 
 use std::time::Instant;
+
+use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::gspn::{Gspn, MarkingKind};
@@ -31,16 +37,61 @@ pub struct MarkingId(pub u32);
 #[derive(Debug, Clone)]
 pub struct ExploreParams {
     /// Stop with [`Error::StateLimit`] beyond this many markings (tangible and
-    /// vanishing). Default 10,000,000 (a few GiB at most for typical nets).
+    /// vanishing). Default: no limit (`usize::MAX`); the memory guard
+    /// [`ExploreParams::max_memory`] decides what is too big.
     pub max_states: usize,
+    /// Stop with [`Error::MemoryLimit`] as soon as generating, compiling and
+    /// solving the markings and edges found so far would need more than this
+    /// many bytes (see [`estimated_bytes`]). Default:
+    /// [`default_max_memory`], 85 % of the memory available at the time.
+    pub max_memory: u64,
 }
 
 impl Default for ExploreParams {
     fn default() -> Self {
         ExploreParams {
-            max_states: 10_000_000,
+            max_states: usize::MAX,
+            max_memory: default_max_memory(),
         }
     }
+}
+
+/// Used when the available memory cannot be read (not Linux): 8 GiB.
+pub const FALLBACK_MAX_MEMORY: u64 = 8 << 30;
+
+/// The default memory guard: 85 % of `MemAvailable` in `/proc/meminfo`
+/// (the memory the kernel can give without swapping, other processes'
+/// use deducted) when it is read, [`FALLBACK_MAX_MEMORY`] otherwise.
+pub fn default_max_memory() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("MemAvailable:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map_or(FALLBACK_MAX_MEMORY, |kib| kib * 1024 / 100 * 85)
+}
+
+/// Bytes per tangible marking that compiling and solving add to the
+/// reachability graph: exit rates, the incoming rows' offsets and diagonal
+/// split, the solution and BiCGSTAB's vectors (≈ 14 doubles), the tangible
+/// index. (Kanban 7 measured ≈ 125.)
+pub const SOLVE_BYTES_PER_STATE: u64 = 150;
+/// Net bytes per edge that compiling adds to the graph's 8 (4-byte target,
+/// 4-byte transition), which become the outgoing rows with 2-byte ids: the
+/// incoming rows (4-byte index, 2-byte value id) less the 2 bytes saved.
+pub const COMPILE_BYTES_PER_EDGE: u64 = 4;
+
+/// Estimated peak bytes of generating, compiling and solving a state space
+/// whose reachability graph takes `graph_bytes` *without* the marking
+/// store's hash index (freed before compiling), with `markings` markings and
+/// `edges` edges. The peak is during the solve (the index's peak, during
+/// generation, is lower). For nets without vanishing markings; eliminating
+/// them adds working memory that this leaves out. Kanban 7: 12.5 GB
+/// estimated, 10.9 GB (10.2 GiB) measured.
+pub fn estimated_bytes(graph_bytes: u64, markings: usize, edges: usize) -> u64 {
+    graph_bytes + edges as u64 * COMPILE_BYTES_PER_EDGE + markings as u64 * SOLVE_BYTES_PER_STATE
 }
 
 /// Figures about a generation run.
@@ -90,14 +141,21 @@ pub struct Edge {
 
 impl ReachabilityGraph {
     /// Generates the reachability graph of `gspn` from its initial marking.
+    ///
+    /// Markings are numbered in breadth-first discovery order (successors in
+    /// transition order), the same on any number of threads: rounds of
+    /// markings are expanded and looked up in parallel, the new successors
+    /// inserted in order. Errors: [`Error::MemoryLimit`] (see
+    /// [`ExploreParams::max_memory`]), [`Error::StateLimit`],
+    /// [`Error::TokenOverflow`].
     pub fn explore(gspn: &Gspn, params: &ExploreParams) -> Result<ReachabilityGraph> {
         let start = Instant::now();
-        let np = gspn.num_places();
         let m0 = gspn.initial_marking().to_vec();
         let mut store = MarkingStore::new(Layout::for_marking(&m0, 1));
         let mut key = vec![0u64; store.layout().words()];
         store.layout().encode(&m0, &mut key);
         store.insert(&key);
+        drop(key);
 
         let mut vanishing = Vec::new();
         let mut offsets = vec![0u64];
@@ -107,75 +165,104 @@ impl ReachabilityGraph {
         let mut max_tokens = m0.clone();
         let mut relayouts = 0;
 
-        let mut cur = vec![0u32; np];
-        let mut cur_key = key.clone();
-        let mut succ_key = key;
-        let mut firable: Vec<TransitionId> = Vec::new();
+        // Markings are expanded in rounds. A round's markings are split into
+        // chunks of `BATCH`; each chunk's successors are computed, their hash
+        // slots loaded together (overlapping the cache misses) and looked up
+        // in the store as it was when the round began — read-only, so the
+        // chunks run in parallel once the store is large. The successors
+        // not found are then inserted one after the other, in order: the
+        // numbering is exactly that of expanding one marking after the other
+        // (breadth-first discovery order), whatever the number of threads.
+        let mut batches: Vec<Batch> = Vec::new();
+        let threads = rayon::current_num_threads();
         let mut i = 0usize;
         while i < store.len() {
-            store.decode(i, &mut cur);
-            for (mx, &c) in max_tokens.iter_mut().zip(&cur) {
-                *mx = (*mx).max(c);
-            }
-            cur_key.clear();
-            cur_key.extend_from_slice(store.key(i));
-            let kind = gspn.firable(&cur, &mut firable);
-            vanishing.push(kind == MarkingKind::Vanishing);
-            let total_weight: f64 = if kind == MarkingKind::Vanishing {
-                firable.iter().map(|&t| gspn.weight(t).unwrap_or(1.0)).sum()
+            // The round's size changes the speed, never the result.
+            let parallel = threads > 1 && store.len() >= PARALLEL_FROM;
+            let end = (i + if parallel {
+                ROUND_PER_THREAD * threads
             } else {
-                1.0
+                BATCH
+            })
+            .min(store.len());
+            let chunks = (end - i).div_ceil(BATCH);
+            batches.resize_with(chunks.max(batches.len()), Batch::default);
+            let run = |(c, b): (usize, &mut Batch)| {
+                let lo = i + c * BATCH;
+                b.expand(gspn, &store, lo..(lo + BATCH).min(end))
             };
-            for &t in &firable {
-                // Widen fields that the firing would overflow.
-                let mut widen: Option<Vec<u8>> = None;
-                for &(p, d) in gspn.delta(t) {
-                    if d > 0 {
-                        let p = p as usize;
-                        let new = u64::from(cur[p]) + d as u64;
-                        if new > u64::from(u32::MAX) {
-                            return Err(Error::TokenOverflow {
-                                place: gspn.place_names()[p].clone(),
-                                limit: u64::from(u32::MAX),
-                            });
-                        }
-                        if new > u64::from(store.layout().max_value(p)) {
-                            let w = widen.get_or_insert_with(|| store.layout().widths().to_vec());
-                            w[p] = (bits_for(new as u32) + 1).min(32);
-                        }
-                    }
-                }
-                if let Some(w) = widen {
-                    store.relayout(Layout::new(w));
-                    relayouts += 1;
-                    cur_key.clear();
-                    cur_key.extend_from_slice(store.key(i));
-                    succ_key.resize(store.layout().words(), 0);
-                }
-                succ_key.copy_from_slice(&cur_key);
-                for &(p, d) in gspn.delta(t) {
-                    store.layout().add(&mut succ_key, p as usize, d);
-                }
-                let (j, new) = store.insert(&succ_key);
-                if new && store.len() > params.max_states {
-                    return Err(state_limit(gspn, params.max_states, i, &max_tokens));
-                }
-                let c = if kind == MarkingKind::Vanishing {
-                    gspn.weight(t).unwrap_or(1.0) / total_weight
-                } else {
-                    gspn.server_factor(t, &cur)
-                };
-                if c != 1.0 && coeffs.is_none() {
-                    coeffs = Some(vec![1.0; targets.len()]);
-                }
-                if let Some(cs) = coeffs.as_mut() {
-                    cs.push(c);
-                }
-                targets.push(j);
-                transitions.push(t.0);
+            let events: Vec<Result<Option<Vec<u8>>>> = if parallel {
+                batches[..chunks].par_iter_mut().enumerate().map(run).collect()
+            } else {
+                batches[..chunks].iter_mut().enumerate().map(run).collect()
+            };
+            // The first event in marking order: an error, or a field to widen
+            // (then the round is computed again in the new layout).
+            if let Some(event) = events.into_iter().find_map(|e| e.transpose()) {
+                store.relayout(Layout::new(event?));
+                relayouts += 1;
+                continue;
             }
-            offsets.push(targets.len() as u64);
-            i += 1;
+            let w = store.layout().words();
+            for b in &batches[..chunks] {
+                for (mx, &c) in max_tokens.iter_mut().zip(&b.max_tokens) {
+                    *mx = (*mx).max(c);
+                }
+            }
+            let mut m = i;
+            for b in &batches[..chunks] {
+                let mut e = 0;
+                for (&end_m, &v) in b.ends.iter().zip(&b.vanishing) {
+                    for k in e..end_m {
+                        let j = match b.found[k] {
+                            NOT_FOUND => {
+                                let (j, new) = store.insert(&b.keys[k * w..(k + 1) * w]);
+                                if new && store.len() > params.max_states {
+                                    return Err(state_limit(gspn, params.max_states, m, &max_tokens));
+                                }
+                                j
+                            }
+                            j => j,
+                        };
+                        let (t, c) = b.edges[k];
+                        if c != 1.0 && coeffs.is_none() {
+                            coeffs = Some(vec![1.0; targets.len()]);
+                        }
+                        if let Some(cs) = coeffs.as_mut() {
+                            cs.push(c);
+                        }
+                        targets.push(j);
+                        transitions.push(t);
+                    }
+                    e = end_m;
+                    vanishing.push(v);
+                    offsets.push(targets.len() as u64);
+                    m += 1;
+                }
+            }
+            i = end;
+            let graph_bytes = store.heap_bytes() - store.index_bytes()
+                + offsets.capacity() * 8
+                + vanishing.capacity()
+                + (targets.capacity() + transitions.capacity()) * 4
+                + coeffs.as_ref().map_or(0, |c| c.capacity() * 8);
+            let estimate = estimated_bytes(graph_bytes as u64, store.len(), targets.len());
+            if estimate > params.max_memory {
+                return Err(Error::MemoryLimit {
+                    estimate,
+                    limit: params.max_memory,
+                    markings: store.len(),
+                    edges: targets.len(),
+                });
+            }
+        }
+        // Vec growth leaves up to half of each array unused; large blocks are
+        // remapped, not copied, when shrunk.
+        targets.shrink_to_fit();
+        transitions.shrink_to_fit();
+        offsets.shrink_to_fit();
+        if let Some(c) = coeffs.as_mut() {
+            c.shrink_to_fit();
         }
         let n = store.len();
         let nv = vanishing.iter().filter(|&&v| v).count();
@@ -290,6 +377,119 @@ impl Successors for ReachabilityGraph {
     fn successors(&self, v: u32) -> &[u32] {
         let (a, b) = self.range(v as usize);
         &self.targets[a..b]
+    }
+}
+
+/// Markings per chunk (see [`ReachabilityGraph::explore`]): their ~10
+/// successors each are a few hundred slot loads in flight, which fit the L1
+/// cache.
+const BATCH: usize = 32;
+/// Markings per round and thread once the store is large (32 chunks per
+/// thread: their slots stay in its L2 cache until they are inserted).
+const ROUND_PER_THREAD: usize = 32 * BATCH;
+/// Stored markings from which rounds run in parallel (below, the hash table
+/// is in cache and a round is too short to share).
+const PARALLEL_FROM: usize = 1 << 15;
+/// `Batch::found` of a successor that was not stored when the round began.
+const NOT_FOUND: u32 = u32::MAX;
+
+/// The successors of a chunk of markings, before insertion.
+#[derive(Default)]
+struct Batch {
+    /// Packed successor keys, `words` each.
+    keys: Vec<u64>,
+    /// `(transition, coefficient)` per successor.
+    edges: Vec<(u32, f64)>,
+    /// The successor's index if it was stored when the round began,
+    /// [`NOT_FOUND`] otherwise.
+    found: Vec<u32>,
+    /// End of each marking's successors in `edges`.
+    ends: Vec<usize>,
+    /// Whether each marking is vanishing.
+    vanishing: Vec<bool>,
+    /// Largest token count of each place over the chunk's markings.
+    max_tokens: Vec<u32>,
+    cur: Vec<u32>,
+    firable: Vec<TransitionId>,
+}
+
+impl Batch {
+    /// Computes the successors of `markings` and looks them up in `store`.
+    /// Returns the widths to widen the layout to if a firing would overflow
+    /// a field (the batch is then incomplete), or the error of a count beyond
+    /// `u32`.
+    fn expand(
+        &mut self,
+        gspn: &Gspn,
+        store: &MarkingStore,
+        markings: std::ops::Range<usize>,
+    ) -> Result<Option<Vec<u8>>> {
+        self.keys.clear();
+        self.edges.clear();
+        self.found.clear();
+        self.ends.clear();
+        self.vanishing.clear();
+        let np = gspn.num_places();
+        self.max_tokens.clear();
+        self.max_tokens.resize(np, 0);
+        self.cur.resize(np, 0);
+        let layout = store.layout();
+        let w = layout.words();
+        for m in markings {
+            store.decode(m, &mut self.cur);
+            for (mx, &c) in self.max_tokens.iter_mut().zip(&self.cur) {
+                *mx = (*mx).max(c);
+            }
+            let kind = gspn.firable(&self.cur, &mut self.firable);
+            self.vanishing.push(kind == MarkingKind::Vanishing);
+            let total_weight: f64 = if kind == MarkingKind::Vanishing {
+                self.firable.iter().map(|&t| gspn.weight(t).unwrap_or(1.0)).sum()
+            } else {
+                1.0
+            };
+            for &t in &self.firable {
+                // Fields that the firing would overflow are widened first.
+                let mut widen: Option<Vec<u8>> = None;
+                for &(p, d) in gspn.delta(t) {
+                    if d > 0 {
+                        let p = p as usize;
+                        let new = u64::from(self.cur[p]) + d as u64;
+                        if new > u64::from(u32::MAX) {
+                            return Err(Error::TokenOverflow {
+                                place: gspn.place_names()[p].clone(),
+                                limit: u64::from(u32::MAX),
+                            });
+                        }
+                        if new > u64::from(layout.max_value(p)) {
+                            let w = widen.get_or_insert_with(|| layout.widths().to_vec());
+                            w[p] = (bits_for(new as u32) + 1).min(32);
+                        }
+                    }
+                }
+                if widen.is_some() {
+                    return Ok(widen);
+                }
+                let at = self.keys.len();
+                self.keys.extend_from_slice(store.key(m));
+                for &(p, d) in gspn.delta(t) {
+                    layout.add(&mut self.keys[at..at + w], p as usize, d);
+                }
+                let c = if kind == MarkingKind::Vanishing {
+                    gspn.weight(t).unwrap_or(1.0) / total_weight
+                } else {
+                    gspn.server_factor(t, &self.cur)
+                };
+                self.edges.push((t.0, c));
+            }
+            self.ends.push(self.edges.len());
+        }
+        store.touch(&self.keys);
+        self.found.extend(
+            self.keys
+                .chunks_exact(w)
+                .map(|k| store.find(k).unwrap_or(NOT_FOUND)),
+        );
+        Ok(None)
     }
 }
 

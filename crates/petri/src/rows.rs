@@ -20,9 +20,29 @@ pub(crate) enum Ids {
 impl Ids {
     pub(crate) fn new(ids: Vec<u32>, dictionary_len: usize) -> Ids {
         if dictionary_len <= usize::from(u16::MAX) + 1 {
-            Ids::U16(ids.into_iter().map(|i| i as u16).collect())
+            let narrow = ids.iter().map(|&i| i as u16).collect();
+            drop(ids);
+            Ids::U16(narrow)
         } else {
             Ids::U32(ids)
+        }
+    }
+
+    /// `len` zeros, as narrow as a dictionary of `dictionary_len` allows.
+    pub(crate) fn zeros(len: usize, dictionary_len: usize) -> Ids {
+        if dictionary_len <= usize::from(u16::MAX) + 1 {
+            Ids::U16(vec![0; len])
+        } else {
+            Ids::U32(vec![0; len])
+        }
+    }
+
+    /// Sets entry `k` to `id` (which the width holds).
+    #[inline]
+    pub(crate) fn set(&mut self, k: usize, id: usize) {
+        match self {
+            Ids::U16(v) => v[k] = id as u16,
+            Ids::U32(v) => v[k] = id as u32,
         }
     }
 
@@ -34,7 +54,7 @@ impl Ids {
         }
     }
 
-    fn bytes(&self) -> usize {
+    pub(crate) fn bytes(&self) -> usize {
         match self {
             Ids::U16(v) => v.capacity() * 2,
             Ids::U32(v) => v.capacity() * 4,

@@ -239,7 +239,10 @@ fn structural_parameters_cannot_change_after_compilation() {
 #[test]
 fn state_limit_on_an_unbounded_net_names_the_limit_and_the_growing_place() {
     let g = unbounded().instantiate(&Params::new()).unwrap();
-    let limit = ExploreParams { max_states: 1000 };
+    let limit = ExploreParams {
+        max_states: 1000,
+        ..ExploreParams::default()
+    };
     for err in [
         ReachabilityGraph::explore(&g, &limit).unwrap_err(),
         CompiledGspn::build(&g, &limit).unwrap_err(),
@@ -264,7 +267,14 @@ fn state_limit_on_an_unbounded_net_names_the_limit_and_the_growing_place() {
 #[test]
 fn state_limit_on_a_bounded_net_blames_no_place() {
     let g = families::kanban(2).instantiate(&Params::new()).unwrap();
-    let err = ReachabilityGraph::explore(&g, &ExploreParams { max_states: 1000 }).unwrap_err();
+    let err = ReachabilityGraph::explore(
+        &g,
+        &ExploreParams {
+            max_states: 1000,
+            ..ExploreParams::default()
+        },
+    )
+    .unwrap_err();
     match &err {
         Error::StateLimit {
             limit: 1000, hint, ..
@@ -272,8 +282,26 @@ fn state_limit_on_a_bounded_net_blames_no_place() {
         other => panic!("expected StateLimit, got {other:?}"),
     }
     // The exact size passes, one less does not.
-    assert!(ReachabilityGraph::explore(&g, &ExploreParams { max_states: 4600 }).is_ok());
-    assert!(ReachabilityGraph::explore(&g, &ExploreParams { max_states: 4599 }).is_err());
+    assert!(
+        ReachabilityGraph::explore(
+            &g,
+            &ExploreParams {
+                max_states: 4600,
+                ..ExploreParams::default()
+            }
+        )
+        .is_ok()
+    );
+    assert!(
+        ReachabilityGraph::explore(
+            &g,
+            &ExploreParams {
+                max_states: 4599,
+                ..ExploreParams::default()
+            }
+        )
+        .is_err()
+    );
 }
 
 #[test]
@@ -480,5 +508,44 @@ fn deeply_nested_expressions_are_an_error_not_a_stack_overflow() {
         crashed.is_empty(),
         "deep inputs crashed the parser:\n{}",
         crashed.join("\n")
+    );
+}
+
+#[test]
+fn memory_guard_is_an_error_with_the_estimate_and_the_limit() {
+    let g = families::kanban(3).instantiate(&Params::new()).unwrap();
+    let guard = ExploreParams {
+        max_memory: 1 << 20,
+        ..ExploreParams::default()
+    };
+    for err in [
+        ReachabilityGraph::explore(&g, &guard).unwrap_err(),
+        CompiledGspn::build(&g, &guard).unwrap_err(),
+    ] {
+        let msg = err.to_string();
+        match err {
+            Error::MemoryLimit {
+                estimate,
+                limit,
+                markings,
+                edges,
+            } => {
+                assert_eq!(limit, 1 << 20);
+                assert!(estimate > limit, "{msg}");
+                assert!(markings < 58_400 && edges > 0, "{msg}");
+            }
+            other => panic!("expected MemoryLimit, got {other:?}"),
+        }
+        assert!(
+            msg.contains("limit of 1.0 MiB") && msg.contains("--max-memory"),
+            "{msg}"
+        );
+    }
+    // The default guard (85 % of the available memory) lets it through.
+    assert_eq!(
+        ReachabilityGraph::explore(&g, &ExploreParams::default())
+            .unwrap()
+            .num_markings(),
+        58_400
     );
 }

@@ -42,7 +42,10 @@ struct Case {
 /// Compiles and solves `net` (with the default state limit, or `limit`).
 fn try_solve(net: &Net, limit: Option<usize>) -> Result<Case, Error> {
     let gspn = net.instantiate(&Params::new())?;
-    let explore = limit.map_or_else(ExploreParams::default, |max_states| ExploreParams { max_states });
+    let explore = limit.map_or_else(ExploreParams::default, |max_states| ExploreParams {
+        max_states,
+        ..ExploreParams::default()
+    });
     let compiled = CompiledGspn::build(&gspn, &explore)?;
     let solution = compiled.solve(&Params::new(), None, &SolveParams::default())?;
     Ok(Case {

@@ -202,7 +202,7 @@ proptest! {
         rates in wide_rates(7),
     ) {
         let g = a.net().instantiate(&Params::new()).unwrap();
-        match CompiledGspn::build(&g, &ExploreParams { max_states: 2000 }) {
+        match CompiledGspn::build(&g, &ExploreParams { max_states: 2000, ..ExploreParams::default() }) {
             Ok(c) => check_solution(&c, &rates[..c.gspn().num_transitions()])?,
             Err(Error::StateLimit { .. } | Error::TimelessTrap { .. }) => {}
             Err(other) => prop_assert!(false, "unexpected error: {other}"),

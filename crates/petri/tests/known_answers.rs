@@ -110,11 +110,26 @@ fn mm1k_matches_closed_form() {
 
 #[test]
 fn kanban_state_space_sizes_match_the_literature() {
-    for (n, states) in [(1, 160), (2, 4600), (3, 58_400)] {
+    // P(Pm1 ≥ 1): this engine's value (10 digits), and Storm's (stormpy
+    // 2.0.0, `S=? [ Pm1 >= 1 ]` on the same PNPRO files, default precision
+    // 1e-6; `bench/storm_compare.py`, see BENCHMARKS.md).
+    let cases: [(u32, usize, f64, Option<f64>); 4] = [
+        (1, 160, 0.110_219_803_1, None),
+        (2, 4600, 0.206_990_126_4, Some(0.206_990_128_2)),
+        (3, 58_400, 0.277_465_673_8, Some(0.277_465_677_3)),
+        (4, 454_475, 0.328_440_182_3, Some(0.328_440_186_6)),
+    ];
+    let pm1 = Expr::parse("#Pm1 >= 1").unwrap();
+    for (n, states, ours, storm) in cases {
         let c = compile(&families::kanban(n));
         assert_eq!(c.num_tangible(), states, "N = {n}");
         let sol = c.solve(&Params::new(), None, &SolveParams::default()).unwrap();
         assert!(sol.info.residual <= 1e-10, "N = {n}: {:?}", sol.info);
+        let p = c.measure(&sol, &pm1).unwrap();
+        assert!((p - ours).abs() < 1e-10, "N = {n}: P(Pm1 >= 1) = {p:.12}");
+        if let Some(storm) = storm {
+            assert!((p - storm).abs() < 1e-6, "N = {n}: {p} vs Storm's {storm}");
+        }
     }
 }
 

@@ -318,7 +318,7 @@ proptest! {
     #[test]
     fn arbitrary_small_nets_compile_or_fail_cleanly_and_the_solvers_agree(a in arbitrary()) {
         let g = a.net().instantiate(&Params::new()).unwrap();
-        match CompiledGspn::build(&g, &ExploreParams { max_states: 2000 }) {
+        match CompiledGspn::build(&g, &ExploreParams { max_states: 2000, ..ExploreParams::default() }) {
             // A stiff absorption system may be too slow for Gauss–Seidel
             // (which BiCGSTAB uses for absorption too): e.g. a cycle left
             // once in ~10^4 rounds needs ~3·10^5 sweeps. That is a clean
