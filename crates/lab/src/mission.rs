@@ -408,15 +408,13 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
             .labels
             .push(label(watch.inner, watch.inner.request().is_some()));
         for e in &watch.notes.events {
-            if e.kind == "warning" {
+            // A warning comes from a filter iteration, which noted its cloud.
+            if e.kind == "warning"
+                && let Some((_, cloud)) = watch.notes.clouds.iter().find(|(n, _)| *n == "particles")
+            {
                 trace.clouds.push(Cloud {
                     time_s: e.time_s,
-                    particles: watch
-                        .inner
-                        .localizer()
-                        .particles()
-                        .map(|p| p.pose.position())
-                        .collect(),
+                    particles: cloud.iter().map(|p| p.position()).collect(),
                 });
             }
             trace.events.push(e.clone());
