@@ -17,7 +17,7 @@
 use std::collections::BTreeMap;
 
 use anyhow::Result;
-use robot::{Command, EventValue, LaserScan, Perception, Pose};
+use robot::{Command, EventValue, LaserScan, Perception, Pose, Vec2};
 use serde::Serialize;
 use sim::render::MarkerKind;
 
@@ -339,13 +339,18 @@ pub struct CloudData {
     pub points: Vec<i32>,
 }
 
+/// A position in whole centimetres `[x, y]`.
+fn centimetres(p: Vec2) -> [i32; 2] {
+    [(p.x * 100.0).round() as i32, (p.y * 100.0).round() as i32]
+}
+
 /// `cloud` thinned to at most [`CLOUD_POINTS`] positions in centimetres.
 fn cloud_points(cloud: &[Pose]) -> Vec<i32> {
     let stride = cloud.len().div_ceil(CLOUD_POINTS).max(1);
     cloud
         .iter()
         .step_by(stride)
-        .flat_map(|p| [(p.x_m * 100.0).round() as i32, (p.y_m * 100.0).round() as i32])
+        .flat_map(|p| centimetres(p.position()))
         .collect()
 }
 
@@ -607,12 +612,9 @@ pub fn run_data(
                 bumper: p.bumper,
             }
         }));
-        ticks.people.push(
-            t.people
-                .iter()
-                .flat_map(|p| [(p.x * 100.0).round() as i32, (p.y * 100.0).round() as i32])
-                .collect(),
-        );
+        ticks
+            .people
+            .push(t.people.iter().flat_map(|&p| centimetres(p)).collect());
         for (name, cloud) in &t.clouds {
             clouds.push(CloudData {
                 tick: n,
