@@ -128,6 +128,29 @@ pub fn safe_speed(points: &[Vec2], v: f64, omega: f64, radius_m: f64, decel_mps2
 /// contour 0.40 → 0.35, the rule 0.97 → 0.93, the supervisor 0.89 → 0.86;
 /// packed, AutoMove 0.93 → 0.90 with collisions 27 → 39 of 480. Telling a
 /// wall from a person out of view is what is missing, not the distance.
+///
+/// **Traced, not yet changed** (2026-12-03, the last contour contacts on
+/// building_31 without people, legs 29 and 32 of `lab run maps`, and leg
+/// 10 once those were gone): each time the wall the robot touched stood
+/// beside it, 55°–90° off its heading at 0.35–0.37 m, where a laser 0.2 m
+/// ahead of the centre cannot see. Three causes: (a) the robot stood still
+/// or turned back and forth beside the wall for 10 s, the memory forgot it
+/// by time (or by rim arc), and the law then turned into it; (b) a 5 cm
+/// square keeps its latest echo, up to 2.6 cm from a block's corner — more
+/// than the 1.5 cm margin in a gap; (c) a robot already inside its margin
+/// is stopped for good by [`safe_speed`] until the memory lets it go.
+/// Variants measured on `lab run maps` (contour legs reached of 33,
+/// building_31 / levine at 0 / 20 / 60 people; `main` 31 26 20 / 33 31 27):
+/// for the contour tracker only, points the laser sees through again
+/// cleared, 2 cm squares, turns not counted: 32 24 27 / 33 33 28 (AutoMove
+/// unchanged); the same without forgetting by time: 29 25 23 / 32 33 29
+/// (four legs then stood at 1–4 cm from a wall for the rest of the leg:
+/// cause (c)); with, in addition, the safety disc shrunk to the nearest
+/// point's distance when inside it (move along or away, never nearer):
+/// 31 24 24 / 33 33 31, AutoMove 33 33 27 / 33 33 29 (from 33 32 25 /
+/// 33 33 27). None completes every leg AutoMove completes on building_31;
+/// the next step is a look before moving towards a side the laser cannot
+/// see (turning sweeps nothing), measured in the museum as well.
 #[derive(Debug, Clone, Default)]
 pub struct NearbyPoints {
     /// Remembered points are forgotten after this long, seconds (`None`:
