@@ -410,7 +410,11 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         for e in &watch.notes.events {
             // A warning comes from a filter iteration, which noted its cloud.
             if e.kind == "warning"
-                && let Some((_, cloud)) = watch.notes.clouds.iter().find(|(n, _)| *n == "particles")
+                && let Some((_, cloud)) = watch
+                    .notes
+                    .clouds
+                    .iter()
+                    .find(|(n, _)| *n == nav::guide::PARTICLES_CLOUD)
             {
                 trace.clouds.push(Cloud {
                     time_s: e.time_s,

@@ -218,6 +218,10 @@ pub struct GuideStats {
     pub filter_iterations: u64,
 }
 
+/// The name of the particle cloud the controller notes at every filter
+/// iteration ([`robot::Notes::cloud`]).
+pub const PARTICLES_CLOUD: &str = "particles";
+
 /// The tour-guide controller (module docs).
 ///
 /// Its notes (traces, the run viewer, MCAP): the behaviour in control;
@@ -493,7 +497,7 @@ impl Controller for GuideController {
                     info.effective_sample_size,
                 ]);
                 if notes.is_enabled() {
-                    notes.cloud("particles", self.localizer.particles().map(|p| p.pose));
+                    notes.cloud(PARTICLES_CLOUD, self.localizer.particles().map(|p| p.pose));
                 }
                 if info.status != self.status {
                     let kind = match info.status {
