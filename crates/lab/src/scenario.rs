@@ -27,6 +27,7 @@
 //! | `[world]` or `map` | shapes, or a map_server YAML | required |
 //! | `[robot] preset` | `aibot` (7 IR, 3 sonar), `jinny` (laser) or `ring` (16 sonars all round) | `aibot` |
 //! | `[robot.odometry]` | odometry error model in place of the preset's ([`sim::sensors::OdometryParams`]) | the preset's |
+//! | `[robot.ir]` | infrared detectors in place of the preset's ([`sim::sensors::IrParams`]) | the preset's |
 //! | `[start] x, y, theta_deg, jitter_m, jitter_deg` | start pose and its per-run spread (uniform in a disc / an interval) | θ 0, no spread |
 //! | `[goal] x, y` | goal | required |
 //! | `[jitter] obstacles_m` | each shape moved by up to this per run (uniform in a disc) | 0 |
@@ -122,7 +123,7 @@ impl Preset {
 }
 
 /// The robot.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
     /// Which robot. Default `aibot`.
@@ -132,6 +133,10 @@ pub struct RobotSpec {
     /// ([`sim::sensors::OdometryParams`]; keys left out keep their defaults).
     #[serde(default)]
     pub odometry: Option<sim::sensors::OdometryParams>,
+    /// The infrared detectors, in place of the preset's
+    /// ([`sim::sensors::IrParams`]; keys left out keep their defaults).
+    #[serde(default)]
+    pub ir: Option<sim::sensors::IrParams>,
 }
 
 impl RobotSpec {
@@ -141,6 +146,9 @@ impl RobotSpec {
         let mut r = self.preset.robot_params();
         if let Some(o) = self.odometry {
             r.odometry = o;
+        }
+        if let Some(ir) = &self.ir {
+            r.ir = ir.clone();
         }
         r
     }
