@@ -283,14 +283,23 @@ struct EchoMemory {
     odometer_m: f64,
     /// Where the robot was at the last tick (odometry).
     last: Option<Vec2>,
+    /// Pose (odometry) and odometer at the last reading remembered.
+    heard_at: Option<(robot::Pose, f64)>,
     /// The remembered echoes in the robot frame, for this tick's votes.
     in_robot: Vec<behaviours::Echo>,
 }
 
 impl EchoMemory {
+    /// Most points remembered: 1 m of travel at one reading per 2 cm, three
+    /// transducers.
+    const MOST: usize = 150;
+
     /// Advances the odometer to `pose`, forgets echoes heard more than
-    /// `keep_m` ago, and lays the others out in the robot frame.
-    fn update(&mut self, pose: &robot::Pose, keep_m: f64, mount_radius_m: f64) {
+    /// `keep_m` ago, and lays the others out in the robot frame — those
+    /// that can lie on a swept path: within `d_max_m` of the transducers
+    /// (beyond, the ramp votes 1 anyway) and not behind the robot by more
+    /// than `half_width_m` (every path runs forward of the robot's axle).
+    fn update(&mut self, pose: &robot::Pose, keep_m: f64, mount_radius_m: f64, d_max_m: f64, half_width_m: f64) {
         let at = pose.position();
         if let Some(last) = self.last {
             self.odometer_m += (at - last).norm();
@@ -301,16 +310,34 @@ impl EchoMemory {
         self.in_robot.clear();
         for &(p, _) in &self.points {
             let q = pose.inverse_transform(p);
-            self.in_robot.push(behaviours::Echo {
-                x_m: q.x,
-                y_m: q.y,
-                distance_m: (q.norm() - mount_radius_m).max(0.0),
-            });
+            let distance_m = (q.norm() - mount_radius_m).max(0.0);
+            if distance_m <= d_max_m && q.x >= -half_width_m {
+                self.in_robot.push(behaviours::Echo {
+                    x_m: q.x,
+                    y_m: q.y,
+                    distance_m,
+                });
+            }
         }
     }
 
-    /// Remembers this reading's echoes (robot frame → odometry frame).
+    /// Remembers this reading's echoes (robot frame → odometry frame),
+    /// unless the robot has moved less than 2 cm and turned less than 5°
+    /// since the last reading it remembered (the echoes would repeat it:
+    /// a robot turning on the spot would otherwise pile them up), and at
+    /// most [`Self::MOST`] points, the oldest forgotten first.
     fn hear(&mut self, pose: &robot::Pose, sonar: &[robot::SonarReading], d_max_m: f64) {
+        if let Some((at, odo)) = self.heard_at {
+            let turned = wrap_angle(pose.theta_rad - at.theta_rad).abs();
+            if self.odometer_m - odo < 0.02 && turned < 5f64.to_radians() {
+                return;
+            }
+        }
+        self.heard_at = Some((*pose, self.odometer_m));
+        if self.points.len() + sonar.len() > Self::MOST {
+            let drop = (self.points.len() + sonar.len() - Self::MOST).min(self.points.len());
+            self.points.drain(..drop);
+        }
         for e in behaviours::echoes(sonar, d_max_m) {
             let p = pose.transform(Vec2::new(e.x_m, e.y_m));
             self.points.push((p, self.odometer_m));
@@ -430,7 +457,8 @@ impl Controller for VotingController {
                     .sonar
                     .first()
                     .map_or(0.0, |s| s.mount.x_m.hypot(s.mount.y_m));
-                self.heard.update(&pose, keep, mount_r);
+                self.heard
+                    .update(&pose, keep, mount_r, self.p.sonar_d_max_m, self.p.swept_half_width_m);
             }
             behaviours::sonar_votes(
                 &self.p.actions,
