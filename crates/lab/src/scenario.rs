@@ -28,6 +28,7 @@
 //! | `[robot] preset` | `aibot` (7 IR, 3 sonar), `jinny` (laser) or `ring` (16 sonars all round) | `aibot` |
 //! | `[robot.odometry]` | odometry error model in place of the preset's ([`sim::sensors::OdometryParams`]) | the preset's |
 //! | `[robot.ir]` | infrared detectors in place of the preset's ([`sim::sensors::IrParams`]) | the preset's |
+//! | `[robot.sonar]` | sonar array in place of the preset's ([`sim::sensors::SonarParams`]) | the preset's |
 //! | `[start] x, y, theta_deg, jitter_m, jitter_deg` | start pose and its per-run spread (uniform in a disc / an interval) | θ 0, no spread |
 //! | `[goal] x, y` | goal | required |
 //! | `[jitter] obstacles_m` | each shape moved by up to this per run (uniform in a disc) | 0 |
@@ -137,6 +138,10 @@ pub struct RobotSpec {
     /// ([`sim::sensors::IrParams`]; keys left out keep their defaults).
     #[serde(default)]
     pub ir: Option<sim::sensors::IrParams>,
+    /// The sonar array, in place of the preset's
+    /// ([`sim::sensors::SonarParams`]; keys left out keep their defaults).
+    #[serde(default)]
+    pub sonar: Option<sim::sensors::SonarParams>,
 }
 
 impl RobotSpec {
@@ -149,6 +154,9 @@ impl RobotSpec {
         }
         if let Some(ir) = &self.ir {
             r.ir = ir.clone();
+        }
+        if let Some(sonar) = &self.sonar {
+            r.sonar = sonar.clone();
         }
         r
     }

@@ -193,17 +193,14 @@ pub struct Echo {
 
 /// The echoes of this reading within `d_max_m`, on their transducers' axes.
 pub fn echoes(sonar: &[SonarReading], d_max_m: f64) -> impl Iterator<Item = Echo> + '_ {
-    sonar
-        .iter()
-        .filter(move |s| s.range_m <= d_max_m)
-        .map(|s| {
-            let (sin, cos) = s.mount.theta_rad.sin_cos();
-            Echo {
-                x_m: s.mount.x_m + s.range_m * cos,
-                y_m: s.mount.y_m + s.range_m * sin,
-                distance_m: s.range_m,
-            }
-        })
+    sonar.iter().filter(move |s| s.range_m <= d_max_m).map(|s| {
+        let (sin, cos) = s.mount.theta_rad.sin_cos();
+        Echo {
+            x_m: s.mount.x_m + s.range_m * cos,
+            y_m: s.mount.y_m + s.range_m * sin,
+            distance_m: s.range_m,
+        }
+    })
 }
 
 /// `b_sonar`: obstacle avoidance with sonar, `D_obs(m)` per [`SweptPaths`]

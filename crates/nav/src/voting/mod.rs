@@ -299,7 +299,14 @@ impl EchoMemory {
     /// that can lie on a swept path: within `d_max_m` of the transducers
     /// (beyond, the ramp votes 1 anyway) and not behind the robot by more
     /// than `half_width_m` (every path runs forward of the robot's axle).
-    fn update(&mut self, pose: &robot::Pose, keep_m: f64, mount_radius_m: f64, d_max_m: f64, half_width_m: f64) {
+    fn update(
+        &mut self,
+        pose: &robot::Pose,
+        keep_m: f64,
+        mount_radius_m: f64,
+        d_max_m: f64,
+        half_width_m: f64,
+    ) {
         let at = pose.position();
         if let Some(last) = self.last {
             self.odometer_m += (at - last).norm();
@@ -457,8 +464,13 @@ impl Controller for VotingController {
                     .sonar
                     .first()
                     .map_or(0.0, |s| s.mount.x_m.hypot(s.mount.y_m));
-                self.heard
-                    .update(&pose, keep, mount_r, self.p.sonar_d_max_m, self.p.swept_half_width_m);
+                self.heard.update(
+                    &pose,
+                    keep,
+                    mount_r,
+                    self.p.sonar_d_max_m,
+                    self.p.swept_half_width_m,
+                );
             }
             behaviours::sonar_votes(
                 &self.p.actions,

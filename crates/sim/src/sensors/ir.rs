@@ -139,7 +139,8 @@ impl Ir {
                 let (sin, cos) = a.sin_cos();
                 let person = scene.people.iter().any(|q| {
                     let rel = into_frame(q.position, origin, sin, cos);
-                    norm(rel) - r <= range && ray_disc(rel, Vec2::new(1.0, 0.0), r).is_some_and(|t| t <= range)
+                    norm(rel) - r <= range
+                        && ray_disc(rel, Vec2::new(1.0, 0.0), r).is_some_and(|t| t <= range)
                 });
                 person || scene.cast(origin, Vec2::new(cos, sin), a, skip, range).is_some()
             };

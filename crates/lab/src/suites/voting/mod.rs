@@ -8,6 +8,7 @@
 //! runs from anywhere; the files in `scenarios/` are the same text,
 //! for reading and copying.
 
+pub mod charts;
 mod explanation;
 
 use std::collections::BTreeMap;
@@ -166,7 +167,23 @@ pub fn tables(summaries: &[Summary]) -> (String, String) {
 fn report(suite: &ScenarioSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport> {
     let (text, main) = tables(ctx.summaries);
     let (_, all) = tables::generic_table(ctx.summaries, &[shared::DEADLOCK_COLUMN]);
+    let label = |e: &str| experiment_label(e).unwrap_or_default();
     let mut blocks = vec![
+        Block::InlineCharts {
+            heading: "The shape at a glance".into(),
+            caption: "One group of bars per field (1 open floor; 2–5 a few obstacles; 6–7 corridors; 8–11 narrow passages off the line, narrower from 8 to 11; 12–14 traps), one bar per experiment; the whiskers are the 95 % intervals. An I_T bar is missing where no run succeeded. The numbers are those of the tables below and of `summary.json`.".into(),
+            charts: vec![
+                (
+                    "Reliability index I_R per field".into(),
+                    charts::svg(ctx.summaries, charts::Index::Reliability, label)?,
+                ),
+                (
+                    "Time index I_T per field (successful runs only)".into(),
+                    charts::svg(ctx.summaries, charts::Index::Time, label)?,
+                ),
+            ],
+        },
+        Block::Heading("The four tables side by side (and e5)".into()),
         Block::Table(main),
         Block::Heading("All scenarios".into()),
         Block::Table(all),
