@@ -331,6 +331,71 @@ mod tests {
         assert_eq!(v[7], 0.0);
     }
 
+    /// The path of [`SweptPaths`] sampled every millimetre, as a reference.
+    fn sampled_distance(actions: &ActionSet, m: usize, reach: f64, x: f64, y: f64) -> f64 {
+        let a = &actions.actions[m];
+        let arc_len = actions.cruise_mps * actions.lookahead_s;
+        let kappa = a.heading_rad / arc_len;
+        let n = (reach / 0.001).ceil() as usize;
+        (0..=n)
+            .map(|k| {
+                let s = k as f64 * 0.001;
+                let sa = s.min(arc_len);
+                let (px, py, th) = if kappa.abs() < 1e-9 {
+                    (sa, 0.0, 0.0)
+                } else {
+                    let th = kappa * sa;
+                    (th.sin() / kappa, (1.0 - th.cos()) / kappa, th)
+                };
+                let rest = s - sa;
+                (x - px - rest * th.cos()).hypot(y - py - rest * th.sin())
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn swept_path_distance_is_exact() {
+        let a = ActionSet::default();
+        let swept = SweptPaths::new(&a, 1.0, 0.2);
+        // A grid of points around the robot, every action but Escape.
+        for m in 0..7 {
+            for i in -12..=12 {
+                for j in -12..=12 {
+                    let (x, y) = (0.1 * i as f64, 0.1 * j as f64);
+                    let exact = swept.distance(m, x, y);
+                    let sampled = sampled_distance(&a, m, 1.0, x, y);
+                    assert!(
+                        (exact - sampled).abs() < 1e-3,
+                        "action {m} at ({x}, {y}): {exact} vs {sampled}"
+                    );
+                }
+            }
+        }
+        assert_eq!(
+            swept.distance(7, 0.3, 0.0),
+            f64::INFINITY,
+            "Escape sweeps nothing"
+        );
+    }
+
+    #[test]
+    fn remembered_echoes_vote_like_heard_ones() {
+        let a = ActionSet::default();
+        let swept = SweptPaths::new(&a, 1.0, 0.2);
+        let mut v = vec![0.0; a.len()];
+        // Nothing heard now; a corner remembered 0.3 m to the left, just
+        // past the +42.5° edge of the left cone.
+        let corner = Echo {
+            x_m: 0.2,
+            y_m: 0.3,
+            distance_m: 0.36 - 0.15,
+        };
+        sonar_votes(&a, &[], &[corner], &swept, 0.25, 1.0, &mut v);
+        assert_eq!(v[0], 0.0, "Hard Left runs into the corner (≤ D_min)");
+        assert_eq!(v[3], 1.0, "Forward passes it");
+        assert_eq!(v[6], 1.0, "Hard Right turns away");
+    }
+
     #[test]
     fn pi_function_wraps() {
         let beta = 0.5;

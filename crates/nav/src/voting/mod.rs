@@ -680,6 +680,47 @@ mod tests {
         assert_eq!(c.argmax(&fused), 3);
     }
 
+    /// Regression: sonar alone turned into the inner corner of the bent
+    /// corridor in every run — the corner, heard at +30° while ahead, is in
+    /// no cone once abeam.
+    #[test]
+    fn sonar_alone_does_not_turn_into_a_corner_it_has_passed() {
+        let run = |memory_m: f64| {
+            let mut c = VotingController::new(VotingParams {
+                teams: Teams::experiment(2).unwrap(),
+                sonar_memory_m: memory_m,
+                ..VotingParams::default()
+            })
+            .unwrap();
+            let goal = Vec2::new(0.3, 5.0); // straight left once abeam
+            // The corner 0.6 m away on the +30° axis…
+            let ahead = perception(&[false; 7], [0.6, 9.0, 9.0], goal);
+            c.step(&ahead, &mut Notes::disabled());
+            // …then 0.3 m further on, at 54° (out of every cone) and on
+            // the ground the left turns sweep.
+            let mut abeam = perception(&[false; 7], [9.0; 3], goal);
+            abeam.odometry = Pose::new(0.3, 0.0, 0.0);
+            c.step(&abeam, &mut Notes::disabled());
+            c.p.actions.actions[c.ballot().chosen].heading_rad
+        };
+        assert!(
+            run(0.0) > 1.5,
+            "without the memory it turns hard left into the corner"
+        );
+        assert!(
+            run(1.0) < 0.6,
+            "with it, it turns no harder than Soft Left: {}",
+            run(1.0)
+        );
+        assert!(
+            VotingController::new(VotingParams {
+                sonar_memory_m: -1.0,
+                ..VotingParams::default()
+            })
+            .is_err()
+        );
+    }
+
     #[test]
     fn arrival_stops_and_bad_params_are_refused() {
         let mut c = VotingController::new(VotingParams::default()).unwrap();

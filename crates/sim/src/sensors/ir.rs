@@ -174,4 +174,36 @@ mod tests {
         let fired: Vec<bool> = out.iter().map(|d| d.triggered).collect();
         assert_eq!(fired, vec![false, false, false, true, false, false, false]);
     }
+
+    #[test]
+    fn a_beam_has_a_width() {
+        let mut g = OccupancyGrid::new(100, 100, 0.05, Pose::default());
+        // One cell 0.6 m ahead of the front detector, 4° off its axis (the
+        // axis runs along the middle of the row of cells below it).
+        let robot = Pose::new(2.0, 2.025, 0.0);
+        let a = 4f64.to_radians();
+        let c = g.cell_of(Vec2::new(2.15 + 0.6 * a.cos(), 2.025 + 0.6 * a.sin()));
+        g.set(c, Cell::Occupied);
+        let fired = |beam_rad: f64| {
+            let p = IrParams {
+                range_sigma_m: 0.0,
+                beam_rad,
+                ..IrParams::default()
+            };
+            let mut ir = Ir::new(p, RandomStream::new(1, 3)).unwrap();
+            let mut out = ir.empty_readings();
+            ir.read(&Scene::static_only(&g), &robot, 0.0, &mut out);
+            out[3].triggered
+        };
+        assert!(!fired(0.0), "a single ray misses it");
+        assert!(fired(10f64.to_radians()), "a 10° beam sees it");
+        assert!(
+            IrParams {
+                beam_rad: 2.0,
+                ..IrParams::default()
+            }
+            .validate()
+            .is_err()
+        );
+    }
 }

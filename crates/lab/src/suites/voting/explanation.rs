@@ -37,7 +37,10 @@ impl View<'_> {
 
     /// Mean `I_R` of `e` over fields `a..=b` (NaN when none ran).
     fn ir(&self, e: u32, a: u32, b: u32) -> f64 {
-        let v: Vec<f64> = (a..=b).filter_map(|f| self.get(e, f)).map(|s| s.reliability.value).collect();
+        let v: Vec<f64> = (a..=b)
+            .filter_map(|f| self.get(e, f))
+            .map(|s| s.reliability.value)
+            .collect();
         mean(&v)
     }
 
@@ -46,7 +49,11 @@ impl View<'_> {
     /// compared on the same fields); NaN when there is none.
     fn it_common(&self, e: u32, a: u32, b: u32, common: &[u32]) -> f64 {
         let v: Vec<f64> = (a..=b)
-            .filter(|&f| common.iter().all(|&c| self.get(c, f).is_some_and(|s| s.time.n > 0)))
+            .filter(|&f| {
+                common
+                    .iter()
+                    .all(|&c| self.get(c, f).is_some_and(|s| s.time.n > 0))
+            })
             .filter_map(|f| self.get(e, f))
             .map(|s| s.time.mean)
             .collect();
@@ -55,9 +62,9 @@ impl View<'_> {
 
     /// Successes and runs of `e` over fields `a..=b`.
     fn successes(&self, e: u32, a: u32, b: u32) -> (usize, usize) {
-        (a..=b).filter_map(|f| self.get(e, f)).fold((0, 0), |(s, n), x| {
-            (s + x.reliability.successes, n + x.runs)
-        })
+        (a..=b)
+            .filter_map(|f| self.get(e, f))
+            .fold((0, 0), |(s, n), x| (s + x.reliability.successes, n + x.runs))
     }
 
     /// (collisions, time limits, lost, runs) of `e` over fields `a..=b`.
@@ -120,11 +127,19 @@ fn detour_factor(v: &View<'_>, es: &[u32], a: u32, b: u32) -> f64 {
 }
 
 fn f2(x: f64) -> String {
-    if x.is_finite() { format!("{x:.2}") } else { "–".into() }
+    if x.is_finite() {
+        format!("{x:.2}")
+    } else {
+        "–".into()
+    }
 }
 
 fn f1(x: f64) -> String {
-    if x.is_finite() { format!("{x:.1} s") } else { "–".into() }
+    if x.is_finite() {
+        format!("{x:.1} s")
+    } else {
+        "–".into()
+    }
 }
 
 /// Markdown paragraphs (blank-line separated) for the report.
@@ -303,7 +318,13 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let ok_fold = traps[3] >= SEVERAL * base;
     let it_plan = v.it_common(4, 12, 14, &[4]);
     let it_without: Vec<(u32, f64, f64)> = (1..=3)
-        .map(|e| (e, v.it_common(e, 12, 14, &[e, 4]), v.it_common(4, 12, 14, &[e, 4])))
+        .map(|e| {
+            (
+                e,
+                v.it_common(e, 12, 14, &[e, 4]),
+                v.it_common(4, 12, 14, &[e, 4]),
+            )
+        })
         .filter(|(_, a, b)| a.is_finite() && b.is_finite())
         .collect();
     let ok_time = !it_without.is_empty() && it_without.iter().all(|(_, a, b)| b < a);
@@ -405,14 +426,26 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let (r4, r5) = (v.ir(4, 1, 11), v.ir(5, 1, 11));
     if t5.is_finite() {
         let dl = |a: u32, b: u32| {
-            let x: Vec<f64> = (a..=b).filter_map(|f| v.get(5, f)).map(|s| s.metric_mean(DEADLOCKS)).collect();
+            let x: Vec<f64> = (a..=b)
+                .filter_map(|f| v.get(5, f))
+                .map(|s| s.metric_mean(DEADLOCKS))
+                .collect();
             mean(&x)
         };
         let pairs: Vec<(u32, crate::summary::Paired)> = (1..=14)
-            .map(|f| (f, paired(runs, &format!("e4/field{f:02}"), &format!("e5/field{f:02}"))))
+            .map(|f| {
+                (
+                    f,
+                    paired(runs, &format!("e4/field{f:02}"), &format!("e5/field{f:02}")),
+                )
+            })
             .collect();
         let sum = |a: u32, b: u32, pick: fn(&crate::summary::Paired) -> usize| -> usize {
-            pairs.iter().filter(|(f, _)| (a..=b).contains(f)).map(|(_, p)| pick(p)).sum()
+            pairs
+                .iter()
+                .filter(|(f, _)| (a..=b).contains(f))
+                .map(|(_, p)| pick(p))
+                .sum()
         };
         let changed: Vec<String> = pairs
             .iter()
