@@ -11,7 +11,9 @@ use std::fmt::Write as _;
 
 use crate::record::Runs;
 use crate::scenario::Scenario;
+use crate::stats::Proportion;
 use crate::suites::shared::DEADLOCKS;
+use crate::summary::CONFIDENCE;
 use crate::summary::{Summary, paired};
 
 /// A share `I_R` counts as "reliable" (field 1) and "sufficient, only a few
@@ -65,6 +67,36 @@ impl View<'_> {
         (a..=b)
             .filter_map(|f| self.get(e, f))
             .fold((0, 0), |(s, n), x| (s + x.reliability.successes, n + x.runs))
+    }
+
+    /// `I_R` of `e` pooled over fields `a..=b`, with its interval.
+    fn pooled(&self, e: u32, a: u32, b: u32) -> Proportion {
+        let (s, n) = self.successes(e, a, b);
+        Proportion::new(s, n, CONFIDENCE)
+    }
+
+    /// The pooled `I_R` of each of `es` over `a..=b`, and whether the
+    /// intervals of neighbours in `es` are apart (the order is significant
+    /// at this batch's size).
+    fn pooled_note(&self, es: &[u32], a: u32, b: u32) -> String {
+        let ps: Vec<Proportion> = es.iter().map(|&e| self.pooled(e, a, b)).collect();
+        let listed: Vec<String> = es
+            .iter()
+            .zip(&ps)
+            .map(|(e, p)| format!("e{e} {}/{} [{}, {}]", p.successes, p.n, f2(p.low), f2(p.high)))
+            .collect();
+        let overlap = ps
+            .windows(2)
+            .any(|w| w[0].high >= w[1].low && w[1].high >= w[0].low);
+        format!(
+            " Pooled over the fields, with 95 % intervals: {}{}.",
+            listed.join(", "),
+            if overlap {
+                " — the intervals overlap, so at 50 runs a field the order is within chance"
+            } else {
+                " — the intervals are apart"
+            }
+        )
     }
 
     /// (collisions, time limits, lost, runs) of `e` over fields `a..=b`.
@@ -201,11 +233,12 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let ok_waste = it1 > it2;
     let _ = writeln!(
         out,
-        "3. *In narrow passages IR alone has low reliability and wastes time searching.* {} Mean I_R over fields 8–11: {} IR alone, {} sonar alone, {} IR+sonar; mean I_T on the fields where both single-sensor teams succeed: {} IR alone against {} sonar alone. Failures: {}. The opening is 0.8 m off the line to the goal: the robot meets a solid wall, slides along it one way or the other and, the wrong way, turns round in the corner. The binary IR beams see the slot's edges only when a beam falls on them, and an edge slipping between two beams is met by the robot's side (the collisions); with one beam through the opening and its neighbours on the wall, the votes for the arcs into it are low, so the robot passes it and comes back.{}{}\n",
+        "3. *In narrow passages IR alone has low reliability and wastes time searching.* {} Mean I_R over fields 8–11: {} IR alone, {} sonar alone, {} IR+sonar.{} Mean I_T on the fields where both single-sensor teams succeed: {} IR alone against {} sonar alone. Failures: {}. The opening is 0.8 m off the line to the goal: the robot meets a solid wall, slides along it one way or the other and, the wrong way, turns round in the corner. The binary IR beams see the slot's edges only when a beam falls on them, and an edge slipping between two beams is met by the robot's side (the collisions); with one beam through the opening and its neighbours on the wall, the votes for the arcs into it are low, so the robot passes it and comes back.{}{}\n",
         mark(ok_low && ok_waste),
         f2(n[0]),
         f2(n[1]),
         f2(n[2]),
+        v.pooled_note(&[1, 2, 3], 8, 11),
         f1(it1),
         f1(it2),
         v.breakdown(8, 11, &[1, 2, 3]),
@@ -278,7 +311,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         .collect();
     let _ = writeln!(
         out,
-        "6. *On the traps, without planning, the robot escapes only by chance — rarely, but not never.* {} Escapes over fields 12–14: {} (mean I_R {}). Failures: {}. Inside a U facing the start the goal's Π-function vote points into the back wall while the obstacle team vetoes the way forward; the robot turns away, the goal pulls it back, and it circles.{}{}\n",
+        "6. *On the traps, without planning, the robot escapes only by chance — rarely, but not never.* {} Escapes over fields 12–14: {} (mean I_R {}; with planning {}). Failures: {}. Inside a U facing the start the goal's Π-function vote points into the back wall while the obstacle team vetoes the way forward; the robot turns away, the goal pulls it back, and it circles.{}{}\n",
         mark(none.is_empty() && often.is_empty()),
         esc.iter()
             .enumerate()
@@ -286,6 +319,10 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             .collect::<Vec<_>>()
             .join(", "),
         (0..3).map(|k| f2(traps[k])).collect::<Vec<_>>().join(" / "),
+        {
+            let (s4, n4) = v.successes(4, 12, 14);
+            format!("{s4} of {n4}")
+        },
         v.breakdown(12, 14, &[1, 2, 3]),
         if none.is_empty() {
             String::new()
