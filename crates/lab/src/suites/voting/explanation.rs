@@ -233,7 +233,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let ok_waste = it1 > it2;
     let _ = writeln!(
         out,
-        "3. *In narrow passages IR alone has low reliability and wastes time searching.* {} Mean I_R over fields 8–11: {} IR alone, {} sonar alone, {} IR+sonar.{} Mean I_T on the fields where both single-sensor teams succeed: {} IR alone against {} sonar alone. Failures: {}. The opening is 0.8 m off the line to the goal: the robot meets a solid wall, slides along it one way or the other and, the wrong way, turns round in the corner. The binary IR beams see the slot's edges only when a beam falls on them, and an edge slipping between two beams is met by the robot's side (the collisions); with one beam through the opening and its neighbours on the wall, the votes for the arcs into it are low, so the robot passes it and comes back.{}{}\n",
+        "3. *In narrow passages IR alone has low reliability and wastes time searching.* {} Mean I_R over fields 8–11: {} IR alone, {} sonar alone, {} IR+sonar.{} Mean I_T on the fields where both single-sensor teams succeed: {} IR alone against {} sonar alone. Failures: {}. The opening is 1.0 m off the line to the goal: the robot meets a solid wall, slides along it one way or the other and, the wrong way, turns round in the corner. The binary IR beams see the slot's edges only when a beam falls on them, and an edge slipping between two beams is met by the robot's side (the collisions); with one beam through the opening and its neighbours on the wall, the votes for the arcs into it are low, so the robot passes it and comes back.{}{}\n",
         mark(ok_low && ok_waste),
         f2(n[0]),
         f2(n[1]),
@@ -421,7 +421,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         .collect();
     let _ = writeln!(
         out,
-        "9. *… while keeping fields 1–11 as good as experiment 3.* {} On each of fields 1–11 e4's I_R lies within e3's 95 % interval{}; mean {} against {}. Where the robot does not loop, `mark_sum` stays below `mark_min` and planning has no weight, so e4 drives e3's path; it differs only where the robot lingers (the narrowest passage).\n",
+        "9. *… while keeping fields 1–11 as good as experiment 3.* {} On each of fields 1–11 e4's I_R lies within e3's 95 % interval{}; mean {} against {}. Where the robot does not loop, `mark_sum` stays below `mark_min` and planning has no weight, so e4 drives e3's path; it differs only where the robot lingers.{}\n",
         mark(outside.is_empty()),
         if outside.is_empty() {
             String::new()
@@ -429,7 +429,12 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             format!(", except {}", outside.join(", "))
         },
         f2(v.ir(4, 1, 11)),
-        f2(v.ir(3, 1, 11))
+        f2(v.ir(3, 1, 11)),
+        if outside.is_empty() {
+            ""
+        } else {
+            " Where it lingers — hesitating in front of a slot, sliding to and fro along the wall — `mark_sum` passes `mark_min`, and the temporary goal, the least-visited direction, leads the robot away from the opening it was about to take: the planner cannot tell a trap from a search."
+        }
     );
 
     // Times across the kinds of field.
@@ -455,7 +460,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     out.push_str(
         "IR beam width (sensor model, `sim::sensors::ir`). Each IR detector was a single ray; it now has a 10° beam sampled by three rays, as a lensed IR proximity detector has. The 20° between neighbouring beams stay blind, so edges still slip between them — now occasionally: with single rays, the IR-only robot met the front corner of a 0.5 m box between two rays in a quarter to a half of the runs of fields 2–5.\n\n\
          Sonar echo memory (vote model, `nav::voting::VotingParams::sonar_memory_m`). Three 25° cones at 0°, ±30° cover ±42.5°; what is beside the robot is in none. A corner the robot passes is heard while ahead and lost as it comes abeam — just when the goal's pull turns the robot into it; sonar alone hit the inner corner of the bent corridor (field 7) in every run and the edge of the opening in the narrow passages. `b_sonar` now keeps the echoes it heard, carried along by odometry, until it has driven D_max (1 m) past them.\n\n\
-         The fields (`crates/lab/src/suites/voting/scenarios/`, design rules in each file's header). Scaled so that field 1 takes the source's 10 s (3 m at 0.3 m/s). Simple fields hold only solid obstacles 0.5 m or more across with gaps of at least 1.2 m (a corridor's width): 5 cm poles, wedges and thin walls seen edge-on, and gaps narrower than a corridor, made fields 2–5 adversarial. Narrow passages are openings 0.8 m off the line to the goal in a wall across the field, from 1.0 m down to 0.7 m (at 0.6 m the IR+sonar team hesitates in front of the slot until the time limit); with the opening on the line, every combination drove straight through. Every goal stands at least 1.4 m from the wall beyond it, so the robot arrives before that wall makes it turn away. The traps are 2.0 m wide inside, room for three tightest turning circles (narrower Us, tried, make every combination collide while turning); the trap among obstacles has no gap narrower than a corridor (with 0.8 m gaps, planning's detour collided).\n\n",
+         The fields (`crates/lab/src/suites/voting/scenarios/`, design rules in each file's header). Scaled so that field 1 takes the source's 10 s (3 m at 0.3 m/s). Simple fields hold only solid obstacles 0.5 m or more across with gaps of at least 1.2 m (a corridor's width): 5 cm poles, wedges and thin walls seen edge-on, and gaps narrower than a corridor, made fields 2–5 adversarial. Narrow passages are openings 1.0 m off the line to the goal in a wall across the field, from 1.0 m down to 0.7 m (at 0.6 m the IR+sonar team hesitates in front of the slot until the time limit); with the opening on the line, every combination drove straight through. Every goal stands at least 1.4 m from the wall beyond it, so the robot arrives before that wall makes it turn away. The traps are 2.0 m wide inside, room for three tightest turning circles (narrower Us, tried, make every combination collide while turning); the trap among obstacles has no gap narrower than a corridor (with 0.8 m gaps, planning's detour collided).\n\n",
     );
 
     // e5.
