@@ -322,6 +322,12 @@ impl Scenario {
             }
             t.validate().map_err(anyhow::Error::msg)?;
         }
+        if let Some(ir) = &self.robot.ir {
+            ir.validate().context("[robot.ir]")?;
+        }
+        if let Some(sonar) = &self.robot.sonar {
+            sonar.validate().context("[robot.sonar]")?;
+        }
         if let Some(o) = &self.robot.odometry {
             o.validate().context("[robot.odometry]")?;
         }
@@ -433,6 +439,27 @@ y = 1.0
         let text = "runs = 4000000000\n".to_string() + SMALL;
         let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
         assert!(err.contains("from 1 to 1000000"), "{err}");
+    }
+
+    #[test]
+    fn ir_and_sonar_overrides_are_read_and_checked() {
+        let text =
+            SMALL.to_string() + "[robot]\nir = { beam_rad = 0.0 }\nsonar = { dropout_probability = 0.1 }\n";
+        let r = Scenario::parse(&text, "s.toml", None)
+            .unwrap()
+            .robot
+            .robot_params();
+        assert_eq!(r.ir.beam_rad, 0.0);
+        assert_eq!(r.sonar.dropout_probability, 0.1);
+        // Keys left out keep the defaults (the AIBOT's seven detectors).
+        assert_eq!(r.ir.mounts.len(), 7);
+        assert_eq!(r.sonar.mounts.len(), 3);
+        let text = SMALL.to_string() + "[robot]\nir = { beam_rad = 2.0 }\n";
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("beam_rad"), "{err}");
+        let text = SMALL.to_string() + "[robot]\nsonar = { cone = 0.1 }\n";
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("cone"), "{err}");
     }
 
     #[test]
