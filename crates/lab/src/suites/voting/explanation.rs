@@ -211,13 +211,23 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let ok = w1 >= SUFFICIENT && w2 >= SUFFICIENT;
     let _ = writeln!(
         out,
-        "2. *IR alone and sonar alone are sufficient on the simple fields 1–6, with only a few failures.* {} The lowest I_R on fields 1–6 is {} for IR alone (field {wf1}) and {} for sonar alone (field {wf2}); mean {} and {}. Failures: {}. The obstacles of fields 2–5 are solid and at least 0.5 m across, and no gap is narrower than a corridor; what fails is a box corner passed at a grazing angle, between two IR beams or beside the sonar cones, as the source describes.{}\n",
+        "2. *IR alone and sonar alone are sufficient on the simple fields 1–6, with only a few failures.* {} The lowest I_R on fields 1–6 is {} for IR alone (field {wf1}) and {} for sonar alone (field {wf2}); mean {} and {}. Failures: {}. The obstacles of fields 2–5 are solid and at least 0.5 m across, and no gap is narrower than a corridor; {}{}\n",
         mark(ok),
         f2(w1),
         f2(w2),
         f2(v.ir(1, 1, 6)),
         f2(v.ir(2, 1, 6)),
         v.breakdown(1, 6, &[1, 2]),
+        {
+            let c = v.failures(1, 1, 6).0 + v.failures(2, 1, 6).0;
+            if c == 0 {
+                "no run of either collided: the few failures are runs that ended lost, where odometry drift put the goal more than the tolerance away.".to_string()
+            } else {
+                format!(
+                    "the {c} collisions are box corners passed at a grazing angle, between two IR beams or beside the sonar cones, as the source describes; the rest are runs lost to odometry drift."
+                )
+            }
+        },
         if ok {
             ""
         } else {
