@@ -144,8 +144,20 @@ pub struct Bar {
     pub high: f64,
 }
 
+/// How [`bars_with`] lays a chart out.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BarOptions {
+    /// Top of the `y` axis; whiskers above it are cut at it. `None`: from
+    /// the data (bars and whiskers), with headroom for a legend inside.
+    pub y_max: Option<f64>,
+    /// Width of a legend column right of the plot, pixels; `None`: the
+    /// legend inside the plot, upper right.
+    pub legend_px: Option<u32>,
+}
+
 /// Grouped bars: for each group (x axis) one bar per series, in the
-/// palette's colours, with its interval as a whisker.
+/// palette's colours, with its interval as a whisker; the legend inside
+/// the plot ([`bars_with`] with the default options).
 pub fn bars(
     title: &str,
     y_label: &str,
@@ -154,27 +166,63 @@ pub fn bars(
     values: &[Vec<Bar>],
     size: (u32, u32),
 ) -> Result<String> {
-    let top = values
+    bars_with(
+        title,
+        y_label,
+        groups,
+        series,
+        values,
+        size,
+        BarOptions::default(),
+    )
+}
+
+/// Grouped bars as [`bars`], laid out by `opts`. Each bar is one
+/// `<rect>` from `y = 0` up to its value, in its series' colour, drawn
+/// group by group in series order (tests read them back).
+pub fn bars_with(
+    title: &str,
+    y_label: &str,
+    groups: &[String],
+    series: &[String],
+    values: &[Vec<Bar>],
+    size: (u32, u32),
+    opts: BarOptions,
+) -> Result<String> {
+    let data_top = values
         .iter()
         .flatten()
         .flat_map(|b| [b.value, b.high])
         .filter(|v| v.is_finite())
         .fold(0.0f64, f64::max);
     let n = series.len().max(1) as f64;
-    // Headroom for the legend (about 20 px a row in the upper right) above
-    // the tallest bar, so that it never hides one.
-    let plot_px = f64::from(size.1.saturating_sub(36 + 24 + 30)).max(60.0);
-    let legend = ((20.0 * n + 16.0) / plot_px).min(0.6);
-    let top = if top > 0.0 {
-        top * 1.05 / (1.0 - legend)
-    } else {
-        1.0
+    let top = match (opts.y_max, opts.legend_px) {
+        (Some(t), _) if t > 0.0 && t.is_finite() => t,
+        (_, Some(_)) if data_top > 0.0 => data_top * 1.05,
+        _ => {
+            // Headroom for the legend (about 20 px a row in the upper
+            // right) above the tallest bar, so that it never hides one.
+            let plot_px = f64::from(size.1.saturating_sub(36 + 24 + 30)).max(60.0);
+            let legend = ((20.0 * n + 16.0) / plot_px).min(0.6);
+            if data_top > 0.0 {
+                data_top * 1.05 / (1.0 - legend)
+            } else {
+                1.0
+            }
+        }
     };
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        let mut chart = ChartBuilder::on(&root)
+        let (plot_area, legend_area) = match opts.legend_px {
+            Some(px) if px < size.0 => {
+                let (a, b) = root.split_horizontally(size.0 - px);
+                (a, Some(b))
+            }
+            _ => (root.clone(), None),
+        };
+        let mut chart = ChartBuilder::on(&plot_area)
             .caption(title, ("sans-serif", 16))
             .margin(12)
             .x_label_area_size(36)
@@ -210,11 +258,11 @@ pub fn bars(
                 let x0 = g as f64 + 0.1 + s as f64 * width;
                 let bar = chart
                     .draw_series(std::iter::once(Rectangle::new(
-                        [(x0, 0.0), (x0 + width * 0.9, b.value)],
+                        [(x0, 0.0), (x0 + width * 0.9, b.value.min(top))],
                         c.filled(),
                     )))
                     .map_err(err)?;
-                if first {
+                if first && legend_area.is_none() {
                     bar.label(name.clone())
                         .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
                     first = false;
@@ -223,23 +271,59 @@ pub fn bars(
                     let xm = x0 + width * 0.45;
                     chart
                         .draw_series(std::iter::once(PathElement::new(
-                            vec![(xm, b.low), (xm, b.high)],
+                            vec![(xm, b.low.clamp(0.0, top)), (xm, b.high.clamp(0.0, top))],
                             BLACK.stroke_width(1),
                         )))
                         .map_err(err)?;
                 }
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(200, 200, 200))
-            .draw()
-            .map_err(err)?;
+        match &legend_area {
+            None => chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(RGBColor(200, 200, 200))
+                .draw()
+                .map_err(err)?,
+            Some(area) => {
+                for (s, name) in series.iter().enumerate() {
+                    let c = PALETTE[s % PALETTE.len()];
+                    let y = 48 + 22 * s as i32;
+                    area.draw(&Rectangle::new([(4, y - 6), (16, y + 6)], c.filled()))
+                        .map_err(err)?;
+                    area.draw(&Text::new(name.clone(), (22, y - 7), ("sans-serif", 13)))
+                        .map_err(err)?;
+                }
+            }
+        }
         root.present().map_err(err)?;
     }
     Ok(svg)
+}
+
+/// The chart made scalable for inline use: a `viewBox` of `size` on the
+/// `<svg>` element (the page's CSS then sets its width), and `desc` — plain
+/// text, escaped here — as its `<desc>` (what screen readers and tests
+/// read).
+pub fn scalable(svg: &str, size: (u32, u32), desc: &str) -> String {
+    let Some(start) = svg.find("<svg") else {
+        return svg.to_string();
+    };
+    let Some(end) = svg[start..].find('>').map(|k| start + k) else {
+        return svg.to_string();
+    };
+    let (tag, rest) = (&svg[start..end], &svg[end + 1..]);
+    let tag = if tag.contains("viewBox") {
+        tag.to_string()
+    } else {
+        format!("{tag} viewBox=\"0 0 {} {}\"", size.0, size.1)
+    };
+    format!(
+        "{}{tag}><desc>{}</desc>{rest}",
+        &svg[..start],
+        crate::page::html_escape(desc)
+    )
 }
 
 #[cfg(test)]

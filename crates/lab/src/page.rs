@@ -48,6 +48,17 @@ pub enum Block {
         /// The pictures.
         figures: Vec<Figure>,
     },
+    /// SVG charts drawn into the page itself (inline, scaled to the page's
+    /// width, kept whole on a printed page), under a heading (HTML page
+    /// only; the Markdown page names them).
+    InlineCharts {
+        /// Section heading.
+        heading: String,
+        /// What the charts show.
+        caption: String,
+        /// (title, SVG markup) of each chart.
+        charts: Vec<(String, String)>,
+    },
     /// Charts under a heading, shown wide (HTML page only).
     Charts {
         /// Section heading.
@@ -119,7 +130,7 @@ pub fn table_to_html(md: &str) -> String {
     out
 }
 
-const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\ntable{border-collapse:collapse;margin:1em 0;font-size:14px}\ntd,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\ntd:first-child,th:first-child{text-align:left}\nth{background:#f2f2f2}\n.pics{display:flex;flex-wrap:wrap;gap:12px}\nfigure{margin:0;width:280px}\nfigure img{width:280px;border:1px solid #ccc}\nfigcaption{font-size:13px}\n.runs{color:#555}\n.runs a{margin-left:4px}\nfigure.chart{width:760px}\nfigure.chart img{width:760px;border:none}\ncode{background:#f4f4f4;padding:0 2px}\n";
+const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\ntable{border-collapse:collapse;margin:1em 0;font-size:14px}\ntd,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\ntd:first-child,th:first-child{text-align:left}\nth{background:#f2f2f2}\n.pics{display:flex;flex-wrap:wrap;gap:12px}\nfigure{margin:0;width:280px}\nfigure img{width:280px;border:1px solid #ccc}\nfigcaption{font-size:13px}\n.runs{color:#555}\n.runs a{margin-left:4px}\nfigure.chart{width:760px}\nfigure.chart img{width:760px;border:none}\nfigure.inline-chart{width:100%;margin:1em 0}\nfigure.inline-chart svg{width:100%;height:auto;display:block}\n@media print{body{max-width:none;margin:0}figure.inline-chart{break-inside:avoid;page-break-inside:avoid}h2{break-after:avoid}}\ncode{background:#f4f4f4;padding:0 2px}\n";
 
 impl Page {
     /// The page as Markdown (tables and text; pictures are on the HTML
@@ -137,6 +148,13 @@ impl Page {
                 }
                 Block::Text(t) => md.push_str(t),
                 Block::Figures { .. } | Block::Charts { .. } => {}
+                Block::InlineCharts { heading, charts, .. } => {
+                    let _ = writeln!(md, "## {heading}\n");
+                    for (title, _) in charts {
+                        let _ = writeln!(md, "- chart: {title} (in index.html)");
+                    }
+                    md.push('\n');
+                }
             }
         }
         md
@@ -166,6 +184,25 @@ impl Page {
                         } else {
                             let _ = writeln!(html, "<p>{}</p>", inline_html(&p.replace('\n', " ")));
                         }
+                    }
+                }
+                Block::InlineCharts {
+                    heading,
+                    caption,
+                    charts,
+                } => {
+                    let _ = writeln!(
+                        html,
+                        "<h2>{}</h2>\n<p>{}</p>",
+                        html_escape(heading),
+                        inline_html(caption)
+                    );
+                    for (title, svg) in charts {
+                        let _ = writeln!(
+                            html,
+                            "<figure class=\"inline-chart\">{svg}<figcaption>{}</figcaption></figure>",
+                            html_escape(title)
+                        );
                     }
                 }
                 Block::Figures {

@@ -27,6 +27,8 @@
 //! | `[world]` or `map` | shapes, or a map_server YAML | required |
 //! | `[robot] preset` | `aibot` (7 IR, 3 sonar), `jinny` (laser) or `ring` (16 sonars all round) | `aibot` |
 //! | `[robot.odometry]` | odometry error model in place of the preset's ([`sim::sensors::OdometryParams`]) | the preset's |
+//! | `[robot.ir]` | infrared detectors in place of the preset's ([`sim::sensors::IrParams`]) | the preset's |
+//! | `[robot.sonar]` | sonar array in place of the preset's ([`sim::sensors::SonarParams`]) | the preset's |
 //! | `[start] x, y, theta_deg, jitter_m, jitter_deg` | start pose and its per-run spread (uniform in a disc / an interval) | θ 0, no spread |
 //! | `[goal] x, y` | goal | required |
 //! | `[jitter] obstacles_m` | each shape moved by up to this per run (uniform in a disc) | 0 |
@@ -122,7 +124,7 @@ impl Preset {
 }
 
 /// The robot.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
     /// Which robot. Default `aibot`.
@@ -132,6 +134,14 @@ pub struct RobotSpec {
     /// ([`sim::sensors::OdometryParams`]; keys left out keep their defaults).
     #[serde(default)]
     pub odometry: Option<sim::sensors::OdometryParams>,
+    /// The infrared detectors, in place of the preset's
+    /// ([`sim::sensors::IrParams`]; keys left out keep their defaults).
+    #[serde(default)]
+    pub ir: Option<sim::sensors::IrParams>,
+    /// The sonar array, in place of the preset's
+    /// ([`sim::sensors::SonarParams`]; keys left out keep their defaults).
+    #[serde(default)]
+    pub sonar: Option<sim::sensors::SonarParams>,
 }
 
 impl RobotSpec {
@@ -141,6 +151,12 @@ impl RobotSpec {
         let mut r = self.preset.robot_params();
         if let Some(o) = self.odometry {
             r.odometry = o;
+        }
+        if let Some(ir) = &self.ir {
+            r.ir = ir.clone();
+        }
+        if let Some(sonar) = &self.sonar {
+            r.sonar = sonar.clone();
         }
         r
     }
@@ -306,6 +322,12 @@ impl Scenario {
             }
             t.validate().map_err(anyhow::Error::msg)?;
         }
+        if let Some(ir) = &self.robot.ir {
+            ir.validate().context("[robot.ir]")?;
+        }
+        if let Some(sonar) = &self.robot.sonar {
+            sonar.validate().context("[robot.sonar]")?;
+        }
         if let Some(o) = &self.robot.odometry {
             o.validate().context("[robot.odometry]")?;
         }
@@ -417,6 +439,27 @@ y = 1.0
         let text = "runs = 4000000000\n".to_string() + SMALL;
         let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
         assert!(err.contains("from 1 to 1000000"), "{err}");
+    }
+
+    #[test]
+    fn ir_and_sonar_overrides_are_read_and_checked() {
+        let text =
+            SMALL.to_string() + "[robot]\nir = { beam_rad = 0.0 }\nsonar = { dropout_probability = 0.1 }\n";
+        let r = Scenario::parse(&text, "s.toml", None)
+            .unwrap()
+            .robot
+            .robot_params();
+        assert_eq!(r.ir.beam_rad, 0.0);
+        assert_eq!(r.sonar.dropout_probability, 0.1);
+        // Keys left out keep the defaults (the AIBOT's seven detectors).
+        assert_eq!(r.ir.mounts.len(), 7);
+        assert_eq!(r.sonar.mounts.len(), 3);
+        let text = SMALL.to_string() + "[robot]\nir = { beam_rad = 2.0 }\n";
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("beam_rad"), "{err}");
+        let text = SMALL.to_string() + "[robot]\nsonar = { cone = 0.1 }\n";
+        let err = format!("{:#}", Scenario::parse(&text, "s.toml", None).unwrap_err());
+        assert!(err.contains("cone"), "{err}");
     }
 
     #[test]

@@ -81,8 +81,8 @@ pub fn sonar_ramp(d_obs_m: f64, d_min_m: f64, d_max_m: f64) -> f64 {
 }
 
 /// The ground each arc action would sweep: the robot's path over the
-/// look-ahead (the arc), continued straight along the final heading, as a
-/// polyline in the robot frame, with the half-width the footprint needs.
+/// look-ahead (the arc), continued straight along the final heading out to
+/// `reach_m` of travel, widened by the half-width the footprint needs.
 ///
 /// **Decision:** the source says only "the obstacle distance the sonar sees
 /// along action `m`". We place each echo on its transducer's axis at the
@@ -93,64 +93,125 @@ pub fn sonar_ramp(d_obs_m: f64, d_min_m: f64, d_max_m: f64) -> f64 {
 /// such echo; an action no echo lies along gets 1. A close echo at the side
 /// thus counts against Forward too, which a nearest-axis rule misses (a
 /// robot that looks only along its heading scrapes the corners it passes).
+///
+/// The test is exact and O(1) per action: the distance from the point to
+/// the arc (a circle of radius `L/θ_m` through the robot, `L` the arc's
+/// length) and to the straight continuation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SweptPaths {
-    /// One polyline per action (empty for Escape).
-    paths: Vec<Vec<(f64, f64)>>,
+    /// Per action: `None` for Escape, else (heading change θ_m, arc length).
+    arcs: Vec<Option<(f64, f64)>>,
+    /// Travel the paths reach, metres.
+    reach_m: f64,
     /// Half-width of the swept ground, metres.
     half_width_m: f64,
+}
+
+/// Distance from `p` to the segment `a`–`b`.
+fn segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
 }
 
 impl SweptPaths {
     /// Paths of `actions` out to `reach_m` of travel, for a footprint of
     /// `half_width_m` (robot radius + margin).
     pub fn new(actions: &ActionSet, reach_m: f64, half_width_m: f64) -> SweptPaths {
-        let step = 0.02;
-        let n = (reach_m / step).ceil().max(1.0) as usize;
         let arc_len = actions.cruise_mps * actions.lookahead_s;
-        let paths = actions
+        let arcs = actions
             .actions
             .iter()
             .map(|a| match a.kind {
-                ActionKind::Escape => Vec::new(),
-                ActionKind::Arc => {
-                    let kappa = a.heading_rad / arc_len;
-                    (0..=n)
-                        .map(|k| {
-                            let s = k as f64 * step;
-                            let sa = s.min(arc_len);
-                            let (x, y, th) = if kappa.abs() < 1e-9 {
-                                (sa, 0.0, 0.0)
-                            } else {
-                                let th = kappa * sa;
-                                (th.sin() / kappa, (1.0 - th.cos()) / kappa, th)
-                            };
-                            let rest = s - sa;
-                            (x + rest * th.cos(), y + rest * th.sin())
-                        })
-                        .collect()
-                }
+                ActionKind::Escape => None,
+                ActionKind::Arc => Some((a.heading_rad, arc_len)),
             })
             .collect();
-        SweptPaths { paths, half_width_m }
+        SweptPaths {
+            arcs,
+            reach_m,
+            half_width_m,
+        }
+    }
+
+    /// Distance from the point (robot frame) to the path of action `m`
+    /// (infinite for Escape).
+    pub fn distance(&self, m: usize, x: f64, y: f64) -> f64 {
+        let Some((theta, arc_len)) = self.arcs[m] else {
+            return f64::INFINITY;
+        };
+        let arc = arc_len.min(self.reach_m);
+        let rest = self.reach_m - arc;
+        if theta.abs() < 1e-9 || arc <= 0.0 {
+            return segment_distance((x, y), (0.0, 0.0), (self.reach_m, 0.0));
+        }
+        // Mirror right turns onto left ones.
+        let (y, turn) = if theta < 0.0 { (-y, -theta) } else { (y, theta) };
+        let r = arc_len / turn;
+        let span = turn * arc / arc_len;
+        let end = (r * span.sin(), r * (1.0 - span.cos()));
+        // Around the centre (0, r), the arc's point at parameter φ lies at
+        // angle φ − π/2.
+        let (qx, qy) = (x, y - r);
+        let phi = wrap_angle(qy.atan2(qx) + std::f64::consts::FRAC_PI_2);
+        let to_arc = if (0.0..=span).contains(&phi) {
+            (qx.hypot(qy) - r).abs()
+        } else {
+            x.hypot(y).min((x - end.0).hypot(y - end.1))
+        };
+        let to_line = if rest > 0.0 {
+            let far = (end.0 + rest * span.cos(), end.1 + rest * span.sin());
+            segment_distance((x, y), end, far)
+        } else {
+            f64::INFINITY
+        };
+        to_arc.min(to_line)
     }
 
     /// Whether the point (robot frame) lies on the ground action `m` sweeps.
     pub fn contains(&self, m: usize, x: f64, y: f64) -> bool {
-        let hw2 = self.half_width_m * self.half_width_m;
-        self.paths[m].iter().any(|&(px, py)| {
-            let (dx, dy) = (x - px, y - py);
-            dx * dx + dy * dy <= hw2
-        })
+        self.distance(m, x, y) <= self.half_width_m
     }
 }
 
-/// `b_sonar`: obstacle avoidance with sonar, `D_obs(m)` per [`SweptPaths`].
+/// An echo as `b_sonar` uses it: the point in the robot frame and its
+/// obstacle distance `D_obs`, metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Echo {
+    /// x in the robot frame, metres.
+    pub x_m: f64,
+    /// y in the robot frame, metres.
+    pub y_m: f64,
+    /// Distance from the transducer, metres.
+    pub distance_m: f64,
+}
+
+/// The echoes of this reading within `d_max_m`, on their transducers' axes.
+pub fn echoes(sonar: &[SonarReading], d_max_m: f64) -> impl Iterator<Item = Echo> + '_ {
+    sonar.iter().filter(move |s| s.range_m <= d_max_m).map(|s| {
+        let (sin, cos) = s.mount.theta_rad.sin_cos();
+        Echo {
+            x_m: s.mount.x_m + s.range_m * cos,
+            y_m: s.mount.y_m + s.range_m * sin,
+            distance_m: s.range_m,
+        }
+    })
+}
+
+/// `b_sonar`: obstacle avoidance with sonar, `D_obs(m)` per [`SweptPaths`]
+/// over this reading's echoes and `remembered` ones (earlier echoes carried
+/// into the robot frame; see [`super::VotingParams::sonar_memory_m`]).
 /// Escape (undefined in the source) votes the fraction of transducers
 /// reading `≤ d_min`.
 pub fn sonar_votes(
     actions: &ActionSet,
     sonar: &[SonarReading],
+    remembered: &[Echo],
     swept: &SweptPaths,
     d_min_m: f64,
     d_max_m: f64,
@@ -168,12 +229,9 @@ pub fn sonar_votes(
             }
             ActionKind::Arc => {
                 let mut d_obs = f64::INFINITY;
-                for s in sonar.iter().filter(|s| s.range_m <= d_max_m) {
-                    let ang = s.mount.theta_rad;
-                    let x = s.mount.x_m + s.range_m * ang.cos();
-                    let y = s.mount.y_m + s.range_m * ang.sin();
-                    if swept.contains(m, x, y) {
-                        d_obs = d_obs.min(s.range_m);
+                for e in echoes(sonar, d_max_m).chain(remembered.iter().copied()) {
+                    if e.distance_m < d_obs && swept.contains(m, e.x_m, e.y_m) {
+                        d_obs = e.distance_m;
                     }
                 }
                 sonar_ramp(d_obs, d_min_m, d_max_m)
@@ -247,7 +305,7 @@ mod tests {
             .collect();
         let mut v = vec![0.0; a.len()];
         let swept = SweptPaths::new(&a, 1.0, 0.2);
-        sonar_votes(&a, &s, &swept, 0.2, 1.0, &mut v);
+        sonar_votes(&a, &s, &[], &swept, 0.2, 1.0, &mut v);
         assert!(
             v[..7].iter().all(|&x| x == 0.0),
             "0.1 m at +30° is beside every path: {v:?}"
@@ -259,7 +317,7 @@ mod tests {
             .zip([0.3, 0.6, f64::INFINITY])
             .map(|(r, range_m)| SonarReading { range_m, ..*r })
             .collect();
-        sonar_votes(&a, &mid, &swept, 0.2, 1.0, &mut v);
+        sonar_votes(&a, &mid, &[], &swept, 0.2, 1.0, &mut v);
         let ramp = |d: f64| (d - 0.2) / 0.8;
         assert!(
             (v[0] - ramp(0.3)).abs() < 1e-12,
@@ -271,6 +329,71 @@ mod tests {
         );
         assert_eq!(v[6], 1.0, "Hard Right sweeps away from both echoes");
         assert_eq!(v[7], 0.0);
+    }
+
+    /// The path of [`SweptPaths`] sampled every millimetre, as a reference.
+    fn sampled_distance(actions: &ActionSet, m: usize, reach: f64, x: f64, y: f64) -> f64 {
+        let a = &actions.actions[m];
+        let arc_len = actions.cruise_mps * actions.lookahead_s;
+        let kappa = a.heading_rad / arc_len;
+        let n = (reach / 0.001).ceil() as usize;
+        (0..=n)
+            .map(|k| {
+                let s = k as f64 * 0.001;
+                let sa = s.min(arc_len);
+                let (px, py, th) = if kappa.abs() < 1e-9 {
+                    (sa, 0.0, 0.0)
+                } else {
+                    let th = kappa * sa;
+                    (th.sin() / kappa, (1.0 - th.cos()) / kappa, th)
+                };
+                let rest = s - sa;
+                (x - px - rest * th.cos()).hypot(y - py - rest * th.sin())
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn swept_path_distance_is_exact() {
+        let a = ActionSet::default();
+        let swept = SweptPaths::new(&a, 1.0, 0.2);
+        // A grid of points around the robot, every action but Escape.
+        for m in 0..7 {
+            for i in -12..=12 {
+                for j in -12..=12 {
+                    let (x, y) = (0.1 * i as f64, 0.1 * j as f64);
+                    let exact = swept.distance(m, x, y);
+                    let sampled = sampled_distance(&a, m, 1.0, x, y);
+                    assert!(
+                        (exact - sampled).abs() < 1e-3,
+                        "action {m} at ({x}, {y}): {exact} vs {sampled}"
+                    );
+                }
+            }
+        }
+        assert_eq!(
+            swept.distance(7, 0.3, 0.0),
+            f64::INFINITY,
+            "Escape sweeps nothing"
+        );
+    }
+
+    #[test]
+    fn remembered_echoes_vote_like_heard_ones() {
+        let a = ActionSet::default();
+        let swept = SweptPaths::new(&a, 1.0, 0.2);
+        let mut v = vec![0.0; a.len()];
+        // Nothing heard now; a corner remembered 0.3 m to the left, just
+        // past the +42.5° edge of the left cone.
+        let corner = Echo {
+            x_m: 0.2,
+            y_m: 0.3,
+            distance_m: 0.36 - 0.15,
+        };
+        sonar_votes(&a, &[], &[corner], &swept, 0.25, 1.0, &mut v);
+        assert_eq!(v[0], 0.0, "Hard Left runs into the corner (≤ D_min)");
+        assert_eq!(v[3], 1.0, "Forward passes it");
+        assert_eq!(v[6], 1.0, "Hard Right turns away");
     }
 
     #[test]

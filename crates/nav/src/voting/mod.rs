@@ -120,6 +120,24 @@ pub struct VotingParams {
     /// `D_obs`: the robot's radius plus a margin, metres. Default 0.2
     /// (AIBOT: 0.15 + 0.05).
     pub swept_half_width_m: f64,
+    /// How far the robot drives (by odometry) before `b_sonar` forgets an
+    /// echo, metres; 0 keeps only the current reading. Default 1.0
+    /// (`D_max`).
+    ///
+    /// **Decision** (the source votes on the current reading only): three
+    /// 25° cones at 0°, ±30° cover ±42.5°; an obstacle beside the robot is
+    /// in none of them. An inner corner of a bend, or the edge of an
+    /// opening the robot slides past, is heard while it is ahead and lost
+    /// as it comes abeam — just when the goal's pull turns the robot into
+    /// it (every sonar-only run cut the corner of the bent corridor without
+    /// this). So `b_sonar` keeps the echoes it heard, carried along by
+    /// odometry into the robot's frame, until the robot has driven `D_max`
+    /// past them: beyond that an echo can no longer be on the ground an
+    /// action sweeps before a fresh reading would see it, and odometry
+    /// drift over 1 m (about 1 %) stays far below the footprint's margin.
+    /// A short-term local map of this kind is the usual companion of a
+    /// sparse sonar ring.
+    pub sonar_memory_m: f64,
 }
 
 impl Default for VotingParams {
@@ -140,6 +158,7 @@ impl Default for VotingParams {
             memory: MemoryParams::default(),
             arrive_m: 0.05,
             swept_half_width_m: 0.2,
+            sonar_memory_m: 1.0,
         }
     }
 }
@@ -170,6 +189,12 @@ impl VotingParams {
             return Err(format!(
                 "swept_half_width_m must be > 0, got {}",
                 self.swept_half_width_m
+            ));
+        }
+        if !(self.sonar_memory_m.is_finite() && self.sonar_memory_m >= 0.0) {
+            return Err(format!(
+                "sonar_memory_m must be a finite number ≥ 0, got {}",
+                self.sonar_memory_m
             ));
         }
         if !(self.memory.cell_m > 0.0 && self.memory.size > 0) {
@@ -245,6 +270,86 @@ pub struct VotingController {
     swept: behaviours::SweptPaths,
     ballot: Ballot,
     steer: Option<f64>,
+    heard: EchoMemory,
+}
+
+/// Echoes `b_sonar` remembers ([`VotingParams::sonar_memory_m`]): points in
+/// the odometry frame with the odometer reading when they were heard.
+#[derive(Debug, Clone, Default)]
+struct EchoMemory {
+    /// (point in the odometry frame, odometer when heard).
+    points: Vec<(Vec2, f64)>,
+    /// Distance driven by odometry, metres.
+    odometer_m: f64,
+    /// Where the robot was at the last tick (odometry).
+    last: Option<Vec2>,
+    /// Pose (odometry) and odometer at the last reading remembered.
+    heard_at: Option<(robot::Pose, f64)>,
+    /// The remembered echoes in the robot frame, for this tick's votes.
+    in_robot: Vec<behaviours::Echo>,
+}
+
+impl EchoMemory {
+    /// Most points remembered: 1 m of travel at one reading per 2 cm, three
+    /// transducers.
+    const MOST: usize = 150;
+
+    /// Advances the odometer to `pose`, forgets echoes heard more than
+    /// `keep_m` ago, and lays the others out in the robot frame — those
+    /// that can lie on a swept path: within `d_max_m` of the transducers
+    /// (beyond, the ramp votes 1 anyway) and not behind the robot by more
+    /// than `half_width_m` (every path runs forward of the robot's axle).
+    fn update(
+        &mut self,
+        pose: &robot::Pose,
+        keep_m: f64,
+        mount_radius_m: f64,
+        d_max_m: f64,
+        half_width_m: f64,
+    ) {
+        let at = pose.position();
+        if let Some(last) = self.last {
+            self.odometer_m += (at - last).norm();
+        }
+        self.last = Some(at);
+        let now = self.odometer_m;
+        self.points.retain(|&(_, heard)| now - heard <= keep_m);
+        self.in_robot.clear();
+        for &(p, _) in &self.points {
+            let q = pose.inverse_transform(p);
+            let distance_m = (q.norm() - mount_radius_m).max(0.0);
+            if distance_m <= d_max_m && q.x >= -half_width_m {
+                self.in_robot.push(behaviours::Echo {
+                    x_m: q.x,
+                    y_m: q.y,
+                    distance_m,
+                });
+            }
+        }
+    }
+
+    /// Remembers this reading's echoes (robot frame → odometry frame),
+    /// unless the robot has moved less than 2 cm and turned less than 5°
+    /// since the last reading it remembered (the echoes would repeat it:
+    /// a robot turning on the spot would otherwise pile them up), and at
+    /// most [`Self::MOST`] points, the oldest forgotten first.
+    fn hear(&mut self, pose: &robot::Pose, sonar: &[robot::SonarReading], d_max_m: f64) {
+        if let Some((at, odo)) = self.heard_at {
+            let turned = wrap_angle(pose.theta_rad - at.theta_rad).abs();
+            if self.odometer_m - odo < 0.02 && turned < 5f64.to_radians() {
+                return;
+            }
+        }
+        self.heard_at = Some((*pose, self.odometer_m));
+        if self.points.len() + sonar.len() > Self::MOST {
+            let drop = (self.points.len() + sonar.len() - Self::MOST).min(self.points.len());
+            self.points.drain(..drop);
+        }
+        for e in behaviours::echoes(sonar, d_max_m) {
+            let p = pose.transform(Vec2::new(e.x_m, e.y_m));
+            self.points.push((p, self.odometer_m));
+        }
+    }
 }
 
 impl VotingController {
@@ -265,6 +370,7 @@ impl VotingController {
             ir_layout: usize::MAX,
             ballot,
             steer: None,
+            heard: EchoMemory::default(),
         })
     }
 
@@ -352,14 +458,32 @@ impl Controller for VotingController {
             behaviours::ir_votes(&self.p.actions, &perception.ir, &self.ir_covers, &mut b.ir);
         }
         if t.sonar {
+            let keep = self.p.sonar_memory_m;
+            if keep > 0.0 {
+                let mount_r = perception
+                    .sonar
+                    .first()
+                    .map_or(0.0, |s| s.mount.x_m.hypot(s.mount.y_m));
+                self.heard.update(
+                    &pose,
+                    keep,
+                    mount_r,
+                    self.p.sonar_d_max_m,
+                    self.p.swept_half_width_m,
+                );
+            }
             behaviours::sonar_votes(
                 &self.p.actions,
                 &perception.sonar,
+                &self.heard.in_robot,
                 &self.swept,
                 self.p.sonar_d_min_m,
                 self.p.sonar_d_max_m,
                 &mut b.sonar,
             );
+            if keep > 0.0 {
+                self.heard.hear(&pose, &perception.sonar, self.p.sonar_d_max_m);
+            }
         }
         if t.odometry {
             behaviours::goal_votes(&self.p.actions, goal_bearing, self.p.beta_rad, &mut b.odo);
@@ -554,6 +678,47 @@ mod tests {
         // All arc votes equal (no goal preference possible): Forward wins ties.
         let fused = vec![0.5; 8];
         assert_eq!(c.argmax(&fused), 3);
+    }
+
+    /// Regression: sonar alone turned into the inner corner of the bent
+    /// corridor in every run — the corner, heard at +30° while ahead, is in
+    /// no cone once abeam.
+    #[test]
+    fn sonar_alone_does_not_turn_into_a_corner_it_has_passed() {
+        let run = |memory_m: f64| {
+            let mut c = VotingController::new(VotingParams {
+                teams: Teams::experiment(2).unwrap(),
+                sonar_memory_m: memory_m,
+                ..VotingParams::default()
+            })
+            .unwrap();
+            let goal = Vec2::new(0.3, 5.0); // straight left once abeam
+            // The corner 0.6 m away on the +30° axis…
+            let ahead = perception(&[false; 7], [0.6, 9.0, 9.0], goal);
+            c.step(&ahead, &mut Notes::disabled());
+            // …then 0.3 m further on, at 54° (out of every cone) and on
+            // the ground the left turns sweep.
+            let mut abeam = perception(&[false; 7], [9.0; 3], goal);
+            abeam.odometry = Pose::new(0.3, 0.0, 0.0);
+            c.step(&abeam, &mut Notes::disabled());
+            c.p.actions.actions[c.ballot().chosen].heading_rad
+        };
+        assert!(
+            run(0.0) > 1.5,
+            "without the memory it turns hard left into the corner"
+        );
+        assert!(
+            run(1.0) < 0.6,
+            "with it, it turns no harder than Soft Left: {}",
+            run(1.0)
+        );
+        assert!(
+            VotingController::new(VotingParams {
+                sonar_memory_m: -1.0,
+                ..VotingParams::default()
+            })
+            .is_err()
+        );
     }
 
     #[test]

@@ -2,12 +2,30 @@
 //! `scenarios/` here × the four behaviour combinations of the source
 //! (`e1`…`e4`), and `e4` with the activity-trace layer (`e5`).
 //!
-//! Prints the four `I_R`/`I_T` tables side by side, the table of all
-//! scenarios, and an explanation checked against the source's observations
-//! (`explanation.rs`). The fields are compiled into the binary, so the suite
-//! runs from anywhere; the files in `scenarios/` are the same text,
+//! The report opens with the source's kind of figure — `I_R` and `I_T`
+//! per field, the experiments' bars side by side with 95 % intervals
+//! (`charts.rs`, inline SVG) — then the four `I_R`/`I_T` tables side by
+//! side, the table of all scenarios, and each of the source's observations
+//! checked against the batch's numbers, holding or not and why
+//! (`explanation.rs`). The fields are compiled into the binary, so the
+//! suite runs from anywhere; the files in `scenarios/` are the same text,
 //! for reading and copying.
+//!
+//! **The fields** follow the spec's kinds, from the robot's geometry
+//! (radius 0.15 m; IR beams 30° apart reaching 0.95 m from the centre; sonar
+//! cones covering ±42.5°; tightest turn 0.58 m across), each file's header
+//! giving its rules: field 1 is 3 m of open floor (the source's 10 s at
+//! 0.3 m/s); fields 2–5 hold one to four solid obstacles at least 0.5 m
+//! across with no gap narrower than a corridor (1.2 m); fields 6–7 are
+//! 1.2 m corridors; fields 8–11 close the line to the goal with a wall
+//! whose opening (1.0 m down to 0.7 m) lies 1.0 m off that line, so it
+//! must be found; fields 12–14 are U traps 2.0 m wide inside (room to
+//! turn), facing the start. Every goal is 1.4 m or more from the wall
+//! beyond it. Per run, the start pose spreads by 0.1 m and ±15°, obstacles
+//! of fields 2–5 and 14 move by up to 5 cm, and sensor and odometry noise
+//! are drawn from the run's seed.
 
+pub mod charts;
 mod explanation;
 
 use std::collections::BTreeMap;
@@ -166,7 +184,23 @@ pub fn tables(summaries: &[Summary]) -> (String, String) {
 fn report(suite: &ScenarioSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport> {
     let (text, main) = tables(ctx.summaries);
     let (_, all) = tables::generic_table(ctx.summaries, &[shared::DEADLOCK_COLUMN]);
+    let label = |e: &str| experiment_label(e).unwrap_or_default();
     let mut blocks = vec![
+        Block::InlineCharts {
+            heading: "The shape at a glance".into(),
+            caption: "One group of bars per field (1 open floor; 2–5 a few obstacles; 6–7 corridors; 8–11 narrow passages off the line, narrower from 8 to 11; 12–14 traps), one bar per experiment; the whiskers are the 95 % intervals. An I_T bar is missing where no run succeeded. The numbers are those of the tables below and of `summary.json`.".into(),
+            charts: vec![
+                (
+                    "Reliability index I_R per field".into(),
+                    charts::svg(ctx.summaries, charts::Index::Reliability, label)?,
+                ),
+                (
+                    "Time index I_T per field (successful runs only)".into(),
+                    charts::svg(ctx.summaries, charts::Index::Time, label)?,
+                ),
+            ],
+        },
+        Block::Heading("The four tables side by side (and e5)".into()),
         Block::Table(main),
         Block::Heading("All scenarios".into()),
         Block::Table(all),
