@@ -341,6 +341,13 @@ pub struct Transition {
     pub attempts: u32,
     /// How many of those attempts did not end at `p_j` (≤ `attempts`).
     pub failures: u32,
+    /// The map heading the robot left `p_i` on — its heading at the end of
+    /// the exit turn — when the transition was recorded (the circular mean
+    /// over the traversals that found it again), radians. Navigation turns
+    /// to it rather than by the exit turn's steps
+    /// ([`super::navigate`]). `None`: not recorded (a map file written
+    /// before it was).
+    pub leave_heading_rad: Option<f64>,
 }
 
 impl Transition {
@@ -363,6 +370,7 @@ impl Transition {
             lambda: 1.0,
             attempts: 0,
             failures: 0,
+            leave_heading_rad: None,
         }
     }
 }
@@ -701,6 +709,9 @@ impl FuzzyPetriNet {
             });
         }
         check_lambda(owner, t.lambda)?;
+        if let Some(h) = t.leave_heading_rad {
+            finite(owner, "leave_heading_rad", h)?;
+        }
         if t.failures > t.attempts {
             return Err(TopoError::BadCounts {
                 owner: owner(),
@@ -765,6 +776,19 @@ impl FuzzyPetriNet {
             lambda,
         )?;
         self.transitions[t.index()].lambda = lambda;
+        Ok(())
+    }
+
+    /// Sets the heading transition `t` leaves its place on (finite,
+    /// radians; wrapped to (−π, π]).
+    pub fn set_leave_heading(&mut self, t: TransitionId, heading_rad: f64) -> Result<(), TopoError> {
+        self.check_transition(t)?;
+        finite(
+            || self.transition_owner(t.index(), &self.transitions[t.index()]),
+            "leave_heading_rad",
+            heading_rad,
+        )?;
+        self.transitions[t.index()].leave_heading_rad = Some(robot::wrap_angle(heading_rad));
         Ok(())
     }
 
@@ -935,6 +959,7 @@ impl FuzzyPetriNet {
                     lambda: t.lambda,
                     attempts: t.attempts,
                     failures: t.failures,
+                    leave_heading_rad: t.leave_heading_rad,
                 })
                 .collect(),
         }
@@ -972,6 +997,7 @@ impl FuzzyPetriNet {
                 lambda: t.lambda,
                 attempts: t.attempts,
                 failures: t.failures,
+                leave_heading_rad: t.leave_heading_rad,
             })?;
         }
         Ok(net)
@@ -1139,6 +1165,8 @@ struct TransitionOut<'a> {
     lambda: f64,
     attempts: u32,
     failures: u32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    leave_heading_rad: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -1162,6 +1190,8 @@ struct TransitionIn {
     lambda: f64,
     attempts: u32,
     failures: u32,
+    #[serde(default)]
+    leave_heading_rad: Option<f64>,
 }
 
 #[cfg(test)]

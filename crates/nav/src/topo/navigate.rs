@@ -261,10 +261,11 @@ impl RouteFollower {
                 };
                 self.expected = Some(t);
                 let to = tr.to;
+                let leave = tr.leave_heading_rad;
                 if self.first_plan.is_none() {
                     self.first_plan = Some(p);
                 }
-                self.walker.start_expecting(action, Some(to));
+                self.walker.start_expecting(action, Some(to), leave);
             }
             _ => {
                 self.stats.no_route += 1;

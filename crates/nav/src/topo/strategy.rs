@@ -221,6 +221,10 @@ pub fn actions_at(kind: PlaceKind, concave: bool) -> &'static [Action] {
 /// What the executor is doing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
+    /// Rotating in place to the odometry heading `target_rad` (a replayed
+    /// transition's leaving heading); then the exit turn's steps in
+    /// direction `sign` if the way is not free there.
+    Aiming { target_rad: f64, sign: f64 },
     /// Rotating in place by the exit turn; `turned_rad` so far.
     Turning { sign: f64, turned_rad: f64 },
     /// Driving the strategy.
@@ -321,6 +325,33 @@ impl Executor {
         }
     }
 
+    /// Like [`Executor::new`], but the exit turn first rotates (the shorter
+    /// way) to the odometry heading `leave_heading_rad` — where a recorded
+    /// transition left its place — and the strategy starts there if the
+    /// way ahead leaves room to drive (beyond `stop_m` + 0.1 m); otherwise
+    /// the exit turn's steps go on from that heading. A detour ignores it
+    /// (it turns toward its side and comes back to the place's heading).
+    pub fn aiming(
+        params: StrategyParams,
+        strategy: Strategy,
+        exit_turn: Turn,
+        heading_rad: f64,
+        leave_heading_rad: f64,
+    ) -> Executor {
+        let mut ex = Executor::new(params, strategy, exit_turn, heading_rad);
+        if strategy.detour_side().is_none() && leave_heading_rad.is_finite() {
+            let sign = match exit_turn {
+                Turn::Right => -1.0,
+                _ => 1.0,
+            };
+            ex.phase = Phase::Aiming {
+                target_rad: wrap_angle(leave_heading_rad),
+                sign,
+            };
+        }
+        ex
+    }
+
     /// The strategy played.
     pub fn strategy(&self) -> Strategy {
         self.strategy
@@ -356,7 +387,7 @@ impl Executor {
 
     /// Whether the exit turn is over.
     pub fn turned(&self) -> bool {
-        !matches!(self.phase, Phase::Turning { .. })
+        !matches!(self.phase, Phase::Turning { .. } | Phase::Aiming { .. })
     }
 
     /// One control tick: the ring, the odometry heading, whether the robot
@@ -373,6 +404,29 @@ impl Executor {
         match self.phase {
             Phase::Arrived => Progress::Arrived,
             Phase::Failed(f) => Progress::Failed(f),
+            Phase::Aiming { target_rad, sign } => {
+                let left_rad = wrap_angle(target_rad - heading_rad);
+                if left_rad.abs() <= TURN_DONE_RAD {
+                    if ahead > p.stop_m + 0.1 {
+                        self.phase = Phase::Driving;
+                        self.hold_heading_rad = heading_rad;
+                        self.last_wall_error_m = None;
+                        return self.drive(ring, heading_rad, ahead, dt_s);
+                    }
+                    // Blocked there (the robot stands elsewhere than when
+                    // the transition was recorded): the exit turn's steps.
+                    self.phase = Phase::Turning {
+                        sign,
+                        turned_rad: 0.0,
+                    };
+                    return Progress::Drive(Command::Stop);
+                }
+                let rate = (2.0 * left_rad.abs()).clamp(0.2, p.turn_radps);
+                Progress::Drive(Command::Twist {
+                    v_mps: 0.0,
+                    omega_radps: left_rad.signum() * rate,
+                })
+            }
             Phase::Turning { sign, turned_rad } => {
                 let turned_rad = turned_rad + sign * dheading;
                 // Turns go by steps of min_turn_rad (90°: then 180°, 270°)

@@ -432,6 +432,37 @@ impl TopoSuite {
         if let Some(map) = &run.map {
             record.state = Some(serde_json::to_value(Learnt { map: map.to_json() })?);
         }
+        let name = |p: PlaceId| format!("p{}", p.0 + 1);
+        record.events = run
+            .legs
+            .iter()
+            .map(|l| {
+                let mut e = Event::new("leg", l.time_s)
+                    .at(l.end.position())
+                    .with("arrived", name(l.arrived))
+                    .with("new", l.new)
+                    .with("as_planned", l.as_planned)
+                    .with("true_x_m", l.end.x_m)
+                    .with("true_y_m", l.end.y_m)
+                    .with("true_heading_rad", l.end.theta_rad)
+                    .with("start_x_m", l.start.x_m)
+                    .with("start_y_m", l.start.y_m)
+                    .with("start_heading_rad", l.start.theta_rad);
+                if let Some(p) = l.from {
+                    e = e.with("from", name(p));
+                }
+                if let Some(p) = l.planned_to {
+                    e = e.with("planned_to", name(p));
+                }
+                if let Some(b) = l.truly_at_planned {
+                    e = e.with("truly_at_planned", b);
+                }
+                if let Some(b) = l.started_at_origin {
+                    e = e.with("started_at_origin", b);
+                }
+                e
+            })
+            .collect();
         Ok((record, run))
     }
 }
