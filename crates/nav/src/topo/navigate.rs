@@ -135,6 +135,9 @@ pub struct NavStats {
     pub failed_legs: u32,
     /// Places with no route to the goals.
     pub no_route: u32,
+    /// Of those, places left by a way back onto the net (a nearby known
+    /// place's transition).
+    pub ways_back: u32,
 }
 
 /// How a navigation stands.
@@ -157,6 +160,8 @@ pub struct RouteFollower {
     start: PlaceId,
     goals: Vec<PlaceId>,
     expected: Option<TransitionId>,
+    /// The expected transition leaves another place (a way back).
+    borrowed: bool,
     state: NavState,
     started: bool,
     first_plan: Option<Plan>,
@@ -197,6 +202,7 @@ impl RouteFollower {
             start,
             goals: goals.to_vec(),
             expected: None,
+            borrowed: false,
             state: NavState::Going,
             started: false,
             first_plan: None,
@@ -247,6 +253,41 @@ impl RouteFollower {
         self.error.as_ref()
     }
 
+    /// A way back onto the net from `at`, a place without a route (module
+    /// docs): the first transition of the route from the nearest known
+    /// place with one that the robot stands on the spot of — within the
+    /// recognition's distance tolerance of its map position, whatever the
+    /// heading or type — and whose strategy may leave `at`; with the map
+    /// heading it leaves on.
+    fn way_back(&self, at: PlaceId) -> Option<(TransitionId, Option<f64>)> {
+        let b = self.walker.builder();
+        let map = b.map();
+        let here = b.map_pose(self.walker.odometry());
+        let tolerance_m = b.params().tolerance_m(b.since_recalibration_m());
+        let origin = map.place(at);
+        let mut near: Vec<(f64, PlaceId)> = map
+            .place_ids()
+            .filter(|&q| q != at)
+            .map(|q| {
+                let p = map.place(q);
+                ((p.x_m - here.x_m).hypot(p.y_m - here.y_m), q)
+            })
+            .filter(|&(d, _)| d <= tolerance_m)
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for (_, q) in near {
+            if let Ok(p) = plan(map, q, &self.goals, self.params.mode)
+                && let Some(&t) = p.route.first()
+            {
+                let tr = map.transition(t);
+                if origin.allows(tr.strategy) && tr.leave_heading_rad.is_some() {
+                    return Some((t, tr.leave_heading_rad));
+                }
+            }
+        }
+        None
+    }
+
     /// Plans from `at` and starts the first transition (or an untried
     /// action when there is no route).
     fn go_from(&mut self, at: PlaceId) {
@@ -260,6 +301,7 @@ impl RouteFollower {
                     strategy: tr.strategy,
                 };
                 self.expected = Some(t);
+                self.borrowed = false;
                 let to = tr.to;
                 let leave = tr.leave_heading_rad;
                 if self.first_plan.is_none() {
@@ -269,6 +311,20 @@ impl RouteFollower {
             }
             _ => {
                 self.stats.no_route += 1;
+                if let Some((t, leave)) = self.way_back(at) {
+                    let tr = self.walker.builder().map().transition(t);
+                    let action = Action {
+                        exit_turn: tr.exit_turn,
+                        strategy: tr.strategy,
+                    };
+                    let to = tr.to;
+                    self.expected = Some(t);
+                    self.borrowed = true;
+                    self.stats.ways_back += 1;
+                    self.walker.start_expecting(action, Some(to), leave);
+                    return;
+                }
+                let map = self.walker.builder().map();
                 let kind = map.place(at).kind;
                 let tried: Vec<Action> = map
                     .leaving(at)
@@ -322,9 +378,12 @@ impl RouteFollower {
                 ..
             } => {
                 let planned = self.expected.take();
+                let borrowed = std::mem::take(&mut self.borrowed);
                 let map = self.walker.builder_mut().map_mut();
                 let as_planned = planned.is_some_and(|t| map.transition(t).to == arrival.place);
-                if let Some(t) = planned {
+                if let Some(t) = planned
+                    && !borrowed
+                {
                     map.record_attempt(t, as_planned, &self.params.thresholds)?;
                 }
                 let visit = Visit {
@@ -369,7 +428,10 @@ impl RouteFollower {
             WalkerStep::Failed { failure, .. } => {
                 self.stats.legs += 1;
                 self.stats.failed_legs += 1;
-                if let Some(t) = self.expected.take() {
+                let borrowed = std::mem::take(&mut self.borrowed);
+                if let Some(t) = self.expected.take()
+                    && !borrowed
+                {
                     self.walker
                         .builder_mut()
                         .map_mut()
