@@ -517,6 +517,16 @@ mod tests {
             .record(p, q, Strategy::FreeMovement, Turn::Right, 10.0, None)
             .unwrap();
         assert_ne!(t, t3);
+        // The heading it leaves on: the first one recorded, then the
+        // circular mean (across ±π).
+        let t4 = b
+            .record(p, q, Strategy::FreeMovement, Turn::Left, 10.0, Some(3.1))
+            .unwrap();
+        assert_eq!(b.map().transition(t4).leave_heading_rad, Some(3.1));
+        b.record(p, q, Strategy::FreeMovement, Turn::Left, 10.0, Some(-3.1))
+            .unwrap();
+        let h = b.map().transition(t4).leave_heading_rad.unwrap();
+        assert!((h.abs() - std::f64::consts::PI).abs() < 1e-9, "{h}");
     }
 
     #[test]

@@ -1445,4 +1445,44 @@ mod tests {
         assert_eq!(via_serde, net);
         assert_eq!(serde_json::to_string_pretty(&net).unwrap() + "\n", text);
     }
+
+    #[test]
+    fn the_leaving_heading_is_optional_in_the_file() {
+        let mut net = two_places();
+        let t = net
+            .add_transition(Transition::new(
+                PlaceId(0),
+                PlaceId(1),
+                Strategy::FreeMovement,
+                Turn::Left,
+                3.0,
+            ))
+            .unwrap();
+        // Not recorded: not written, so a file from before reads and writes
+        // the same bytes.
+        let old = net.to_json();
+        assert!(!old.contains("leave_heading_rad"), "{old}");
+        assert_eq!(
+            FuzzyPetriNet::from_json(&old)
+                .unwrap()
+                .transition(t)
+                .leave_heading_rad,
+            None
+        );
+        // Recorded (wrapped to (−π, π]): written, read back exactly.
+        net.set_leave_heading(t, 1.5 + std::f64::consts::TAU).unwrap();
+        let h = net.transition(t).leave_heading_rad.unwrap();
+        assert!((h - 1.5).abs() < 1e-12, "{h}");
+        let text = net.to_json();
+        assert!(text.contains("\"leave_heading_rad\""), "{text}");
+        let back = FuzzyPetriNet::from_json(&text).unwrap();
+        assert_eq!(back, net);
+        assert_eq!(back.to_json(), text);
+        // Not a number: an error naming the field.
+        assert!(net.set_leave_heading(t, f64::NAN).is_err());
+        let mut bad = Transition::new(PlaceId(0), PlaceId(1), Strategy::FreeMovement, Turn::Left, 3.0);
+        bad.leave_heading_rad = Some(f64::INFINITY);
+        let e = two_places().add_transition(bad).unwrap_err();
+        assert!(e.to_string().contains("leave_heading_rad"), "{e}");
+    }
 }

@@ -469,3 +469,51 @@ impl Controller for RouteFollower {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::topo::{Place, PlaceKind, Strategy, Transition};
+    use robot::Pose;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    /// A corner `a` with a transition to `goal` leaving on −90°, and
+    /// places without a way out: `beside` on `a`'s spot facing the other
+    /// way, `far` 3 m off, `open` on the spot but of type (c).
+    fn map() -> (FuzzyPetriNet, [PlaceId; 5], TransitionId) {
+        let mut map = FuzzyPetriNet::new();
+        let concave = |x: f64, heading: f64, kind: PlaceKind| {
+            let mut p = Place::new(x, 0.0, heading, kind);
+            p.concave = kind != PlaceKind::C;
+            p
+        };
+        let a = map.add_place(concave(0.0, 0.0, PlaceKind::A)).unwrap();
+        let goal = map.add_place(concave(5.0, 0.0, PlaceKind::B)).unwrap();
+        let beside = map.add_place(concave(0.2, PI, PlaceKind::B)).unwrap();
+        let far = map.add_place(concave(3.0, PI, PlaceKind::B)).unwrap();
+        let open = map.add_place(concave(0.1, PI, PlaceKind::C)).unwrap();
+        let mut t = Transition::new(a, goal, Strategy::WallFollowLeft, Turn::Right, 10.0);
+        t.leave_heading_rad = Some(-FRAC_PI_2);
+        let t = map.add_transition(t).unwrap();
+        (map, [a, goal, beside, far, open], t)
+    }
+
+    fn way_back_from(at: usize) -> Option<(TransitionId, Option<f64>)> {
+        let (map, places, _) = map();
+        let mut f = RouteFollower::new(map, places[at], &[places[1]], NavigateParams::default(), 1).unwrap();
+        f.walker.stand_at(places[at], Pose::default()).unwrap();
+        f.way_back(places[at])
+    }
+
+    #[test]
+    fn a_place_without_a_route_borrows_the_route_of_a_known_place_on_its_spot() {
+        let (_, _, t) = map();
+        // On a's spot, facing the other way: a's transition, leaving on
+        // its recorded heading.
+        assert_eq!(way_back_from(2), Some((t, Some(-FRAC_PI_2))));
+        // Too far from any place with a route: none.
+        assert_eq!(way_back_from(3), None);
+        // On the spot, but wall following may not leave a (c) place.
+        assert_eq!(way_back_from(4), None);
+    }
+}

@@ -631,6 +631,63 @@ mod tests {
         assert!((heading + FRAC_PI_2).abs() <= TURN_DONE_RAD, "{heading}");
     }
 
+    /// Plays `ex` on a fixed ring, integrating the heading, until the exit
+    /// turn is over; the heading then.
+    fn turn_until_driving(ex: &mut Executor, ring: &Ring, mut heading: f64) -> f64 {
+        for _ in 0..300 {
+            let Progress::Drive(c) = ex.step(ring, heading, true, 0.1) else {
+                panic!("turning")
+            };
+            if ex.turned() {
+                return heading;
+            }
+            if let Command::Twist { omega_radps, .. } = c {
+                heading = wrap_angle(heading + omega_radps * 0.1);
+            }
+        }
+        panic!("never turned");
+    }
+
+    #[test]
+    fn a_replayed_transition_turns_to_the_heading_it_left_on() {
+        let p = StrategyParams::default();
+        let open = ring(|_| 5.0);
+        // Arrived facing 20° off the heading it stood on when the transition
+        // was recorded: a right turn by steps would leave on −70°; aiming
+        // leaves on the recorded −90°.
+        let mut ex = Executor::aiming(p, Strategy::FreeMovement, Turn::Right, 0.35, -FRAC_PI_2);
+        let h = turn_until_driving(&mut ex, &open, 0.35);
+        assert!((h + FRAC_PI_2).abs() <= TURN_DONE_RAD, "{h}");
+        let mut stepped = Executor::new(p, Strategy::FreeMovement, Turn::Right, 0.35);
+        let h = turn_until_driving(&mut stepped, &open, 0.35);
+        assert!((h - (0.35 - FRAC_PI_2)).abs() <= TURN_DONE_RAD, "{h}");
+        // Blocked at the aimed heading (only facing back is clear): the
+        // right turn's steps go on from there, to 180°.
+        let mut ex = Executor::aiming(p, Strategy::FreeMovement, Turn::Right, 0.0, 0.0);
+        let mut heading: f64 = 0.0;
+        for _ in 0..400 {
+            let facing_back = wrap_angle(heading - PI).abs() < 0.2;
+            let r = ring(|_| if facing_back { 5.0 } else { 0.45 });
+            match ex.step(&r, heading, true, 0.1) {
+                Progress::Drive(Command::Twist { omega_radps, v_mps }) => {
+                    if ex.turned() {
+                        assert!(v_mps > 0.0);
+                        break;
+                    }
+                    assert!(omega_radps <= 0.0, "turns right only");
+                    heading = wrap_angle(heading + omega_radps * 0.1);
+                }
+                Progress::Drive(Command::Stop) => {}
+                other => panic!("{other:?}"),
+            }
+        }
+        assert!(ex.turned());
+        assert!(wrap_angle(heading - PI).abs() <= TURN_DONE_RAD, "{heading}");
+        // A detour ignores the heading (it turns toward its side).
+        let ex = Executor::aiming(p, Strategy::DetourLeft, Turn::Left, 0.0, 2.0);
+        assert!(matches!(ex.phase, Phase::Turning { sign, .. } if sign > 0.0));
+    }
+
     #[test]
     fn a_wall_ahead_brakes_then_arrives_once_stopped() {
         let mut ex = Executor::new(
