@@ -48,6 +48,12 @@
 //! }
 //! ```
 //!
+//! Two fields came later and may be left out, so that files written before
+//! them still read: a place's `"heading_aligned"` (default `false`) and a
+//! transition's `"leave_heading_rad"` (the map heading it left its place
+//! on; default none — and written only when recorded, so such a file also
+//! writes back byte for byte).
+//!
 //! Transitions name their places; a transition's id is its position in the
 //! list (from 0), a place's id its position in `places`. Reading checks
 //! everything [`FuzzyPetriNet::add_place`] and

@@ -11,7 +11,11 @@
 //!    [`StrategyParams::clear_m`] with room to drive beside it (a dead end
 //!    turns about). Each step slows down to end on its angle, so that the
 //!    strategy leaves on a repeatable heading. No clear way at 270°: a
-//!    failure.
+//!    failure. A transition played again from the map turns instead to the
+//!    heading it left on when it was recorded ([`Executor::aiming`]): the
+//!    heading a robot stops on in front of an obstacle varies by tens of
+//!    degrees (an arc round a door jamb ends wherever something comes
+//!    ahead), the walls do not;
 //! 2. **Strategy** — until an obstacle ahead closes to
 //!    [`StrategyParams::stop_m`]: then the robot brakes, and once stopped
 //!    the executor reports [`Progress::Arrived`], the next reference place.
