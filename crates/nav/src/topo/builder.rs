@@ -9,7 +9,8 @@
 //!
 //! A transition found again (same origin, destination, strategy and exit
 //! turn) keeps the running mean of its durations and the cost
-//! [`cost_of`] of that mean.
+//! [`cost_of`] of that mean, and the circular running mean of the map
+//! heading it left its place on (what navigation replays).
 
 use robot::{Pose, Vec2, wrap_angle};
 

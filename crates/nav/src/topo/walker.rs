@@ -2,8 +2,9 @@
 //! [`Action`] at a time with an [`Executor`], and on every stop in front of
 //! an obstacle classifies the place ([`Situation`]), recognises or adds it
 //! ([`MapBuilder::arrive`]) and records the transition that led there
-//! ([`MapBuilder::record`]). The explorer and the route follower decide
-//! which action comes next; this is what they share.
+//! ([`MapBuilder::record`]) with the map heading its exit turn ended on.
+//! The explorer and the route follower decide which action comes next;
+//! this is what they share.
 
 use robot::{Command, Perception, Pose};
 
