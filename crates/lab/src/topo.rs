@@ -389,6 +389,37 @@ pub struct RouteRun {
     pub result: RunResult,
     /// The trace, if asked for.
     pub trace: Option<Trace>,
+    /// Every leg of a map route that ended at a place, judged against the
+    /// true poses (empty for wall following).
+    pub legs: Vec<LegTruth>,
+}
+
+/// One leg of a route by the map, with where the robot truly was.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LegTruth {
+    /// When the leg ended, seconds.
+    pub time_s: f64,
+    /// The place it left (`None` after a failed leg).
+    pub from: Option<PlaceId>,
+    /// The place the planned transition leads to (`None`: no route, or an
+    /// untried action).
+    pub planned_to: Option<PlaceId>,
+    /// The place the follower recognised (or added) at the end.
+    pub arrived: PlaceId,
+    /// It added that place.
+    pub new: bool,
+    /// It ended at the planned place (as the follower judged).
+    pub as_planned: bool,
+    /// The true pose at the start of the leg.
+    pub start: Pose,
+    /// The true pose at its end.
+    pub end: Pose,
+    /// The true end is the planned place's ([`same_place`] with where it
+    /// was recorded while exploring; `None`: no planned place, or one
+    /// added after the exploration).
+    pub truly_at_planned: Option<bool>,
+    /// The true start is the origin place's (as above).
+    pub started_at_origin: Option<bool>,
 }
 
 /// Right-hand wall following from stop to stop, for ever.
@@ -460,7 +491,34 @@ pub fn route(world: &World, spec: &RouteSpec<'_>) -> Result<RouteRun> {
             let planned = plan(spec.map, spec.from, &[spec.to], params.mode).ok();
             let mut follower =
                 RouteFollower::new(spec.map.clone(), spec.from, &[spec.to], *params, spec.seed)?;
-            while sim.tick(&mut follower).is_none() && follower.state() == NavState::Going {}
+            let mut legs = Vec::new();
+            let mut leg_start = start;
+            let truth_of = |p: PlaceId| spec.truth.get(p.0 as usize).copied();
+            loop {
+                let ended = sim.tick(&mut follower).is_some();
+                let known = follower.legs();
+                while legs.len() < known.len() {
+                    let l = known[legs.len()];
+                    let end = sim.pose();
+                    let planned_to = l.planned.map(|t| follower.map().transition(t).to);
+                    legs.push(LegTruth {
+                        time_s: l.visit.time_s,
+                        from: l.visit.from,
+                        planned_to,
+                        arrived: l.visit.place,
+                        new: l.visit.new,
+                        as_planned: l.as_planned,
+                        start: leg_start,
+                        end,
+                        truly_at_planned: planned_to.and_then(truth_of).map(|q| same_place(q, end)),
+                        started_at_origin: l.visit.from.and_then(truth_of).map(|q| same_place(q, leg_start)),
+                    });
+                    leg_start = end;
+                }
+                if ended || follower.state() != NavState::Going {
+                    break;
+                }
+            }
             let here = sim.pose();
             let d = here.position().dist(goal.position());
             let outcome = match follower.state() {
@@ -479,6 +537,7 @@ pub fn route(world: &World, spec: &RouteSpec<'_>) -> Result<RouteRun> {
                 map: Some(follower.into_map()),
                 result: sim.result(),
                 trace: sim.take_trace(),
+                legs,
             })
         }
         RouteMethod::WallFollowing(params) => {
@@ -511,6 +570,7 @@ pub fn route(world: &World, spec: &RouteSpec<'_>) -> Result<RouteRun> {
                 map: None,
                 result: sim.result(),
                 trace: sim.take_trace(),
+                legs: Vec::new(),
             })
         }
     }

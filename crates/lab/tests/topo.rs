@@ -85,6 +85,23 @@ fn routes_are_judged_against_where_the_goal_truly_is() {
         }
         if matches!(method, RouteMethod::Map(_)) {
             assert!(run.plan.is_some() && run.map.is_some() && run.stats.is_some());
+            // Every leg that ended at a place, judged against the truth.
+            let stats = run.stats.unwrap();
+            assert_eq!(run.legs.len() as u32, stats.legs - stats.failed_legs);
+            assert_eq!(
+                run.legs.iter().filter(|l| l.as_planned).count() as u32,
+                stats.as_planned
+            );
+            for l in &run.legs {
+                if l.as_planned {
+                    assert_eq!(l.planned_to, Some(l.arrived));
+                }
+                if let (Some(q), Some(at)) = (l.planned_to, l.truly_at_planned) {
+                    assert_eq!(at, topo::same_place(e.truth[q.0 as usize], l.end));
+                }
+            }
+        } else {
+            assert!(run.legs.is_empty());
         }
     }
     // A place the map does not have is an error.

@@ -9,7 +9,8 @@
 //!
 //! A transition found again (same origin, destination, strategy and exit
 //! turn) keeps the running mean of its durations and the cost
-//! [`cost_of`] of that mean.
+//! [`cost_of`] of that mean, and the circular running mean of the map
+//! heading it left its place on (what navigation replays).
 
 use robot::{Pose, Vec2, wrap_angle};
 
@@ -263,8 +264,9 @@ impl MapBuilder {
     }
 
     /// Records that `strategy` after `exit_turn` led from `from` to `to` in
-    /// `duration_s`: a new transition, or the running mean of an old one's
-    /// duration (and its cost).
+    /// `duration_s`, leaving on map heading `leave_heading_rad` (the end of
+    /// the exit turn; `None` if unknown): a new transition, or the running
+    /// means of an old one's duration (and its cost) and leaving heading.
     pub fn record(
         &mut self,
         from: PlaceId,
@@ -272,6 +274,7 @@ impl MapBuilder {
         strategy: Strategy,
         exit_turn: Turn,
         duration_s: f64,
+        leave_heading_rad: Option<f64>,
     ) -> Result<TransitionId, TopoError> {
         match self.find_transition(from, to, strategy, exit_turn) {
             Some(t) => {
@@ -280,14 +283,28 @@ impl MapBuilder {
                 // attempt since.
                 let n = f64::from(1 + tr.attempts.saturating_sub(tr.failures));
                 let mean = tr.duration_s + (duration_s - tr.duration_s) / (n + 1.0);
+                let heading = match (tr.leave_heading_rad, leave_heading_rad) {
+                    (Some(old), Some(new)) => Some(old + wrap_angle(new - old) / (n + 1.0)),
+                    (old, new) => old.or(new),
+                };
                 self.map.set_duration(t, mean)?;
                 self.map.set_cost(t, cost_of(mean, strategy))?;
+                if let Some(h) = heading {
+                    self.map.set_leave_heading(t, h)?;
+                }
                 Ok(t)
             }
-            None => self.map.add_transition(super::fpn::Transition::new(
-                from, to, strategy, exit_turn, duration_s,
-            )),
+            None => {
+                let mut tr = super::fpn::Transition::new(from, to, strategy, exit_turn, duration_s);
+                tr.leave_heading_rad = leave_heading_rad.map(wrap_angle);
+                self.map.add_transition(tr)
+            }
         }
+    }
+
+    /// The odometry heading of map heading `map_heading_rad`.
+    pub fn odom_heading(&self, map_heading_rad: f64) -> f64 {
+        wrap_angle(map_heading_rad - self.map_from_odom.theta_rad)
     }
 }
 
@@ -486,10 +503,10 @@ mod tests {
             .unwrap()
             .place;
         let t = b
-            .record(p, q, Strategy::WallFollowLeft, Turn::Right, 10.0)
+            .record(p, q, Strategy::WallFollowLeft, Turn::Right, 10.0, None)
             .unwrap();
         let t2 = b
-            .record(p, q, Strategy::WallFollowLeft, Turn::Right, 20.0)
+            .record(p, q, Strategy::WallFollowLeft, Turn::Right, 20.0, None)
             .unwrap();
         assert_eq!(t, t2);
         assert_eq!(b.map().transition(t).duration_s, 15.0);
@@ -497,8 +514,20 @@ mod tests {
             b.map().transition(t).cost,
             cost_of(15.0, Strategy::WallFollowLeft)
         );
-        let t3 = b.record(p, q, Strategy::FreeMovement, Turn::Right, 10.0).unwrap();
+        let t3 = b
+            .record(p, q, Strategy::FreeMovement, Turn::Right, 10.0, None)
+            .unwrap();
         assert_ne!(t, t3);
+        // The heading it leaves on: the first one recorded, then the
+        // circular mean (across ±π).
+        let t4 = b
+            .record(p, q, Strategy::FreeMovement, Turn::Left, 10.0, Some(3.1))
+            .unwrap();
+        assert_eq!(b.map().transition(t4).leave_heading_rad, Some(3.1));
+        b.record(p, q, Strategy::FreeMovement, Turn::Left, 10.0, Some(-3.1))
+            .unwrap();
+        let h = b.map().transition(t4).leave_heading_rad.unwrap();
+        assert!((h.abs() - std::f64::consts::PI).abs() < 1e-9, "{h}");
     }
 
     #[test]

@@ -48,6 +48,12 @@
 //! }
 //! ```
 //!
+//! Two fields came later and may be left out, so that files written before
+//! them still read: a place's `"heading_aligned"` (default `false`) and a
+//! transition's `"leave_heading_rad"` (the map heading it left its place
+//! on; default none — and written only when recorded, so such a file also
+//! writes back byte for byte).
+//!
 //! Transitions name their places; a transition's id is its position in the
 //! list (from 0), a place's id its position in `places`. Reading checks
 //! everything [`FuzzyPetriNet::add_place`] and
@@ -341,6 +347,13 @@ pub struct Transition {
     pub attempts: u32,
     /// How many of those attempts did not end at `p_j` (≤ `attempts`).
     pub failures: u32,
+    /// The map heading the robot left `p_i` on — its heading at the end of
+    /// the exit turn — when the transition was recorded (the circular mean
+    /// over the traversals that found it again), radians. Navigation turns
+    /// to it rather than by the exit turn's steps
+    /// ([`super::navigate`]). `None`: not recorded (a map file written
+    /// before it was).
+    pub leave_heading_rad: Option<f64>,
 }
 
 impl Transition {
@@ -363,6 +376,7 @@ impl Transition {
             lambda: 1.0,
             attempts: 0,
             failures: 0,
+            leave_heading_rad: None,
         }
     }
 }
@@ -701,6 +715,9 @@ impl FuzzyPetriNet {
             });
         }
         check_lambda(owner, t.lambda)?;
+        if let Some(h) = t.leave_heading_rad {
+            finite(owner, "leave_heading_rad", h)?;
+        }
         if t.failures > t.attempts {
             return Err(TopoError::BadCounts {
                 owner: owner(),
@@ -765,6 +782,19 @@ impl FuzzyPetriNet {
             lambda,
         )?;
         self.transitions[t.index()].lambda = lambda;
+        Ok(())
+    }
+
+    /// Sets the heading transition `t` leaves its place on (finite,
+    /// radians; wrapped to (−π, π]).
+    pub fn set_leave_heading(&mut self, t: TransitionId, heading_rad: f64) -> Result<(), TopoError> {
+        self.check_transition(t)?;
+        finite(
+            || self.transition_owner(t.index(), &self.transitions[t.index()]),
+            "leave_heading_rad",
+            heading_rad,
+        )?;
+        self.transitions[t.index()].leave_heading_rad = Some(robot::wrap_angle(heading_rad));
         Ok(())
     }
 
@@ -935,6 +965,7 @@ impl FuzzyPetriNet {
                     lambda: t.lambda,
                     attempts: t.attempts,
                     failures: t.failures,
+                    leave_heading_rad: t.leave_heading_rad,
                 })
                 .collect(),
         }
@@ -972,6 +1003,7 @@ impl FuzzyPetriNet {
                 lambda: t.lambda,
                 attempts: t.attempts,
                 failures: t.failures,
+                leave_heading_rad: t.leave_heading_rad,
             })?;
         }
         Ok(net)
@@ -1139,6 +1171,8 @@ struct TransitionOut<'a> {
     lambda: f64,
     attempts: u32,
     failures: u32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    leave_heading_rad: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -1162,6 +1196,8 @@ struct TransitionIn {
     lambda: f64,
     attempts: u32,
     failures: u32,
+    #[serde(default)]
+    leave_heading_rad: Option<f64>,
 }
 
 #[cfg(test)]
@@ -1414,5 +1450,45 @@ mod tests {
         let via_serde: FuzzyPetriNet = serde_json::from_str(&text).unwrap();
         assert_eq!(via_serde, net);
         assert_eq!(serde_json::to_string_pretty(&net).unwrap() + "\n", text);
+    }
+
+    #[test]
+    fn the_leaving_heading_is_optional_in_the_file() {
+        let mut net = two_places();
+        let t = net
+            .add_transition(Transition::new(
+                PlaceId(0),
+                PlaceId(1),
+                Strategy::FreeMovement,
+                Turn::Left,
+                3.0,
+            ))
+            .unwrap();
+        // Not recorded: not written, so a file from before reads and writes
+        // the same bytes.
+        let old = net.to_json();
+        assert!(!old.contains("leave_heading_rad"), "{old}");
+        assert_eq!(
+            FuzzyPetriNet::from_json(&old)
+                .unwrap()
+                .transition(t)
+                .leave_heading_rad,
+            None
+        );
+        // Recorded (wrapped to (−π, π]): written, read back exactly.
+        net.set_leave_heading(t, 1.5 + std::f64::consts::TAU).unwrap();
+        let h = net.transition(t).leave_heading_rad.unwrap();
+        assert!((h - 1.5).abs() < 1e-12, "{h}");
+        let text = net.to_json();
+        assert!(text.contains("\"leave_heading_rad\""), "{text}");
+        let back = FuzzyPetriNet::from_json(&text).unwrap();
+        assert_eq!(back, net);
+        assert_eq!(back.to_json(), text);
+        // Not a number: an error naming the field.
+        assert!(net.set_leave_heading(t, f64::NAN).is_err());
+        let mut bad = Transition::new(PlaceId(0), PlaceId(1), Strategy::FreeMovement, Turn::Left, 3.0);
+        bad.leave_heading_rad = Some(f64::INFINITY);
+        let e = two_places().add_transition(bad).unwrap_err();
+        assert!(e.to_string().contains("leave_heading_rad"), "{e}");
     }
 }

@@ -11,7 +11,11 @@
 //!    [`StrategyParams::clear_m`] with room to drive beside it (a dead end
 //!    turns about). Each step slows down to end on its angle, so that the
 //!    strategy leaves on a repeatable heading. No clear way at 270°: a
-//!    failure.
+//!    failure. A transition played again from the map turns instead to the
+//!    heading it left on when it was recorded ([`Executor::aiming`]): the
+//!    heading a robot stops on in front of an obstacle varies by tens of
+//!    degrees (an arc round a door jamb ends wherever something comes
+//!    ahead), the walls do not;
 //! 2. **Strategy** — until an obstacle ahead closes to
 //!    [`StrategyParams::stop_m`]: then the robot brakes, and once stopped
 //!    the executor reports [`Progress::Arrived`], the next reference place.
@@ -221,6 +225,10 @@ pub fn actions_at(kind: PlaceKind, concave: bool) -> &'static [Action] {
 /// What the executor is doing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
+    /// Rotating in place to the odometry heading `target_rad` (a replayed
+    /// transition's leaving heading); then the exit turn's steps in
+    /// direction `sign` if the way is not free there.
+    Aiming { target_rad: f64, sign: f64 },
     /// Rotating in place by the exit turn; `turned_rad` so far.
     Turning { sign: f64, turned_rad: f64 },
     /// Driving the strategy.
@@ -321,6 +329,33 @@ impl Executor {
         }
     }
 
+    /// Like [`Executor::new`], but the exit turn first rotates (the shorter
+    /// way) to the odometry heading `leave_heading_rad` — where a recorded
+    /// transition left its place — and the strategy starts there if the
+    /// way ahead leaves room to drive (beyond `stop_m` + 0.1 m); otherwise
+    /// the exit turn's steps go on from that heading. A detour ignores it
+    /// (it turns toward its side and comes back to the place's heading).
+    pub fn aiming(
+        params: StrategyParams,
+        strategy: Strategy,
+        exit_turn: Turn,
+        heading_rad: f64,
+        leave_heading_rad: f64,
+    ) -> Executor {
+        let mut ex = Executor::new(params, strategy, exit_turn, heading_rad);
+        if strategy.detour_side().is_none() && leave_heading_rad.is_finite() {
+            let sign = match exit_turn {
+                Turn::Right => -1.0,
+                _ => 1.0,
+            };
+            ex.phase = Phase::Aiming {
+                target_rad: wrap_angle(leave_heading_rad),
+                sign,
+            };
+        }
+        ex
+    }
+
     /// The strategy played.
     pub fn strategy(&self) -> Strategy {
         self.strategy
@@ -356,7 +391,7 @@ impl Executor {
 
     /// Whether the exit turn is over.
     pub fn turned(&self) -> bool {
-        !matches!(self.phase, Phase::Turning { .. })
+        !matches!(self.phase, Phase::Turning { .. } | Phase::Aiming { .. })
     }
 
     /// One control tick: the ring, the odometry heading, whether the robot
@@ -373,6 +408,29 @@ impl Executor {
         match self.phase {
             Phase::Arrived => Progress::Arrived,
             Phase::Failed(f) => Progress::Failed(f),
+            Phase::Aiming { target_rad, sign } => {
+                let left_rad = wrap_angle(target_rad - heading_rad);
+                if left_rad.abs() <= TURN_DONE_RAD {
+                    if ahead > p.stop_m + 0.1 {
+                        self.phase = Phase::Driving;
+                        self.hold_heading_rad = heading_rad;
+                        self.last_wall_error_m = None;
+                        return self.drive(ring, heading_rad, ahead, dt_s);
+                    }
+                    // Blocked there (the robot stands elsewhere than when
+                    // the transition was recorded): the exit turn's steps.
+                    self.phase = Phase::Turning {
+                        sign,
+                        turned_rad: 0.0,
+                    };
+                    return Progress::Drive(Command::Stop);
+                }
+                let rate = (2.0 * left_rad.abs()).clamp(0.2, p.turn_radps);
+                Progress::Drive(Command::Twist {
+                    v_mps: 0.0,
+                    omega_radps: left_rad.signum() * rate,
+                })
+            }
             Phase::Turning { sign, turned_rad } => {
                 let turned_rad = turned_rad + sign * dheading;
                 // Turns go by steps of min_turn_rad (90°: then 180°, 270°)
@@ -575,6 +633,63 @@ mod tests {
             assert!(ticks < 100);
         }
         assert!((heading + FRAC_PI_2).abs() <= TURN_DONE_RAD, "{heading}");
+    }
+
+    /// Plays `ex` on a fixed ring, integrating the heading, until the exit
+    /// turn is over; the heading then.
+    fn turn_until_driving(ex: &mut Executor, ring: &Ring, mut heading: f64) -> f64 {
+        for _ in 0..300 {
+            let Progress::Drive(c) = ex.step(ring, heading, true, 0.1) else {
+                panic!("turning")
+            };
+            if ex.turned() {
+                return heading;
+            }
+            if let Command::Twist { omega_radps, .. } = c {
+                heading = wrap_angle(heading + omega_radps * 0.1);
+            }
+        }
+        panic!("never turned");
+    }
+
+    #[test]
+    fn a_replayed_transition_turns_to_the_heading_it_left_on() {
+        let p = StrategyParams::default();
+        let open = ring(|_| 5.0);
+        // Arrived facing 20° off the heading it stood on when the transition
+        // was recorded: a right turn by steps would leave on −70°; aiming
+        // leaves on the recorded −90°.
+        let mut ex = Executor::aiming(p, Strategy::FreeMovement, Turn::Right, 0.35, -FRAC_PI_2);
+        let h = turn_until_driving(&mut ex, &open, 0.35);
+        assert!((h + FRAC_PI_2).abs() <= TURN_DONE_RAD, "{h}");
+        let mut stepped = Executor::new(p, Strategy::FreeMovement, Turn::Right, 0.35);
+        let h = turn_until_driving(&mut stepped, &open, 0.35);
+        assert!((h - (0.35 - FRAC_PI_2)).abs() <= TURN_DONE_RAD, "{h}");
+        // Blocked at the aimed heading (only facing back is clear): the
+        // right turn's steps go on from there, to 180°.
+        let mut ex = Executor::aiming(p, Strategy::FreeMovement, Turn::Right, 0.0, 0.0);
+        let mut heading: f64 = 0.0;
+        for _ in 0..400 {
+            let facing_back = wrap_angle(heading - PI).abs() < 0.2;
+            let r = ring(|_| if facing_back { 5.0 } else { 0.45 });
+            match ex.step(&r, heading, true, 0.1) {
+                Progress::Drive(Command::Twist { omega_radps, v_mps }) => {
+                    if ex.turned() {
+                        assert!(v_mps > 0.0);
+                        break;
+                    }
+                    assert!(omega_radps <= 0.0, "turns right only");
+                    heading = wrap_angle(heading + omega_radps * 0.1);
+                }
+                Progress::Drive(Command::Stop) => {}
+                other => panic!("{other:?}"),
+            }
+        }
+        assert!(ex.turned());
+        assert!(wrap_angle(heading - PI).abs() <= TURN_DONE_RAD, "{heading}");
+        // A detour ignores the heading (it turns toward its side).
+        let ex = Executor::aiming(p, Strategy::DetourLeft, Turn::Left, 0.0, 2.0);
+        assert!(matches!(ex.phase, Phase::Turning { sign, .. } if sign > 0.0));
     }
 
     #[test]

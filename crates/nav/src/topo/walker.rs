@@ -2,8 +2,9 @@
 //! [`Action`] at a time with an [`Executor`], and on every stop in front of
 //! an obstacle classifies the place ([`Situation`]), recognises or adds it
 //! ([`MapBuilder::arrive`]) and records the transition that led there
-//! ([`MapBuilder::record`]). The explorer and the route follower decide
-//! which action comes next; this is what they share.
+//! ([`MapBuilder::record`]) with the map heading its exit turn ended on.
+//! The explorer and the route follower decide which action comes next;
+//! this is what they share.
 
 use robot::{Command, Perception, Pose};
 
@@ -64,6 +65,8 @@ pub struct Walker {
     strategy: StrategyParams,
     situation: SituationParams,
     leg: Option<(Leg, Executor)>,
+    /// The map heading the leg's exit turn ended on (once it has).
+    left_heading_rad: Option<f64>,
     expected: Option<PlaceId>,
     place: Option<PlaceId>,
     last_time_s: Option<f64>,
@@ -84,6 +87,7 @@ impl Walker {
             strategy,
             situation,
             leg: None,
+            left_heading_rad: None,
             expected: None,
             place: None,
             last_time_s: None,
@@ -131,9 +135,25 @@ impl Walker {
 
     /// Starts a leg from where the robot stands, expecting it to end at
     /// `expected` (a planned transition's destination; see
-    /// [`super::recognition`]).
-    pub fn start_expecting(&mut self, action: Action, expected: Option<PlaceId>) {
+    /// [`super::recognition`]); with `leave_heading_rad` (a map heading:
+    /// where the transition left the place when recorded) the exit turn
+    /// turns to it ([`Executor::aiming`]).
+    pub fn start_expecting(
+        &mut self,
+        action: Action,
+        expected: Option<PlaceId>,
+        leave_heading_rad: Option<f64>,
+    ) {
         self.start(action);
+        if let (Some(h), Some((_, ex))) = (leave_heading_rad, &mut self.leg) {
+            *ex = Executor::aiming(
+                self.strategy,
+                action.strategy,
+                action.exit_turn,
+                self.odom.theta_rad,
+                self.builder.odom_heading(h),
+            );
+        }
         self.expected = expected;
     }
 
@@ -151,6 +171,7 @@ impl Walker {
             self.odom.theta_rad,
         );
         self.leg = Some((leg, ex));
+        self.left_heading_rad = None;
     }
 
     /// Starts a leg from nowhere known: turn left, then straight ahead to
@@ -178,7 +199,12 @@ impl Walker {
         let ring = Ring::of(p);
         let (l, r) = p.wheel_speeds_mps;
         let stopped = l.abs() < STOPPED_MPS && r.abs() < STOPPED_MPS;
-        match ex.step(&ring, p.odometry.theta_rad, stopped, dt_s) {
+        let progress = ex.step(&ring, p.odometry.theta_rad, stopped, dt_s);
+        if self.left_heading_rad.is_none() && ex.turned() {
+            // The heading the strategy starts on (the turn ended this tick).
+            self.left_heading_rad = Some(self.builder.map_pose(p.odometry).theta_rad);
+        }
+        match progress {
             Progress::Drive(c) => Ok(WalkerStep::Drive(c)),
             Progress::Arrived => {
                 let leg = *leg;
@@ -205,6 +231,7 @@ impl Walker {
                         leg.action.strategy,
                         leg.action.exit_turn,
                         duration_s,
+                        self.left_heading_rad,
                     )?),
                     None => None,
                 };

@@ -42,6 +42,65 @@ fn explored(r: &RunRecord) -> Option<(FuzzyPetriNet, Vec<Pose>)> {
     Some((map, e.truth.iter().map(|p| Pose::new(p[0], p[1], p[2])).collect()))
 }
 
+/// What the legs of routes by the map say about the failures, from their
+/// `leg` events (one per leg that ended at a place, judged against the
+/// true poses by [`topo::route`]).
+#[derive(Debug, Default)]
+struct LegCauses {
+    /// Legs that played a planned transition.
+    planned: usize,
+    /// Of those, legs that ended elsewhere than planned.
+    surprises: usize,
+    /// Surprises truly elsewhere.
+    truly_elsewhere: usize,
+    /// Surprises truly at the planned place.
+    truly_there: usize,
+    /// Surprises with a planned place added after the exploration.
+    unjudged: usize,
+    /// Failed routes where one transition ended elsewhere at least twice.
+    failed_repeating: usize,
+    /// Failed routes with at least half of their legs unplanned.
+    failed_off_net: usize,
+}
+
+impl LegCauses {
+    fn of<'a>(routes: impl Iterator<Item = &'a RunRecord>) -> LegCauses {
+        let mut c = LegCauses::default();
+        for r in routes {
+            let legs: Vec<&robot::Event> = r.events.iter().filter(|e| e.kind == "leg").collect();
+            let mut failed_again: BTreeMap<(String, String), u32> = BTreeMap::new();
+            let mut unplanned = 0;
+            for e in &legs {
+                let Some(to) = e.text("planned_to") else {
+                    unplanned += 1;
+                    continue;
+                };
+                c.planned += 1;
+                if e.flag("as_planned") == Some(true) {
+                    continue;
+                }
+                c.surprises += 1;
+                match e.flag("truly_at_planned") {
+                    Some(true) => c.truly_there += 1,
+                    Some(false) => c.truly_elsewhere += 1,
+                    None => c.unjudged += 1,
+                }
+                let from = e.text("from").unwrap_or("").to_string();
+                *failed_again.entry((from, to.to_string())).or_default() += 1;
+            }
+            if !r.success {
+                if failed_again.values().any(|&n| n >= 2) {
+                    c.failed_repeating += 1;
+                }
+                if !legs.is_empty() && 2 * unplanned >= legs.len() {
+                    c.failed_off_net += 1;
+                }
+            }
+        }
+        c
+    }
+}
+
 /// The report (module docs).
 pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport> {
     let runs = ctx.runs;
@@ -297,6 +356,21 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
                 percent(p),
                 map_runs.values().filter(|r| !r.success).count(),
             );
+            let legs = LegCauses::of(map_runs.values().copied());
+            if legs.planned > 0 {
+                let _ = write!(
+                    why,
+                    "Judged against the true poses, {} of the {} planned legs ended elsewhere than planned: {} truly elsewhere (the driving: more than {} m or 45° from where the planned place was recorded), {} truly at the planned place but not recognised as it, {} at a place added after the exploration (no true pose to judge by). Of the failed routes, {} played a transition that had already ended elsewhere on the same route again and ended elsewhere again (a replay that reproduces the wrong outcome), and {} spent at least half of their legs at places without a route to the goal (off the net, playing untried actions). ",
+                    legs.surprises,
+                    legs.planned,
+                    legs.truly_elsewhere,
+                    topo::SAME_PLACE_M,
+                    legs.truly_there,
+                    legs.unjudged,
+                    legs.failed_repeating,
+                    legs.failed_off_net,
+                );
+            }
             if let Some(w) = rates.get("wall_following") {
                 let _ = write!(
                     why,
