@@ -151,6 +151,21 @@ pub fn safe_speed(points: &[Vec2], v: f64, omega: f64, radius_m: f64, decel_mps2
 /// 33 33 27). None completes every leg AutoMove completes on building_31;
 /// the next step is a look before moving towards a side the laser cannot
 /// see (turning sweeps nothing), measured in the museum as well.
+///
+/// **The look, measured, not kept** (2026-12-03, late): for the contour
+/// tracker, points kept until the laser sees through them (both beams
+/// beside the bearing 5 cm beyond, 2 cm squares, no forgetting by time or
+/// turning); a remembered point older than 3 s that holds the robot up is
+/// looked at first (turn on the spot towards it, v = 0); and inside its
+/// margin the disc shrinks to the nearest point (along or away, an arc
+/// nearer after its first 2 cm refused). `lab run maps`, contour legs of
+/// 33: building_31 30 / 24 / 27, levine 33 / 30 / 30 — no collision on
+/// building_31 without people, but three legs (18, 21, 29, from hall_north
+/// and south_corridor) now time out: the robot first stood 1 cm from a
+/// wall for 135 s (a floor of r + 7.5 mm under the shrunk disc: the
+/// scan's noise crossed it), and without that floor it wanders between
+/// the north hall's doors, passing gaps and turning back, until the limit
+/// (60 people: 2 collisions). Not kept; the patch is not on `main`.
 #[derive(Debug, Clone, Default)]
 pub struct NearbyPoints {
     /// Remembered points are forgotten after this long, seconds (`None`:
