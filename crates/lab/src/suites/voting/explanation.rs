@@ -443,7 +443,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         if outside.is_empty() {
             ""
         } else {
-            " Where it lingers — hesitating in front of a slot, sliding to and fro along the wall — `mark_sum` passes `mark_min`, and the temporary goal, the least-visited direction, leads the robot away from the opening it was about to take: the planner cannot tell a trap from a search."
+            " Where it lingers — hesitating in front of a slot, sliding to and fro along the wall — `mark_sum` passes `mark_min`, and the temporary goal, the least-visited direction, leads the robot away from the opening it was about to take: the planner cannot tell a trap from a search. The cause is `mark_min` (6): a path that never revisits a cell can enter up to 25 cells of the 5 × 5 neighbourhood, so planning weighs in on the first turn at the wall, before anything has been revisited. Measured and not kept: `mark_min` 25 and `mark_max` 50 (by the pigeonhole rule, a sum above 25 proves a revisit): e4 on field 11 0.96, within e3's interval, and fields 1–10 unchanged within one run; but on the traps planning then starts later — I_R 0.98 / 0.64 / 0.94 on fields 12–14 (0.96 / 0.94 / 0.94 now), I_T 61.5 / 98.2 / 62.9 s — so it no longer shortens the time against IR alone (about 56 s) and the deep trap runs out of time: one observation traded for another."
         }
     );
 
