@@ -33,6 +33,14 @@ pub fn ir_table(triggered_of_three: usize) -> f64 {
 /// (±90°) the hard turns are judged by the three outermost detectors. With
 /// fewer than three detectors all of them are used (and the count is scaled
 /// to "of three" for the table). Computed once per sensor layout.
+///
+/// **Consequence** (the source's rule, kept): the beams ahead are in no
+/// turn's cover, so a wall 0.5 m ahead leaves the vote of Left (covered by
+/// 30°, 60°, 90°) at 1.0 although its arc (radius 0.43 m) sweeps into
+/// that wall. In the voting suite this is how IR alone collides on the
+/// narrow-passage fields: it meets the wall head-on, chatters between Left
+/// and Right as noise flips the goal's bearing, and turns only when the
+/// wall is too close for the arc (the suite's explanation, observation 3).
 pub fn ir_covers(actions: &ActionSet, ir: &[IrReading]) -> Vec<Vec<usize>> {
     actions
         .actions

@@ -105,6 +105,15 @@ pub struct VotingParams {
     /// Sonar: distance above which an action gets 1, metres. Default 1.0.
     pub sonar_d_max_m: f64,
     /// `mark_sum` at which planning starts to weigh in. Default 6.
+    ///
+    /// **Decision**, with its cost measured in the voting suite: 6 is
+    /// below what one pass without any revisit can leave in the default
+    /// 5 × 5 neighbourhood (up to 25), so planning weighs in on the first
+    /// turn at a wall — early enough that the traps are escaped quickly,
+    /// but it also takes weight from goal seeking while the robot searches
+    /// along a wall for a narrow opening (voting suite, field 11).
+    /// 25 / 50 (a sum above 25 proves a revisit) mends field 11 and costs
+    /// the traps time and, on the deep one, reliability; not kept.
     pub mark_min: f64,
     /// `mark_sum` at which planning takes over. Default 20.
     pub mark_max: f64,

@@ -20,7 +20,12 @@
 //! 1.2 m corridors; fields 8–11 close the line to the goal with a wall
 //! whose opening (1.0 m down to 0.7 m) lies 1.0 m off that line, so it
 //! must be found; fields 12–14 are U traps 2.0 m wide inside (room to
-//! turn), facing the start. Every goal is 1.4 m or more from the wall
+//! turn), facing the start; their arms' faces stand 0.875 m from the
+//! middle line, inside the ±90° IR beams' reach (0.95 m), so from near
+//! that line the IR sees both arms and the IR-only robot drives out as
+//! down a corridor — its escapes come from this geometry, not from chance
+//! (the explanation, observation 6, gives the numbers and the wider U
+//! measured and not kept). Every goal is 1.4 m or more from the wall
 //! beyond it. Per run, the start pose spreads by 0.1 m and ±15°, obstacles
 //! of fields 2–5 and 14 move by up to 5 cm, and sensor and odometry noise
 //! are drawn from the run's seed.
