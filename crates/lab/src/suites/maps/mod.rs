@@ -8,7 +8,7 @@
 //! scenario of its map (common random numbers: the behaviours and crowds are
 //! compared on the same draws). Scenarios are named `MAP/BEHAVIOUR/Np`.
 //!
-//! After a leg that ends without arriving (time-out, lost, no route), the
+//! After a leg that ends without arriving (collision, time-out, lost, no route), the
 //! next starts at the place it was heading for, the robot put there by its
 //! operator ([`crate::mission`]'s decision): before, one failure cascaded
 //! through the rest of the tour. Measured (`lab run maps`, 2026-12-03,
@@ -18,7 +18,11 @@
 //! `nav::guide::contour` 31 26 20 / 33 31 27. AutoMove 33 31 27 / 33 33 29
 //! → 33 32 25 / 33 33 27: the legs after its time-outs now start elsewhere,
 //! so they meet other crowds; the two fewer among 60 people were not
-//! examined further.
+//! examined further. Since 2026-12-04 a collision is followed the same way
+//! (it used to be an operator's nudge to where the robot was a second
+//! before, still touching distance from the wall): with contour tracking's
+//! door rules of that day, contour 33 26 24 / 33 33 29 → 33 27 24 /
+//! 33 33 29, AutoMove unchanged.
 //!
 //! Per leg it records the common measures and, as metrics, the localizer's
 //! true error (`loc_mean_error_m`, `loc_max_error_m`), its warnings
@@ -422,7 +426,7 @@ impl Suite for MapsSuite {
         Ok(SuiteReport {
             text,
             intro: Some(format!(
-                "{} tours of every map's places per scenario (a leg from each place to the next: the rows count legs; after a leg that timed out, got lost or had no route, the operator takes the robot to the place it was heading for and gives it its pose there), base seed {}.",
+                "{} tours of every map's places per scenario (a leg from each place to the next: the rows count legs; after a leg that collided, timed out, got lost or had no route, the operator takes the robot to the place it was heading for and gives it its pose there), base seed {}.",
                 self.info.runs, self.info.seed
             )),
             blocks,
