@@ -96,7 +96,7 @@ impl Id for u32 {
 /// additions do not wait on each other (rows are short; the sweeps are bound
 /// by this latency, not by memory bandwidth).
 /// `x` holds the states from `offset` on.
-#[inline]
+#[inline(always)]
 fn dot<I: Id>(index: &[u32], ids: &[I], values: &[f64], x: &[f64], offset: usize) -> f64 {
     let (mut s0, mut s1) = (0.0, 0.0);
     let mut pairs = index.chunks_exact(2).zip(ids.chunks_exact(2));
