@@ -81,6 +81,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (t2 - t1).as_secs_f64(),
         (t2 - t0).as_secs_f64()
     );
+    if std::env::var("PI_HASH").is_ok() {
+        let h = sol.pi.iter().fold(0u64, |h, v| h.rotate_left(5) ^ v.to_bits());
+        println!("pi hash {h:016x}");
+    }
     // The benchmark measure of the Kanban family (issue 16, Storm's
     // `S=? [ Pm1 >= 1 ]`).
     if family == "kanban" {

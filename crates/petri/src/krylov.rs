@@ -98,44 +98,80 @@ impl<'a, 'c> Blocked<'a, 'c> {
         });
     }
 
-    /// `y = M⁻¹ p` and `v = A y = p − R y`, blocks in parallel.
-    fn precondition_apply(&self, p: &[f64], y: &mut [f64], v: &mut [f64]) {
+    /// The forward block Gauss–Seidel sweep `y = M⁻¹ p`, blocks in
+    /// parallel, with `p_j = make(j, p_j)` computed just before row `j`
+    /// needs it (and stored): the vector update that produces the input
+    /// costs no pass of its own.
+    fn sweep(&self, p: &mut [f64], y: &mut [f64], make: impl Fn(usize, f64) -> f64 + Sync) {
         let rows = self.chain.incoming;
         let values = self.chain.values;
-        y.par_chunks_mut(self.block).enumerate().for_each(|(blk, yb)| {
-            let lo = blk * self.block;
-            for jj in 0..yb.len() {
-                let j = lo + jj;
-                yb[jj] = if j == self.k {
-                    p[j]
-                } else {
-                    let a = rows.offsets[j] as usize;
-                    let inner = rows.dot_span_offset(
-                        a + self.cross[j] as usize,
-                        a + rows.below[j] as usize,
-                        values,
-                        yb,
-                        lo,
-                    );
-                    (p[j] + inner) * self.inv_exit[j]
-                };
-            }
-        });
-        let y = &*y;
-        v.par_chunks_mut(CHUNK).enumerate().for_each(|(c, vc)| {
-            for (jj, vj) in vc.iter_mut().enumerate() {
-                let j = c * CHUNK + jj;
-                *vj = if j == self.k {
-                    p[j]
-                } else {
-                    let (a, b) = rows.range(j);
-                    let before = rows.dot_span_offset(a, a + self.cross[j] as usize, values, y, 0);
-                    let after = rows.dot_span_offset(a + rows.below[j] as usize, b, values, y, 0);
-                    p[j] - (before + after)
-                };
-            }
-        });
+        y.par_chunks_mut(self.block)
+            .zip(p.par_chunks_mut(self.block))
+            .enumerate()
+            .for_each(|(blk, (yb, pb))| {
+                let lo = blk * self.block;
+                for jj in 0..yb.len() {
+                    let j = lo + jj;
+                    let pj = make(j, pb[jj]);
+                    pb[jj] = pj;
+                    yb[jj] = if j == self.k {
+                        pj
+                    } else {
+                        let a = rows.offsets[j] as usize;
+                        let inner = rows.dot_span_offset(
+                            a + self.cross[j] as usize,
+                            a + rows.below[j] as usize,
+                            values,
+                            yb,
+                            lo,
+                        );
+                        (pj + inner) * self.inv_exit[j]
+                    };
+                }
+            });
     }
+
+    /// `v = A y = p − R y` for `y = M⁻¹ p` (Eisenstat's trick), in chunks
+    /// in parallel; returns `Σ_j terms(j, v_j)` summed per chunk in state
+    /// order, then over the chunks in order (two sums at once).
+    fn product(
+        &self,
+        p: &[f64],
+        y: &[f64],
+        v: &mut [f64],
+        terms: impl Fn(usize, f64) -> [f64; 2] + Sync,
+    ) -> [f64; 2] {
+        let rows = self.chain.incoming;
+        let values = self.chain.values;
+        let partial: Vec<[f64; 2]> = v
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, vc)| {
+                let mut sums = [0.0, 0.0];
+                for (jj, vj) in vc.iter_mut().enumerate() {
+                    let j = c * CHUNK + jj;
+                    *vj = if j == self.k {
+                        p[j]
+                    } else {
+                        let (a, b) = rows.range(j);
+                        let before = rows.dot_span_offset(a, a + self.cross[j] as usize, values, y, 0);
+                        let after = rows.dot_span_offset(a + rows.below[j] as usize, b, values, y, 0);
+                        p[j] - (before + after)
+                    };
+                    let [t0, t1] = terms(j, *vj);
+                    sums[0] += t0;
+                    sums[1] += t1;
+                }
+                sums
+            })
+            .collect();
+        sum_pairs(&partial)
+    }
+}
+
+/// Sums per-chunk pairs in chunk order.
+fn sum_pairs(partial: &[[f64; 2]]) -> [f64; 2] {
+    partial.iter().fold([0.0, 0.0], |[a, b], [c, d]| [a + c, b + d])
 }
 
 /// `a · b`, summed per fixed chunk and then in chunk order.
@@ -155,6 +191,32 @@ fn update(out: &mut [f64], f: impl Fn(usize, f64) -> f64 + Sync) {
             *o = f(c * CHUNK + jj, *o);
         }
     });
+}
+
+/// `(x_j, r_j) = f(j, x_j)` in parallel; returns the sums of the pairs
+/// `f` also yields, per chunk in order, then over the chunks in order.
+fn fused_update(
+    x: &mut [f64],
+    r: &mut [f64],
+    f: impl Fn(usize, f64) -> (f64, f64, [f64; 2]) + Sync,
+) -> [f64; 2] {
+    let partial: Vec<[f64; 2]> = x
+        .par_chunks_mut(CHUNK)
+        .zip(r.par_chunks_mut(CHUNK))
+        .enumerate()
+        .map(|(c, (xc, rc))| {
+            let mut sums = [0.0, 0.0];
+            for (jj, (xj, rj)) in xc.iter_mut().zip(rc.iter_mut()).enumerate() {
+                let (xn, rn, [t0, t1]) = f(c * CHUNK + jj, *xj);
+                *xj = xn;
+                *rj = rn;
+                sums[0] += t0;
+                sums[1] += t1;
+            }
+            sums
+        })
+        .collect();
+    sum_pairs(&partial)
 }
 
 fn normalised(x: &[f64]) -> Vec<f64> {
@@ -220,28 +282,34 @@ pub(crate) fn bicgstab(chain: &Chain<'_>, params: &SolveParams) -> Result<(Vec<f
         let (mut rho, mut alpha, mut omega) = (1.0, 1.0, 1.0);
         v.iter_mut().for_each(|e| *e = 0.0);
         p.iter_mut().for_each(|e| *e = 0.0);
+        // `(r̂, r)` of the next iteration, computed with `r`.
+        let mut rho_next = dot(&rhat, &r);
         while it < params.max_iterations {
             it += 1;
-            let rho_new = dot(&rhat, &r);
+            let rho_new = rho_next;
             if rho_new == 0.0 || !rho_new.is_finite() {
                 break; // restart
             }
             let beta = (rho_new / rho) * (alpha / omega);
             rho = rho_new;
-            update(&mut p, |j, pj| r[j] + beta * (pj - omega * v[j]));
-            a.precondition_apply(&p, &mut y, &mut v);
-            let rv = dot(&rhat, &v);
+            // p = r + β (p − ω v), y = M⁻¹ p, v = A y, with (r̂, v).
+            a.sweep(&mut p, &mut y, |j, pj| r[j] + beta * (pj - omega * v[j]));
+            let [rv, _] = a.product(&p, &y, &mut v, |j, vj| [rhat[j] * vj, 0.0]);
             if rv == 0.0 || !rv.is_finite() {
                 break;
             }
             alpha = rho / rv;
-            update(&mut s, |j, _| r[j] - alpha * v[j]);
-            a.precondition_apply(&s, &mut z, &mut t);
-            let tt = dot(&t, &t);
-            omega = if tt > 0.0 { dot(&t, &s) / tt } else { 0.0 };
-            update(&mut x, |j, xj| xj + alpha * y[j] + omega * z[j]);
-            update(&mut r, |j, _| s[j] - omega * t[j]);
-            let cheap = dot(&r, &r).sqrt();
+            // s = r − α v, z = M⁻¹ s, t = A z, with (t, t) and (t, s).
+            a.sweep(&mut s, &mut z, |j, _| r[j] - alpha * v[j]);
+            let [tt, ts] = a.product(&s, &z, &mut t, |j, tj| [tj * tj, tj * s[j]]);
+            omega = if tt > 0.0 { ts / tt } else { 0.0 };
+            // x += α y + ω z, r = s − ω t, with (r, r) and (r̂, r).
+            let [rr, rhr] = fused_update(&mut x, &mut r, |j, xj| {
+                let rj = s[j] - omega * t[j];
+                (xj + alpha * y[j] + omega * z[j], rj, [rj * rj, rhat[j] * rj])
+            });
+            rho_next = rhr;
+            let cheap = rr.sqrt();
             if !cheap.is_finite() {
                 break;
             }
