@@ -292,7 +292,7 @@ fn merge(out: &Path, parts: &[PathBuf], pictures: bool) -> Result<()> {
 
 /// Fails early (before a replay that may take a while) when a file cannot
 /// go where asked: its folder missing, or the path a folder.
-fn check_output(path: &Path) -> Result<()> {
+pub(crate) fn check_output(path: &Path) -> Result<()> {
     if path.is_dir() {
         bail!("cannot write {}: it is a folder", path.display());
     }

@@ -99,6 +99,12 @@ pub struct GoArgs {
     /// Per-tick trace as JSON lines: time, true pose, estimate, state, events.
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
+    /// Watch the leg: one HTML file that opens offline in any browser, with the map, the
+    /// trajectory so far, the laser beams, people, the particle cloud, a time slider and the
+    /// controller's notes per tick (contour tracking's mode, distance, gap; the localizer's
+    /// scores).
+    #[arg(long, value_name = "FILE")]
+    html: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -338,6 +344,9 @@ fn print_legs(legs: &[LegRun], json: bool) -> Result<()> {
 
 fn go(a: &GoArgs) -> Result<()> {
     let c = &a.common;
+    for path in [&a.trace, &a.html, &c.output].into_iter().flatten() {
+        crate::lab_cmd::check_output(path)?;
+    }
     let grid = load_map(&c.map)?;
     let places = load_places(c)?;
     let from = resolve(&a.from, places.as_ref(), "--from")?;
@@ -360,7 +369,11 @@ fn go(a: &GoArgs) -> Result<()> {
             goal: to.pose.position(),
             policy: policy.clone(),
             seed: c.seed,
-            trace: sim::TraceParams::default(),
+            trace: if a.html.is_some() {
+                sim::TraceParams::full()
+            } else {
+                sim::TraceParams::default()
+            },
         },
     )?;
     if let Some(path) = &a.trace {
@@ -370,10 +383,21 @@ fn go(a: &GoArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(path) = &c.output {
-        mission::picture(setup.world.grid(), std::slice::from_ref(&leg), &[from, to], path)?;
+        mission::picture(
+            setup.world.grid(),
+            std::slice::from_ref(&leg),
+            &[from.clone(), to.clone()],
+            path,
+        )?;
     }
     log_legs(c, std::slice::from_ref(&leg), &policy)?;
     print_legs(std::slice::from_ref(&leg), c.json)?;
+    let mut leg = leg;
+    if let Some(path) = &a.html {
+        let replay = lab::suites::maps::leg_replay(setup.world.grid(), &mut leg, to.pose.position())?;
+        let key = format!("{} → {} (seed {})", from.name, to.name, c.seed);
+        lab::viewer::write_page(&replay, &lab::suites::maps::MARKERS, "nav go", &key, path)?;
+    }
     exit_status(&[leg])
 }
 

@@ -103,6 +103,25 @@ fn a_leg_reaches_its_place_with_json_picture_and_trace() {
 }
 
 #[test]
+fn a_leg_can_be_watched_in_a_viewer_page() {
+    let dir = fresh("html");
+    let html = dir.join("leg.html");
+    let out = go(&["--behaviour", "contour", "--html", html.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let page = std::fs::read_to_string(&html).expect("the page is written");
+    assert!(page.starts_with("<!DOCTYPE html>") || page.starts_with("<!doctype html>"));
+    assert!(
+        page.contains("entrance → west_corridor_south (seed 1)"),
+        "the leg's title"
+    );
+    // A folder that does not exist is refused before the leg is run.
+    let missing = dir.join("no/such/folder/leg.html");
+    let out = go(&["--html", missing.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("there is no folder"), "{}", stderr(&out));
+}
+
+#[test]
 fn the_same_seed_gives_the_same_leg_and_trace() {
     let dir = fresh("determinism");
     let run = |seed: &str, name: &str| {

@@ -205,16 +205,27 @@ fn room_with_door(width_m: f64) -> World {
     World::new(g)
 }
 
+/// Seeks `goal` from `start` through the 0.80 m door of
+/// [`room_with_door`]: the goal is reached without contact, the door passed
+/// as a gap, and the clearance stays above `min_clearance_m`.
+fn passes_door(start: Pose, goal: Vec2, min_clearance_m: f64) {
+    let world = room_with_door(0.8);
+    let (c, r) = seek(&world, start, goal, 120.0);
+    assert_eq!(r.outcome, Some(sim::Outcome::Goal), "through the door");
+    assert_eq!(r.collisions, 0, "no contact");
+    assert!(c.in_gap > 0, "passed as a gap");
+    assert!(
+        r.min_clearance_m > min_clearance_m,
+        "clearance {:.3} m",
+        r.min_clearance_m
+    );
+}
+
 #[test]
 fn a_door_0_80_m_wide_is_passed_without_contact() {
     // 0.80 m for a 0.70 m robot: 5 cm either side when centred. The robot
     // starts 0.3 m off the door's axis and crooked, and must centre.
-    let world = room_with_door(0.8);
-    let (c, r) = seek(&world, Pose::new(1.0, 2.3, -0.2), Vec2::new(7.0, 1.8), 120.0);
-    assert_eq!(r.outcome, Some(sim::Outcome::Goal), "through the door");
-    assert_eq!(r.collisions, 0, "no contact");
-    assert!(c.in_gap > 0, "passed as a gap");
-    assert!(r.min_clearance_m > 0.01, "clearance {:.3} m", r.min_clearance_m);
+    passes_door(Pose::new(1.0, 2.3, -0.2), Vec2::new(7.0, 1.8), 0.01);
 }
 
 #[test]
@@ -224,13 +235,8 @@ fn a_door_approached_obliquely_from_beside_its_wall_is_passed_without_contact() 
     // while it turns in, so it must be on the line before its footprint
     // gets there (the look-ahead shortens near the sides; with a fixed
     // 0.25 m the robot stopped 3 mm from that jamb and never got through).
-    let world = room_with_door(0.8);
-    let (c, r) = seek(&world, Pose::new(3.0, 3.4, -0.5), Vec2::new(7.0, 2.0), 120.0);
-    assert_eq!(r.outcome, Some(sim::Outcome::Goal), "through the door");
-    assert_eq!(r.collisions, 0, "no contact");
-    assert!(c.in_gap > 0, "passed as a gap");
     // Centred: 5 cm either side at most; 4.7 cm measured.
-    assert!(r.min_clearance_m > 0.035, "clearance {:.3} m", r.min_clearance_m);
+    passes_door(Pose::new(3.0, 3.4, -0.5), Vec2::new(7.0, 2.0), 0.035);
 }
 
 #[test]

@@ -45,6 +45,7 @@ use std::sync::OnceLock;
 use anyhow::{Context, Result, bail};
 use nav::guide::Policy;
 use nav::supervisor::Behaviour;
+use robot::Vec2;
 use sim::{CrowdParams, Places, TraceParams, World};
 
 use crate::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop, Whereabouts};
@@ -272,39 +273,66 @@ impl MapsSuite {
         let data = self.map(s.map)?;
         let k = (job.run % self.legs(s.map)?) as usize;
         let after = before.after(leg, &data.stops[k + 1]);
-        let r = &leg.result;
-        let sim = leg.sim.as_ref();
-        let mut behaviour_ticks = BTreeMap::new();
-        for l in &leg.trace.labels {
-            *behaviour_ticks.entry(l.to_string()).or_insert(0) += 1;
-        }
-        let start = leg.trace.poses.first().copied().unwrap_or_default();
-        let mut record = RunRecord {
-            success: r.outcome == LegOutcome::Reached,
-            outcome: mission::outcome_name(r.outcome).to_string(),
-            time_s: r.time_s,
-            path_length_m: r.path_m,
-            collisions: u32::from(r.outcome == LegOutcome::Collision),
-            min_clearance_m: sim.map_or(0.0, |s| s.min_clearance_m),
-            odometry_error_m: sim.map_or(0.0, |s| s.odometry_error_m),
-            goal_distance_m: r.final_error_m,
-            ticks: sim.map_or(0, |s| s.ticks),
-            behaviour_ticks,
-            metrics: BTreeMap::new(),
-            events: Vec::new(),
-            start: [start.x_m, start.y_m, start.theta_rad],
-            trap: None,
-            state: Some(serde_json::to_value(&after)?),
-        };
-        let l = &r.localization;
-        record.set_metric(metric::LOC_MEAN, l.mean_error_m)?;
-        record.set_metric(metric::LOC_MAX, l.max_error_m)?;
-        record.set_metric(metric::WARNINGS, f64::from(l.warnings))?;
-        record.set_metric(metric::WARNING_S, l.time_in_warning_s)?;
-        record.set_metric(metric::ABNORMAL, f64::from(r.planner.abnormal_episodes))?;
-        record.set_metric(metric::ABNORMAL_S, r.planner.time_abnormal_s)?;
+        let mut record = leg_record(leg)?;
+        record.state = Some(serde_json::to_value(&after)?);
         Ok(record)
     }
+}
+
+/// A leg's record, as the suite keeps it (without the suite's state): the
+/// outcome, time, path, clearance, ticks per behaviour and the
+/// localization and planner measures.
+pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
+    let r = &leg.result;
+    let sim = leg.sim.as_ref();
+    let mut behaviour_ticks = BTreeMap::new();
+    for l in &leg.trace.labels {
+        *behaviour_ticks.entry(l.to_string()).or_insert(0) += 1;
+    }
+    let start = leg.trace.poses.first().copied().unwrap_or_default();
+    let mut record = RunRecord {
+        success: r.outcome == LegOutcome::Reached,
+        outcome: mission::outcome_name(r.outcome).to_string(),
+        time_s: r.time_s,
+        path_length_m: r.path_m,
+        collisions: u32::from(r.outcome == LegOutcome::Collision),
+        min_clearance_m: sim.map_or(0.0, |s| s.min_clearance_m),
+        odometry_error_m: sim.map_or(0.0, |s| s.odometry_error_m),
+        goal_distance_m: r.final_error_m,
+        ticks: sim.map_or(0, |s| s.ticks),
+        behaviour_ticks,
+        metrics: BTreeMap::new(),
+        events: Vec::new(),
+        start: [start.x_m, start.y_m, start.theta_rad],
+        trap: None,
+        state: None,
+    };
+    let l = &r.localization;
+    record.set_metric(metric::LOC_MEAN, l.mean_error_m)?;
+    record.set_metric(metric::LOC_MAX, l.max_error_m)?;
+    record.set_metric(metric::WARNINGS, f64::from(l.warnings))?;
+    record.set_metric(metric::WARNING_S, l.time_in_warning_s)?;
+    record.set_metric(metric::ABNORMAL, f64::from(r.planner.abnormal_episodes))?;
+    record.set_metric(metric::ABNORMAL_S, r.planner.time_abnormal_s)?;
+    Ok(record)
+}
+
+/// A leg run with a simulator trace ([`mission::LegSpec::trace`]) as a
+/// replay to draw, watch or export (`nav go --html`): its record, the
+/// trace taken out of the leg, the map and the goal.
+pub fn leg_replay(grid: &sim::OccupancyGrid, leg: &mut LegRun, goal: Vec2) -> Result<Replay> {
+    Ok(Replay {
+        record: leg_record(leg)?,
+        trace: leg
+            .sim
+            .as_mut()
+            .and_then(|s| s.trace.take())
+            .context("the leg was run without a simulator trace")?,
+        grid: grid.clone(),
+        goal: Some(goal),
+        robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
+        control_period_s: 0.1,
+    })
 }
 
 impl Suite for MapsSuite {
@@ -435,9 +463,9 @@ impl Suite for MapsSuite {
     }
 }
 
-/// No events are drawn on `lab replay` pictures of legs beyond the
-/// trajectory's colours.
-const MARKERS: [EventMarker; 1] = [EventMarker {
+/// The events drawn on pictures and viewer pages of legs beyond the
+/// trajectory's colours: the localizer's warnings.
+pub const MARKERS: [EventMarker; 1] = [EventMarker {
     kind: "warning",
     marker: sim::render::MarkerKind::Ring([0, 160, 160]),
     place: MarkerPlace::Event,
@@ -487,17 +515,8 @@ impl MapsSuite {
         let s = self.scenario(&job.scenario)?;
         let data = self.map(s.map)?;
         let k = (job.run % self.legs(s.map)?) as usize;
-        Ok(Replay {
-            record,
-            trace: leg
-                .sim
-                .as_mut()
-                .and_then(|s| s.trace.take())
-                .context("a leg that could not run has no trace")?,
-            grid: data.world.grid().clone(),
-            goal: Some(data.stops[k + 1].pose.position()),
-            robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
-            control_period_s: 0.1,
-        })
+        let mut replay = leg_replay(data.world.grid(), leg, data.stops[k + 1].pose.position())?;
+        replay.record = record;
+        Ok(replay)
     }
 }
