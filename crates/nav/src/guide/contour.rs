@@ -125,6 +125,31 @@
 //! the 3 s AutoMove's uses): after a 3 s wait it forgot the wall beside it
 //! and turned into it.
 //!
+//! **Measured, not kept — passages beside the end of a wall** (2026-12-04,
+//! branch `contour6`). On building_31 from `middle_corridor_south` to
+//! `hall_north` the way out of the room is a 1.05 m passage between the
+//! end of a long wall and a low wall, with a small box 0.8 m before the
+//! wall's end. Following the box on its left into the passage, the robot
+//! heads at the low wall; the front sector (−45° on the other side) puts
+//! that wall into the followed contour, its nearest point (0.45–0.6 m)
+//! defeats the corridor check (`d` below the half width) and its tangent
+//! turns the robot back west: 2 of 8 seeds reached the goal (`petrinav nav
+//! go maps/building_31/building_31.yaml --goals
+//! maps/building_31/places.yaml --from middle_corridor_south --to
+//! hall_north --behaviour contour --seed S --html leg.html` shows it per
+//! tick). Centring when nothing of the followed side's own half is nearer
+//! than the middle brought it to 7 of 8 and, over `lab run maps --runs 9`
+//! (99 legs each), contour legs without people 95 → 98 on building_31 and
+//! 98 → 97 on levine, crowds about the same (building_31 20 / 60 people
+//! 0.87 → 0.88, 0.69 → 0.67; levine 0.94 → 0.94, 0.91 → 0.93) — but contacts
+//! among people 5 → 13 of 396 legs, the robot wedged, its centred flag
+//! flipping, then touching a wall beside it that the memory had let go
+//! (cause (a) of [`scan::NearbyPoints`]). Two other rules were worse: front
+//! points counted only when joined to the contour beside the robot by a
+//! chain of beams (0 of 8, two contacts: the obstacle met at the hit was
+//! lost), and the tangent taken from the nearest point of the followed
+//! half (0 of 8: the robot took the middle corridor north). Not solved.
+//!
 //! **Figures** (contour tracking alone; before = `main` at f74babb, after =
 //! this module; `petrinav lab run maps` with its 3 tours, success rate
 //! `I_R`): building_31 0 / 20 / 60 people 0.82 / 0.39 / 0.15 → 0.85 /
