@@ -125,30 +125,40 @@
 //! the 3 s AutoMove's uses): after a 3 s wait it forgot the wall beside it
 //! and turned into it.
 //!
-//! **Measured, not kept — passages beside the end of a wall** (2026-12-04,
-//! branch `contour6`). On building_31 from `middle_corridor_south` to
-//! `hall_north` the way out of the room is a 1.05 m passage between the
-//! end of a long wall and a low wall, with a small box 0.8 m before the
-//! wall's end. Following the box on its left into the passage, the robot
-//! heads at the low wall; the front sector (−45° on the other side) puts
-//! that wall into the followed contour, its nearest point (0.45–0.6 m)
-//! defeats the corridor check (`d` below the half width) and its tangent
-//! turns the robot back west: 2 of 8 seeds reached the goal (`petrinav nav
-//! go maps/building_31/building_31.yaml --goals
-//! maps/building_31/places.yaml --from middle_corridor_south --to
-//! hall_north --behaviour contour --seed S --html leg.html` shows it per
-//! tick). Centring when nothing of the followed side's own half is nearer
-//! than the middle brought it to 7 of 8 and, over `lab run maps --runs 9`
-//! (99 legs each), contour legs without people 95 → 98 on building_31 and
-//! 98 → 97 on levine, crowds about the same (building_31 20 / 60 people
-//! 0.87 → 0.88, 0.69 → 0.67; levine 0.94 → 0.94, 0.91 → 0.93) — but contacts
-//! among people 5 → 13 of 396 legs, the robot wedged, its centred flag
-//! flipping, then touching a wall beside it that the memory had let go
-//! (cause (a) of [`scan::NearbyPoints`]). Two other rules were worse: front
-//! points counted only when joined to the contour beside the robot by a
-//! chain of beams (0 of 8, two contacts: the obstacle met at the hit was
-//! lost), and the tangent taken from the nearest point of the followed
-//! half (0 of 8: the robot took the middle corridor north). Not solved.
+//! **Decision — passages (the far side ahead is not a wall ahead).** On
+//! building_31 from `middle_corridor_south` to `hall_north` the way out of
+//! the room is a 1.05 m passage between the end of a long wall and a low
+//! wall, with a small box 0.8 m before the wall's end. Following the box on
+//! its left into the passage, the robot heads at the low wall; the front
+//! sector (from −45° on the other side) puts that wall into the followed
+//! contour, its nearest point (0.45–0.6 m) failed the corridor check (the
+//! contour nearer than the half width: "a wall ahead") and its tangent
+//! turned the robot back west, to creep along the room's furniture: 2 of 8
+//! seeds reached the goal (`petrinav nav go maps/building_31/building_31.yaml
+//! --goals maps/building_31/places.yaml --from middle_corridor_south --to
+//! hall_north --behaviour contour --seed S --html leg.html` shows it tick by
+//! tick). The corridor check now asks that nothing of the followed side's
+//! *own half* be nearer than the middle: what stands ahead on the other
+//! half is the far side of a passage, and the robot centres between the
+//! two. Only while it moves (the last command at least `creep_mps`): turning
+//! on the spot sweeps the front sector across both halves, and without
+//! that condition the centred flag flipped every few cycles while the robot
+//! was wedged, until it touched a wall beside it that the safety layer's
+//! memory had let go (contacts among people 5 → 13 of 396 legs). Measured
+//! (`petrinav lab run maps --runs 9`, 99 legs per row, contour tracking,
+//! before → after): building_31 0 / 20 / 60 people 0.96 / 0.87 / 0.69 →
+//! 0.97 / 0.86 / 0.71 with contacts 0 / 2 / 3 → 0 / 4 / 1; levine 0.99 /
+//! 0.94 / 0.91 → 0.99 / 0.96 / 0.89, contacts 0 / 0 / 0 → 0 / 0 / 0;
+//! AutoMove unchanged (1.00 without people on both). The 8 seeds above:
+//! 8 of 8 (84–85 s, one 224 s). Still failing without people: 2 of 9 tours
+//! on the same leg (its start is where the previous leg ended, 0.27 m
+//! further north), one on levine from `south_west_end` (both failing
+//! before too) and, new, one of 9 from `hall_south` through its door. Tried and worse: front points counted only when
+//! joined to the contour beside the robot by a chain of beams (0 of 8 and
+//! two contacts: the obstacle met at the hit point was lost), and the
+//! tangent taken from the nearest point of the followed half (0 of 8: the
+//! robot took the middle corridor north). Test: `tests/contour.rs`, the
+//! leg on the real map by dead reckoning.
 //!
 //! **Figures** (contour tracking alone; before = `main` at f74babb, after =
 //! this module; `petrinav lab run maps` with its 3 tours, success rate
@@ -438,6 +448,8 @@ pub struct ContourTracker {
     lost_since: Option<f64>,
     /// Gaps the robot stalled at (middle, odometry frame), and when.
     refused: Vec<(Vec2, f64)>,
+    /// The speed commanded last cycle, m/s.
+    last_v: f64,
 }
 
 /// A gap in the way: its two sides, its middle and the direction through
@@ -716,6 +728,7 @@ impl ContourTracker {
             hit_since: None,
             lost_since: None,
             refused: Vec::new(),
+            last_v: 0.0,
         })
     }
 
@@ -751,6 +764,7 @@ impl ContourTracker {
         self.hit_since = None;
         self.lost_since = None;
         self.refused.clear();
+        self.last_v = 0.0;
     }
 
     /// One control cycle: the scan, the odometry pose (for the short
@@ -944,6 +958,7 @@ impl ContourTracker {
             self.held_since = None;
             None
         };
+        self.last_v = v;
         ContourStep {
             command: Command::Twist {
                 v_mps: v,
@@ -1215,12 +1230,26 @@ impl ContourTracker {
                 false,
             );
         };
-        // Corridor: both sides seen beside the robot.
+        // Corridor: both sides seen beside the robot, and nothing on the
+        // followed side's own half nearer than the middle (a wall ahead
+        // on that side, which the look-ahead law turns away from). The
+        // front sector's points on the other half are the far side of a
+        // passage here, not a wall ahead (module docs, passages).
         let left = polar.nearest_in(deg(45.0), deg(135.0));
         let right = polar.nearest_in(deg(-135.0), deg(-45.0));
+        // Only while moving (module docs, passages).
+        let own = if self.turning.is_some() || self.last_v < p.creep_mps {
+            d
+        } else {
+            contour
+                .iter()
+                .filter(|q| s * q.y >= 0.0)
+                .map(|q| q.norm())
+                .fold(f64::INFINITY, f64::min)
+        };
         if let (Some((l, ln)), Some((r, rn))) = (left, right)
             && ln + rn <= p.corridor_m
-            && d > p.distance_m.min(0.5 * (ln + rn)) - 0.05
+            && own > p.distance_m.min(0.5 * (ln + rn)) - 0.05
         {
             let tl = wrap_angle(l.angle() - std::f64::consts::FRAC_PI_2);
             let tr = wrap_angle(r.angle() + std::f64::consts::FRAC_PI_2);
