@@ -641,6 +641,36 @@ pub fn crowd_near(
     out
 }
 
+/// A leg's record with what every suite of legs keeps: outcome, time,
+/// path, contact, clearance, odometry error, ticks per behaviour label, the
+/// true start pose; no metrics, events or state (each suite adds its own).
+pub fn leg_base_record(leg: &LegRun) -> crate::record::RunRecord {
+    let r = &leg.result;
+    let sim = leg.sim.as_ref();
+    let mut behaviour_ticks = BTreeMap::new();
+    for l in &leg.trace.labels {
+        *behaviour_ticks.entry(l.to_string()).or_insert(0) += 1;
+    }
+    let start = leg.trace.poses.first().copied().unwrap_or_default();
+    crate::record::RunRecord {
+        success: r.outcome == LegOutcome::Reached,
+        outcome: outcome_name(r.outcome).to_string(),
+        time_s: r.time_s,
+        path_length_m: r.path_m,
+        collisions: u32::from(r.outcome == LegOutcome::Collision),
+        min_clearance_m: sim.map_or(0.0, |s| s.min_clearance_m),
+        odometry_error_m: sim.map_or(0.0, |s| s.odometry_error_m),
+        goal_distance_m: r.final_error_m,
+        ticks: sim.map_or(0, |s| s.ticks),
+        behaviour_ticks,
+        metrics: BTreeMap::new(),
+        events: Vec::new(),
+        start: [start.x_m, start.y_m, start.theta_rad],
+        trap: None,
+        state: None,
+    }
+}
+
 /// The lab's common outcome name of a leg's outcome (`goal`, `collision`,
 /// `time_limit`, `lost`, `unreachable`, `gave_up`): what summaries count.
 pub fn outcome_name(o: LegOutcome) -> &'static str {

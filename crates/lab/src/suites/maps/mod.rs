@@ -48,7 +48,7 @@ use nav::supervisor::Behaviour;
 use robot::Vec2;
 use sim::{CrowdParams, Places, TraceParams, World};
 
-use crate::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop, Whereabouts};
+use crate::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop, Whereabouts};
 use crate::page::{Block, Figure, RunLink};
 use crate::pictures::{EventMarker, MarkerPlace, Replay};
 use crate::record::RunRecord;
@@ -284,29 +284,7 @@ impl MapsSuite {
 /// localization and planner measures.
 pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
     let r = &leg.result;
-    let sim = leg.sim.as_ref();
-    let mut behaviour_ticks = BTreeMap::new();
-    for l in &leg.trace.labels {
-        *behaviour_ticks.entry(l.to_string()).or_insert(0) += 1;
-    }
-    let start = leg.trace.poses.first().copied().unwrap_or_default();
-    let mut record = RunRecord {
-        success: r.outcome == LegOutcome::Reached,
-        outcome: mission::outcome_name(r.outcome).to_string(),
-        time_s: r.time_s,
-        path_length_m: r.path_m,
-        collisions: u32::from(r.outcome == LegOutcome::Collision),
-        min_clearance_m: sim.map_or(0.0, |s| s.min_clearance_m),
-        odometry_error_m: sim.map_or(0.0, |s| s.odometry_error_m),
-        goal_distance_m: r.final_error_m,
-        ticks: sim.map_or(0, |s| s.ticks),
-        behaviour_ticks,
-        metrics: BTreeMap::new(),
-        events: Vec::new(),
-        start: [start.x_m, start.y_m, start.theta_rad],
-        trap: None,
-        state: None,
-    };
+    let mut record = mission::leg_base_record(leg);
     let l = &r.localization;
     record.set_metric(metric::LOC_MEAN, l.mean_error_m)?;
     record.set_metric(metric::LOC_MAX, l.max_error_m)?;

@@ -40,7 +40,7 @@ use robot::{Pose, Vec2};
 use sim::shapes::WorldSpec;
 use sim::{CrowdParams, TraceParams, World};
 
-use crate::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan};
+use crate::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan};
 use crate::pictures::{EventMarker, MarkerPlace, Replay};
 use crate::record::RunRecord;
 use crate::runner::{Campaign, Job, derive_seed};
@@ -349,24 +349,8 @@ impl TourGuideSuite {
 
     fn record(&self, leg: &LegRun, entry: &Entry) -> Result<RunRecord> {
         let r = &leg.result;
-        let sim = leg.sim.as_ref();
-        let mut behaviour_ticks = BTreeMap::new();
-        for l in &leg.trace.labels {
-            *behaviour_ticks.entry(l.to_string()).or_insert(0) += 1;
-        }
         let kept = ["decision", "switch", "warning", "success"];
         let mut record = RunRecord {
-            success: r.outcome == LegOutcome::Reached,
-            outcome: mission::outcome_name(r.outcome).to_string(),
-            time_s: r.time_s,
-            path_length_m: r.path_m,
-            collisions: u32::from(r.outcome == LegOutcome::Collision),
-            min_clearance_m: sim.map_or(0.0, |s| s.min_clearance_m),
-            odometry_error_m: sim.map_or(0.0, |s| s.odometry_error_m),
-            goal_distance_m: r.final_error_m,
-            ticks: sim.map_or(0, |s| s.ticks),
-            behaviour_ticks,
-            metrics: BTreeMap::new(),
             events: leg
                 .trace
                 .events
@@ -375,8 +359,8 @@ impl TourGuideSuite {
                 .cloned()
                 .collect(),
             start: [START.x_m, START.y_m, START.theta_rad],
-            trap: None,
             state: Some(serde_json::to_value(entry)?),
+            ..mission::leg_base_record(leg)
         };
         let s = &leg.summary;
         record.set_metric(metric::WARNING_S, r.localization.time_in_warning_s)?;
