@@ -174,6 +174,15 @@ impl Turn {
             Turn::Straight => "straight",
         }
     }
+
+    /// The other way (left ↔ right; straight stays straight).
+    pub fn mirrored(self) -> Turn {
+        match self {
+            Turn::Left => Turn::Right,
+            Turn::Right => Turn::Left,
+            Turn::Straight => Turn::Straight,
+        }
+    }
 }
 
 /// A navigation strategy: what drives the robot along a transition.

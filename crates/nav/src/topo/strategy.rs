@@ -158,6 +158,11 @@ const ALIGN_SCALE_M: f64 = 1.0;
 /// radians (20°).
 const SEGMENT_TURN_RAD: f64 = 0.35;
 
+/// Homing drives along a free heading at most this far from its bearing
+/// (three transducers' spacing, 67.5°); farther, it goes round what blocks
+/// the bearing instead.
+const HOMING_FREE_RAD: f64 = 3.0 * std::f64::consts::FRAC_PI_8;
+
 /// The smallest turn counts as done this close to its angle, radians.
 const TURN_DONE_RAD: f64 = 0.02;
 
@@ -222,6 +227,30 @@ pub fn actions_at(kind: PlaceKind, concave: bool) -> &'static [Action] {
     }
 }
 
+/// Among the transducers' axes, the odometry heading nearest `bearing_rad`
+/// along which the ring sees the way free: the transducer on the axis
+/// beyond `clear_m`, and every transducer within `ahead_half_width_rad` of
+/// it beyond `stop_m` + 0.3 m along the axis (robot at odometry heading
+/// `heading_rad`). `None` when no axis is free.
+fn free_heading_near(ring: &Ring, p: &StrategyParams, heading_rad: f64, bearing_rad: f64) -> Option<f64> {
+    let echoes = ring.echoes();
+    echoes
+        .iter()
+        .filter(|e| e.range_m > p.clear_m)
+        .filter(|e| {
+            echoes.iter().all(|o| {
+                let off = wrap_angle(o.bearing_rad - e.bearing_rad);
+                off.abs() > p.ahead_half_width_rad + 1e-9 || o.range_m * off.cos() > p.stop_m + 0.3
+            })
+        })
+        .map(|e| wrap_angle(heading_rad + e.bearing_rad))
+        .min_by(|a, b| {
+            wrap_angle(a - bearing_rad)
+                .abs()
+                .total_cmp(&wrap_angle(b - bearing_rad).abs())
+        })
+}
+
 /// What the executor is doing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
@@ -229,6 +258,9 @@ enum Phase {
     /// transition's leaving heading); then the exit turn's steps in
     /// direction `sign` if the way is not free there.
     Aiming { target_rad: f64, sign: f64 },
+    /// Homing's first tick: choose, from the ring, the free heading
+    /// nearest the odometry heading `bearing_rad` ([`Executor::homing`]).
+    Choosing { bearing_rad: f64 },
     /// Rotating in place by the exit turn; `turned_rad` so far.
     Turning { sign: f64, turned_rad: f64 },
     /// Driving the strategy.
@@ -289,6 +321,23 @@ pub struct Executor {
     wall_heading: (f64, f64),
     elapsed_s: f64,
     driven_s: f64,
+    /// What the aiming turn leads to ([`Executor::homing`],
+    /// [`Executor::facing`]).
+    after_aim: AfterAim,
+    /// The side homing detours on (`None`: the freer one).
+    homing_side: Option<Turn>,
+}
+
+/// What an executor does once its aiming turn is over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum AfterAim {
+    /// The strategy if the way is free, else the exit turn's steps.
+    Strategy,
+    /// Free movement if the way is free, else a detour on the freer side
+    /// back to the aimed heading ([`Executor::homing`]).
+    Homing,
+    /// Stop: the leg is the turn ([`Executor::facing`]).
+    Stop,
 }
 
 impl Executor {
@@ -326,7 +375,45 @@ impl Executor {
             wall_heading: (0.0, 0.0),
             elapsed_s: 0.0,
             driven_s: 0.0,
+            after_aim: AfterAim::Strategy,
+            homing_side: None,
         }
+    }
+
+    /// Heading for a point (navigation off the net, [`super::navigate`]):
+    /// rotate in place (the shorter way) to the odometry heading
+    /// `bearing_rad`, then free movement along it if the way ahead leaves
+    /// room to drive; otherwise a detour round what blocks it, on the side
+    /// the ring sees freer (the larger perpendicular range from 45° to 90°),
+    /// back to `bearing_rad` and on along it. The leg ends, as every leg, at
+    /// the next obstacle ahead.
+    pub fn homing(
+        params: StrategyParams,
+        heading_rad: f64,
+        bearing_rad: f64,
+        side: Option<Turn>,
+    ) -> Executor {
+        let mut ex = Executor::new(params, Strategy::FreeMovement, Turn::Left, heading_rad);
+        ex.phase = Phase::Choosing {
+            bearing_rad: wrap_angle(bearing_rad),
+        };
+        ex.place_heading_rad = wrap_angle(bearing_rad);
+        ex.after_aim = AfterAim::Homing;
+        ex.homing_side = side;
+        ex
+    }
+
+    /// A turn in place to the odometry heading `facing_rad` (the shorter
+    /// way), and then the leg is over ([`Progress::Arrived`] once
+    /// stopped): to look at a place from the heading it was recorded with.
+    pub fn facing(params: StrategyParams, heading_rad: f64, facing_rad: f64) -> Executor {
+        let mut ex = Executor::new(params, Strategy::FreeMovement, Turn::Left, heading_rad);
+        ex.phase = Phase::Aiming {
+            target_rad: wrap_angle(facing_rad),
+            sign: 1.0,
+        };
+        ex.after_aim = AfterAim::Stop;
+        ex
     }
 
     /// Like [`Executor::new`], but the exit turn first rotates (the shorter
@@ -354,6 +441,16 @@ impl Executor {
             };
         }
         ex
+    }
+
+    /// Brakes now: the leg ends where the robot stops
+    /// ([`Progress::Arrived`]), as if an obstacle had come ahead (homing
+    /// that has reached its point, [`super::Walker::start_homing`]). Only
+    /// while driving the strategy; otherwise nothing.
+    pub fn brake(&mut self) {
+        if self.phase == Phase::Driving {
+            self.phase = Phase::Braking;
+        }
     }
 
     /// The strategy played.
@@ -391,7 +488,10 @@ impl Executor {
 
     /// Whether the exit turn is over.
     pub fn turned(&self) -> bool {
-        !matches!(self.phase, Phase::Turning { .. } | Phase::Aiming { .. })
+        !matches!(
+            self.phase,
+            Phase::Turning { .. } | Phase::Aiming { .. } | Phase::Choosing { .. }
+        )
     }
 
     /// One control tick: the ring, the odometry heading, whether the robot
@@ -408,14 +508,54 @@ impl Executor {
         match self.phase {
             Phase::Arrived => Progress::Arrived,
             Phase::Failed(f) => Progress::Failed(f),
+            Phase::Choosing { bearing_rad } => {
+                // A free heading within 67.5° of the bearing: along it.
+                // None: the bearing, which is blocked, and round what blocks
+                // it (the aiming phase's detour).
+                let target_rad = free_heading_near(ring, &p, heading_rad, bearing_rad)
+                    .filter(|h| wrap_angle(h - bearing_rad).abs() <= HOMING_FREE_RAD + 1e-9)
+                    .unwrap_or(bearing_rad);
+                self.place_heading_rad = target_rad;
+                self.phase = Phase::Aiming {
+                    target_rad,
+                    sign: 1.0,
+                };
+                Progress::Drive(Command::Stop)
+            }
             Phase::Aiming { target_rad, sign } => {
                 let left_rad = wrap_angle(target_rad - heading_rad);
                 if left_rad.abs() <= TURN_DONE_RAD {
+                    if self.after_aim == AfterAim::Stop && ahead <= p.stop_m + 0.1 {
+                        self.phase = Phase::Braking;
+                        return Progress::Drive(Command::Stop);
+                    }
                     if ahead > p.stop_m + 0.1 {
                         self.phase = Phase::Driving;
                         self.hold_heading_rad = heading_rad;
                         self.last_wall_error_m = None;
                         return self.drive(ring, heading_rad, ahead, dt_s);
+                    }
+                    if self.after_aim == AfterAim::Homing {
+                        // Round what blocks the way, on the freer side.
+                        let left = ring.side_m(Side::Left, FRAC_PI_4, FRAC_PI_2);
+                        let right = ring.side_m(Side::Right, FRAC_PI_4, FRAC_PI_2);
+                        let go_left = match self.homing_side {
+                            Some(Turn::Left) => true,
+                            Some(Turn::Right) => false,
+                            _ => left >= right,
+                        };
+                        let (strategy, sign) = if go_left {
+                            (Strategy::DetourLeft, 1.0)
+                        } else {
+                            (Strategy::DetourRight, -1.0)
+                        };
+                        self.strategy = strategy;
+                        self.rounding = true;
+                        self.phase = Phase::Turning {
+                            sign,
+                            turned_rad: 0.0,
+                        };
+                        return Progress::Drive(Command::Stop);
                     }
                     // Blocked there (the robot stands elsewhere than when
                     // the transition was recorded): the exit turn's steps.

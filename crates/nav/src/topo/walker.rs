@@ -18,6 +18,10 @@ use super::strategy::{Action, Executor, Failure, Progress, StrategyParams};
 /// Wheels slower than this (both) count as stopped, m/s.
 const STOPPED_MPS: f64 = 0.01;
 
+/// A homing leg stops once the robot's map position is this close to its
+/// point, metres.
+const HOMING_REACHED_M: f64 = 0.2;
+
 /// A leg: where it started (if at a known place) and what it plays.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Leg {
@@ -71,6 +75,11 @@ pub struct Walker {
     place: Option<PlaceId>,
     last_time_s: Option<f64>,
     odom: Pose,
+    /// The leg records no transition ([`Walker::start_homing`],
+    /// [`Walker::start_facing`]).
+    unrecorded: bool,
+    /// The point a homing leg heads for (map frame).
+    homing_target: Option<(f64, f64)>,
 }
 
 impl Walker {
@@ -92,6 +101,8 @@ impl Walker {
             place: None,
             last_time_s: None,
             odom: Pose::default(),
+            unrecorded: false,
+            homing_target: None,
         })
     }
 
@@ -157,8 +168,55 @@ impl Walker {
         self.expected = expected;
     }
 
+    /// Starts a leg that heads for the map position `target` (x, y) from
+    /// where the robot stands ([`Executor::homing`]), expecting nothing;
+    /// the place it ends at is recognised or added, but no transition is
+    /// recorded for it (its course depends on where it started from, not
+    /// on a strategy that could be played again).
+    pub fn start_homing(&mut self, target: (f64, f64), side: Option<Turn>) {
+        let here = self.builder.map_pose(self.odom);
+        let bearing = (target.1 - here.y_m).atan2(target.0 - here.x_m);
+        self.start(Action {
+            exit_turn: Turn::Left,
+            strategy: Strategy::FreeMovement,
+        });
+        if let Some((_, ex)) = &mut self.leg {
+            self.homing_target = Some(target);
+            *ex = Executor::homing(
+                self.strategy,
+                self.odom.theta_rad,
+                self.builder.odom_heading(bearing),
+                side,
+            );
+        }
+        self.unrecorded = true;
+    }
+
+    /// Starts a turn in place to the map heading `heading_rad`
+    /// ([`Executor::facing`]), expecting place `expected` (which the robot
+    /// stands on the spot of): the place is then recognised again from the
+    /// heading the expected one was recorded with. No transition is
+    /// recorded.
+    pub fn start_facing(&mut self, heading_rad: f64, expected: Option<PlaceId>) {
+        self.start(Action {
+            exit_turn: Turn::Straight,
+            strategy: Strategy::FreeMovement,
+        });
+        if let Some((_, ex)) = &mut self.leg {
+            *ex = Executor::facing(
+                self.strategy,
+                self.odom.theta_rad,
+                self.builder.odom_heading(heading_rad),
+            );
+        }
+        self.expected = expected;
+        self.unrecorded = true;
+    }
+
     /// Starts a leg from where the robot stands.
     pub fn start(&mut self, action: Action) {
+        self.unrecorded = false;
+        self.homing_target = None;
         self.expected = None;
         let leg = Leg {
             from: self.place,
@@ -199,6 +257,12 @@ impl Walker {
         let ring = Ring::of(p);
         let (l, r) = p.wheel_speeds_mps;
         let stopped = l.abs() < STOPPED_MPS && r.abs() < STOPPED_MPS;
+        if let Some((x, y)) = self.homing_target {
+            let here = self.builder.map_pose(p.odometry);
+            if (x - here.x_m).hypot(y - here.y_m) <= HOMING_REACHED_M {
+                ex.brake();
+            }
+        }
         let progress = ex.step(&ring, p.odometry.theta_rad, stopped, dt_s);
         if self.left_heading_rad.is_none() && ex.turned() {
             // The heading the strategy starts on (the turn ended this tick).
@@ -224,7 +288,7 @@ impl Walker {
                     expected: self.expected.take(),
                 };
                 let arrival = self.builder.arrive(&situation, p.odometry, cues)?;
-                let transition = match leg.from {
+                let transition = match leg.from.filter(|_| !self.unrecorded) {
                     Some(from) => Some(self.builder.record(
                         from,
                         arrival.place,
