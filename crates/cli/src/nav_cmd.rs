@@ -359,7 +359,7 @@ fn go(a: &GoArgs) -> Result<()> {
     };
     let setup = setup(c, grid, &anchors, from.pose.position())?;
     let policy = policy(c)?;
-    let leg = mission::run_leg(
+    let mut leg = mission::run_leg(
         &setup,
         &LegSpec {
             from: &from.name,
@@ -392,9 +392,9 @@ fn go(a: &GoArgs) -> Result<()> {
     }
     log_legs(c, std::slice::from_ref(&leg), &policy)?;
     print_legs(std::slice::from_ref(&leg), c.json)?;
-    let mut leg = leg;
     if let Some(path) = &a.html {
-        let replay = lab::suites::maps::leg_replay(setup.world.grid(), &mut leg, to.pose.position())?;
+        let record = lab::suites::maps::leg_record(&leg)?;
+        let replay = lab::suites::maps::leg_replay(record, setup.world.grid(), &mut leg, to.pose.position())?;
         let key = format!("{} → {} (seed {})", from.name, to.name, c.seed);
         lab::viewer::write_page(&replay, &lab::suites::maps::MARKERS, "nav go", &key, path)?;
     }

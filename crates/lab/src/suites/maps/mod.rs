@@ -296,11 +296,16 @@ pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
 }
 
 /// A leg run with a simulator trace ([`mission::LegSpec::trace`]) as a
-/// replay to draw, watch or export (`nav go --html`): its record, the
-/// trace taken out of the leg, the map and the goal.
-pub fn leg_replay(grid: &sim::OccupancyGrid, leg: &mut LegRun, goal: Vec2) -> Result<Replay> {
+/// replay to draw, watch or export (`nav go --html`): its `record` (e.g.
+/// [`leg_record`]), the trace taken out of the leg, the map and the goal.
+pub fn leg_replay(
+    record: RunRecord,
+    grid: &sim::OccupancyGrid,
+    leg: &mut LegRun,
+    goal: Vec2,
+) -> Result<Replay> {
     Ok(Replay {
-        record: leg_record(leg)?,
+        record,
         trace: leg
             .sim
             .as_mut()
@@ -493,8 +498,6 @@ impl MapsSuite {
         let s = self.scenario(&job.scenario)?;
         let data = self.map(s.map)?;
         let k = (job.run % self.legs(s.map)?) as usize;
-        let mut replay = leg_replay(data.world.grid(), leg, data.stops[k + 1].pose.position())?;
-        replay.record = record;
-        Ok(replay)
+        leg_replay(record, data.world.grid(), leg, data.stops[k + 1].pose.position())
     }
 }
