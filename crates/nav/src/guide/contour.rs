@@ -153,8 +153,9 @@
 //! 8 of 8 (84–85 s, one 224 s). Still failing without people: 2 of 9 tours
 //! on the same leg (its start is where the previous leg ended, 0.27 m
 //! further north), one on levine from `south_west_end` (both failing
-//! before too) and, new, one of 9 from `hall_south` through its door. Tried and worse: front points counted only when
-//! joined to the contour beside the robot by a chain of beams (0 of 8 and
+//! before too) and, new, one of 9 from `hall_south` through its door.
+//! Tried and worse: front points counted only when joined to the contour
+//! beside the robot by a chain of beams (0 of 8 and
 //! two contacts: the obstacle met at the hit point was lost), and the
 //! tangent taken from the nearest point of the followed half (0 of 8: the
 //! robot took the middle corridor north), and the corridor check looking
@@ -1239,19 +1240,22 @@ impl ContourTracker {
         // passage here, not a wall ahead (module docs, passages).
         let left = polar.nearest_in(deg(45.0), deg(135.0));
         let right = polar.nearest_in(deg(-135.0), deg(-45.0));
-        // Only while moving (module docs, passages).
-        let own = if self.turning.is_some() || self.last_v < p.creep_mps {
-            d
-        } else {
-            contour
-                .iter()
-                .filter(|q| s * q.y >= 0.0)
-                .map(|q| q.norm())
-                .fold(f64::INFINITY, f64::min)
+        // Only while moving (module docs, passages): a robot turning on
+        // the spot was commanded no speed last cycle.
+        let own = || {
+            if self.last_v < p.creep_mps {
+                d
+            } else {
+                contour
+                    .iter()
+                    .filter(|q| s * q.y >= 0.0)
+                    .map(|q| q.norm())
+                    .fold(f64::INFINITY, f64::min)
+            }
         };
         if let (Some((l, ln)), Some((r, rn))) = (left, right)
             && ln + rn <= p.corridor_m
-            && own > p.distance_m.min(0.5 * (ln + rn)) - 0.05
+            && own() > p.distance_m.min(0.5 * (ln + rn)) - 0.05
         {
             let tl = wrap_angle(l.angle() - std::f64::consts::FRAC_PI_2);
             let tr = wrap_angle(r.angle() + std::f64::consts::FRAC_PI_2);
