@@ -251,8 +251,9 @@ pub struct NavigateParams {
     pub thresholds: ThresholdParams,
     /// Legs before giving up. Default 40.
     pub max_legs: u32,
-    /// Head for the nearest place with a route when there is none from
-    /// here (module docs). Default true.
+    /// Head for the nearest goal place's map position when there is no
+    /// route from here and no way back onto the net (module docs).
+    /// Default true.
     pub homing: bool,
     /// Reject a transition (λ = 0) that ended at the same wrong place
     /// twice on a route (module docs). Default true.
@@ -313,7 +314,7 @@ pub struct NavStats {
     /// Of those, places left by a way back onto the net (a nearby known
     /// place's transition).
     pub ways_back: u32,
-    /// Of those, places left heading for the nearest place with a route.
+    /// Of those, places left heading for the nearest goal's map position.
     pub homings: u32,
     /// Turns in place to a goal's heading on its spot.
     pub facings: u32,
@@ -489,42 +490,44 @@ impl RouteFollower {
         None
     }
 
-    /// Where homing heads for (module docs): the map position of the
-    /// nearest goal place, unless the robot already stands on its spot
-    /// (within the recognition's base tolerance: it has looked there).
-    fn homing_target(&self) -> Option<(f64, f64)> {
+    /// The goal place nearest the robot's map position, other than
+    /// `except`, and its distance, metres.
+    fn nearest_goal(&self, except: Option<PlaceId>) -> Option<(f64, PlaceId)> {
         let b = self.walker.builder();
         let map = b.map();
         let here = b.map_pose(self.walker.odometry());
         self.goals
             .iter()
-            .map(|&g| {
+            .copied()
+            .filter(|&g| Some(g) != except)
+            .map(|g| {
                 let p = map.place(g);
-                ((p.x_m - here.x_m).hypot(p.y_m - here.y_m), g, (p.x_m, p.y_m))
+                ((p.x_m - here.x_m).hypot(p.y_m - here.y_m), g)
             })
             .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
-            .filter(|&(d, _, _)| d > b.params().base_m)
-            .map(|(_, _, at)| at)
+    }
+
+    /// Where homing heads for (module docs) and how far it is: the map
+    /// position of the nearest goal place, unless the robot already stands
+    /// on its spot (within the recognition's base tolerance: it has looked
+    /// there).
+    fn homing_target(&self) -> Option<((f64, f64), f64)> {
+        let b = self.walker.builder();
+        self.nearest_goal(None)
+            .filter(|&(d, _)| d > b.params().base_m)
+            .map(|(d, g)| {
+                let p = b.map().place(g);
+                ((p.x_m, p.y_m), d)
+            })
     }
 
     /// A goal place the robot stands on the spot of at `at` (its map
     /// position within the recognition's distance tolerance), not
     /// recognised because the robot faces another way: the nearest.
     fn goal_on_spot(&self, at: PlaceId) -> Option<PlaceId> {
-        let b = self.walker.builder();
-        let map = b.map();
-        let here = b.map_pose(self.walker.odometry());
-        let tolerance_m = b.params().base_m;
-        self.goals
-            .iter()
-            .copied()
-            .filter(|&g| g != at)
-            .map(|g| {
-                let p = map.place(g);
-                ((p.x_m - here.x_m).hypot(p.y_m - here.y_m), g)
-            })
+        let tolerance_m = self.walker.builder().params().base_m;
+        self.nearest_goal(Some(at))
             .filter(|&(d, _)| d <= tolerance_m)
-            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
             .map(|(_, g)| g)
     }
 
@@ -601,12 +604,10 @@ impl RouteFollower {
                     return;
                 }
                 if self.params.homing
-                    && let Some(target) = self.homing_target()
+                    && let Some((target, d)) = self.homing_target()
                 {
                     self.expected = None;
                     self.stats.homings += 1;
-                    let here = self.walker.builder().map_pose(self.walker.odometry());
-                    let d = (target.0 - here.x_m).hypot(target.1 - here.y_m);
                     // The side homing goes round obstacles on: drawn once,
                     // kept while homing gets nearer, changed when a homing
                     // leg ended no nearer than it began.
