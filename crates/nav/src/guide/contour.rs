@@ -1286,7 +1286,8 @@ impl ContourTracker {
         // followed side's own half nearer than the middle (a wall ahead
         // on that side, which the look-ahead law turns away from). The
         // front sector's points on the other half are the far side of a
-        // passage here, not a wall ahead (module docs, passages).
+        // passage here, not a wall ahead, nor are remembered points behind
+        // the robot's centre (module docs, passages).
         let left = polar.nearest_in(deg(45.0), deg(135.0));
         let right = polar.nearest_in(deg(-135.0), deg(-45.0));
         // Only while moving (module docs, passages): a robot turning on
@@ -1523,7 +1524,7 @@ mod tests {
 
     #[test]
     fn a_box_passed_and_remembered_behind_is_not_a_wall_ahead_in_a_passage() {
-        // Following on the left, a box ahead-left at 0.63 m is remembered;
+        // Following on the left, a box ahead-left at 0.62 m is remembered;
         // 0.5 m on it is behind the robot, out of the laser's view, while
         // ahead lie a wall's end on the left and a low wall on the right at
         // 0.6 m: a passage, to be passed in its middle (module docs,
@@ -1532,7 +1533,7 @@ mod tests {
         let right_wall: Vec<(f64, f64)> = (-90..=-1)
             .map(|k| (k as f64, 0.6 / deg(-k as f64).sin()))
             .collect();
-        // Points at x = 0.3, y = 0.6 ± 0.03 (bearings 61–65°).
+        // Points at x = 0.3, y = 0.54–0.64 (bearings 61–65°).
         let mut first = right_wall.clone();
         first.extend((61..=65).map(|k| (k as f64, 0.3 / deg(k as f64).cos())));
         let mut t = ContourTracker::following(ContourParams::default(), Side::Left).unwrap();
