@@ -96,7 +96,10 @@ pub struct GoArgs {
     /// Where it goes: a place's NAME, or `x,y,theta`.
     #[arg(long, value_name = "NAME|X,Y,THETA", allow_hyphen_values = true)]
     to: String,
-    /// Per-tick trace as JSON lines: time, true pose, estimate, state, events.
+    /// Per-tick trace as JSON lines: time, true pose, estimate, state, events,
+    /// the command and the controller's notes (`notes`: MCL's scores and
+    /// effective sample size, Warning, contour tracking's mode, distance,
+    /// centred, gap).
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
     /// Watch the leg: one HTML file that opens offline in any browser, with the map, the
@@ -371,6 +374,8 @@ fn go(a: &GoArgs) -> Result<()> {
             seed: c.seed,
             trace: if a.html.is_some() {
                 sim::TraceParams::full()
+            } else if a.trace.is_some() {
+                sim::TraceParams::poses()
             } else {
                 sim::TraceParams::default()
             },
@@ -378,8 +383,9 @@ fn go(a: &GoArgs) -> Result<()> {
     )?;
     if let Some(path) = &a.trace {
         let f = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
+        let sim_trace = leg.sim.as_ref().and_then(|s| s.trace.as_ref());
         leg.trace
-            .write_json_lines(std::io::BufWriter::new(f))
+            .write_json_lines(sim_trace, std::io::BufWriter::new(f))
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(path) = &c.output {

@@ -92,8 +92,22 @@ fn a_leg_reaches_its_place_with_json_picture_and_trace() {
     assert!(image.width() > 200 && image.height() > 200);
     let ticks = std::fs::read_to_string(&trace).unwrap();
     let first: serde_json::Value = serde_json::from_str(ticks.lines().next().unwrap()).unwrap();
-    for key in ["time_s", "true_pose", "estimate", "state", "events"] {
+    for key in [
+        "time_s",
+        "true_pose",
+        "estimate",
+        "state",
+        "events",
+        "command",
+        "notes",
+    ] {
         assert!(first.get(key).is_some(), "trace key {key}");
+    }
+    // The controller's notes: the localizer's, every tick.
+    for line in ticks.lines() {
+        let tick: serde_json::Value = serde_json::from_str(line).unwrap();
+        let ess = tick["notes"]["effective_sample_size"].as_f64();
+        assert!(ess.is_some_and(|n| n > 0.0), "notes in {tick}");
     }
     let n = ticks.lines().count() as f64;
     assert!(

@@ -575,22 +575,39 @@ impl Whereabouts {
 
 impl LegTrace {
     /// Writes one JSON object per tick: time, true pose, estimate, state,
-    /// and the events of that tick.
-    pub fn write_json_lines(&self, mut out: impl std::io::Write) -> Result<()> {
+    /// and the events of that tick; with the simulator's trace of the leg
+    /// (`sim`), also the command and the controller's notes of the tick
+    /// (`notes`: name → value, e.g. MCL's `effective_sample_size`, contour
+    /// tracking's `contour_mode`; [`nav::guide::GuideController`]).
+    pub fn write_json_lines(&self, sim: Option<&sim::Trace>, mut out: impl std::io::Write) -> Result<()> {
         let mut events = self.events.iter().peekable();
+        let mut ticks = sim.map(|s| s.ticks.iter().peekable());
         for k in 0..self.times.len() {
             let t = self.times[k];
             let mut now = Vec::new();
             while let Some(e) = events.next_if(|e| e.time_s <= t + 1e-9) {
                 now.push(e);
             }
-            let line = serde_json::json!({
+            let mut line = serde_json::json!({
                 "time_s": t,
                 "true_pose": self.poses[k],
                 "estimate": self.estimates[k],
                 "state": self.labels[k],
                 "events": now,
             });
+            // The simulator's tick of the same time (one per control cycle).
+            if let Some(tick) = ticks
+                .as_mut()
+                .and_then(|it| it.next_if(|tick| (tick.time_s - t).abs() < 1e-9))
+            {
+                let notes: serde_json::Map<String, serde_json::Value> = tick
+                    .values
+                    .iter()
+                    .map(|&(name, v)| (name.to_string(), serde_json::json!(v)))
+                    .collect();
+                line["command"] = serde_json::json!(tick.command);
+                line["notes"] = serde_json::Value::Object(notes);
+            }
             serde_json::to_writer(&mut out, &line)?;
             out.write_all(b"\n")?;
         }
