@@ -55,7 +55,8 @@
 //!    back, free movement goes straight back. It leads to the spot of the
 //!    place the leg left, where the way back (2) finds a route. Only from
 //!    a place whose type allows the strategy (no wall following from a
-//!    (c) place), never after a detour, and once per new place;
+//!    (c) place), never after a detour or a turn on the spot, and once
+//!    per new place;
 //! 4. **homing** ([`NavigateParams::homing`]): head for the map position
 //!    of the nearest goal place — along the free heading (a transducer's
 //!    axis the ring sees clear) nearest its bearing if one is within 67.5°
@@ -908,7 +909,14 @@ impl RouteFollower {
                 if planned.is_some() && !as_planned {
                     self.stats.replans += 1;
                 }
-                self.retrace = if planned.is_some() && !as_planned && arrival.new {
+                // Not after a turn on the spot (a planned transition played
+                // as a turn, `exit_turn` straight): undoing a turn is no
+                // drive back.
+                self.retrace = if planned.is_some()
+                    && !as_planned
+                    && arrival.new
+                    && leg.action.exit_turn != Turn::Straight
+                {
                     self.retrace_of(arrival.place, leg.action.strategy, arrival.map_pose.theta_rad)
                 } else {
                     None
