@@ -312,7 +312,13 @@
 //! leg from there ended twice at one place (in 9 of the 27 failing
 //! office routes an unplanned leg from one place to another recurs
 //! three times or more: 90 / 80 / 81 % — in a
-//! room the map does not know, untried actions find the door no better).
+//! room the map does not know, untried actions find the door no better);
+//! after a retrace that ended at a new place short of the place it led
+//! back to (room 1's other jamb), homing toward that place instead of
+//! the goal (91 / 81 / 80 %: the office unchanged, 5 routes won and 5
+//! lost); retracing also a leg that ended at a known place without a
+//! route, not only at a new one (86 / 79 / 79 %: a known place is on
+//! ground the map covers, where homing does better than going back).
 //!
 //! What remains (30 explorations, 27 of the office's 300 routes fail, 22
 //! on the time limit, 5 declared arrived 0.5–1.8 m from the goal): in 19
