@@ -3,7 +3,9 @@
 //! follower heads for the goal place's map position, goes round what blocks
 //! the way, and turns on the goal's spot to recognise it.
 
-use nav::topo::{FuzzyPetriNet, NavState, NavigateParams, Place, PlaceKind, RouteFollower};
+use nav::topo::{
+    FuzzyPetriNet, NavState, NavigateParams, Place, PlaceKind, RouteFollower, Strategy, Transition, Turn,
+};
 use robot::Pose;
 use sim::shapes::{SegmentSpec, WorldSpec};
 use sim::{RobotParams, RunParams, Simulation, Task, World};
@@ -90,4 +92,107 @@ fn without_homing_the_robot_wanders() {
         .count();
     eprintln!("arrived {arrived}");
     assert!(arrived <= 2, "{arrived} of 6 arrived without homing");
+}
+
+/// Drives in `world` on `map` from place 0 (the robot at `start`) to place
+/// 1 until the follower has played `legs` legs (or `time_s` passed); the
+/// follower.
+fn legs_in(
+    world: &World,
+    map: FuzzyPetriNet,
+    start: Pose,
+    params: NavigateParams,
+    legs: usize,
+) -> RouteFollower {
+    let (from, goal) = (map.place_ids().next().unwrap(), map.place_ids().nth(1).unwrap());
+    let mut robot = RobotParams::sonar_ring();
+    robot.odometry.large_slip_probability = 0.0;
+    let run = RunParams {
+        time_limit_s: 240.0,
+        collision_fatal: false,
+        ..RunParams::default()
+    };
+    let mut sim = Simulation::new(world, robot, run, Task { start, goal: None }, 1).unwrap();
+    let mut follower = RouteFollower::new(map, from, &[goal], params, 1).unwrap();
+    while sim.tick(&mut follower).is_none()
+        && follower.state() == NavState::Going
+        && follower.legs().len() < legs
+    {}
+    follower
+}
+
+/// One room of 10 m × 6 m (x 1–11, y 1–7).
+fn hall() -> World {
+    let mut spec = WorldSpec::new(12.0, 8.0, 0.05);
+    spec.segments = vec![
+        wall([1.0, 1.0], [11.0, 1.0]),
+        wall([11.0, 1.0], [11.0, 7.0]),
+        wall([11.0, 7.0], [1.0, 7.0]),
+        wall([1.0, 7.0], [1.0, 1.0]),
+    ];
+    World::new(spec.rasterise().unwrap())
+}
+
+/// Homing drives along the transducer axis nearest the goal's bearing,
+/// which passes the goal's map position 0.6 m off: it stops once past the
+/// closest approach (issue 13: homing along a corridor drove past the door
+/// to the goal's room, to the corridor's end), not at the far wall.
+#[test]
+fn a_homing_leg_stops_once_past_the_goals_closest_approach() {
+    let mut map = FuzzyPetriNet::new();
+    map.add_place(Place::new(1.6, 3.0, std::f64::consts::PI, PlaceKind::C))
+        .unwrap();
+    map.add_place(Place::new(6.0, 4.2, std::f64::consts::FRAC_PI_2, PlaceKind::C))
+        .unwrap();
+    let start = Pose::new(1.6, 3.0, std::f64::consts::PI);
+    let first_stop = |params: NavigateParams| {
+        let f = legs_in(&hall(), map.clone(), start, params, 1);
+        assert!(f.stats().homings >= 1, "{:?}", f.stats());
+        let end = f.legs()[0].visit.map_pose;
+        (end.x_m - 6.0).hypot(end.y_m - 4.2)
+    };
+    let past = first_stop(NavigateParams::default());
+    assert!(past <= 1.2, "stopped {past:.2} m from the goal");
+    let on = first_stop(NavigateParams {
+        homing_stop_past: false,
+        ..NavigateParams::default()
+    });
+    assert!(on >= 3.0, "without stopping past: {on:.2} m from the goal");
+}
+
+/// A planned wall-following leg that ends at a new place (the map's
+/// transition from the south-west corner leads elsewhere now) is undone:
+/// the robot turns about and follows the same wall back to the corner it
+/// left (issue 13: legs that passed a door into a room the map did not
+/// know left the robot there, homing round the room).
+#[test]
+fn a_planned_leg_that_ends_off_the_net_is_retraced() {
+    let mut map = FuzzyPetriNet::new();
+    let corner = map
+        .add_place(Place::new(1.5, 1.5, -std::f64::consts::FRAC_PI_2, PlaceKind::B))
+        .unwrap();
+    let far = map.add_place(Place::new(8.4, 4.5, 0.0, PlaceKind::C)).unwrap();
+    let mut t = Transition::new(corner, far, Strategy::WallFollowRight, Turn::Left, 20.0);
+    t.leave_heading_rad = Some(0.0);
+    map.add_transition(t).unwrap();
+    let start = Pose::new(1.5, 1.5, -std::f64::consts::FRAC_PI_2);
+    let second_stop = |params: NavigateParams| {
+        let f = legs_in(&two_rooms(), map.clone(), start, params, 2);
+        assert!(
+            f.legs()[0].visit.new && !f.legs()[0].as_planned,
+            "{:?}",
+            f.legs()[0]
+        );
+        let end = f.legs()[1].visit.map_pose;
+        (f.stats(), (end.x_m - 1.5).hypot(end.y_m - 1.5))
+    };
+    let (stats, back) = second_stop(NavigateParams::default());
+    assert_eq!(stats.retraces, 1, "{stats:?}");
+    assert!(back <= 0.5, "came back {back:.2} m from the corner");
+    let (stats, back) = second_stop(NavigateParams {
+        retrace: false,
+        ..NavigateParams::default()
+    });
+    assert_eq!(stats.retraces, 0, "{stats:?}");
+    assert!(back >= 1.5, "without retracing: {back:.2} m from the corner");
 }

@@ -190,6 +190,12 @@ impl MapBuilder {
             )
             .map(|d| (q, d))
         });
+        // A match plain recognition would make too (module docs of
+        // [`super::recognition`]: only such a match recalibrates when
+        // `firm_recalibration`).
+        let firm = expected.is_none_or(|(q, d)| {
+            d <= tolerance_m && self.map.get_place(q).is_some_and(|p| p.kind == situation.kind)
+        });
         let found =
             expected.or_else(|| match_place(&self.map, pose, situation.kind, tolerance_m, heading_tol));
         let Some((place, _)) = found else {
@@ -208,7 +214,7 @@ impl MapBuilder {
         };
         self.map.record_visit(place)?;
         let known = self.map.place(place).clone();
-        let recalibrated = known.concave && situation.concave;
+        let recalibrated = known.concave && situation.concave && (firm || !self.params.firm_recalibration);
         let mut heading_recalibrated = false;
         if recalibrated {
             if let Some(h) = aligned {
@@ -431,6 +437,57 @@ mod tests {
             b.arrive(&corner(PlaceKind::C, false), far, expect).unwrap().place,
             p
         );
+    }
+
+    /// Issue 13: a stop 0.7 m and 43° off the expected concave place,
+    /// taken for it only thanks to the expected place's extra tolerance,
+    /// moved the map pose by 0.7 m, and no place was recognised after.
+    #[test]
+    fn a_match_only_the_expectation_allows_does_not_recalibrate() {
+        let arrive_far = |params: RecognitionParams| {
+            let mut b = MapBuilder::new(params).unwrap();
+            let p = b
+                .arrive(
+                    &corner(PlaceKind::A, true),
+                    Pose::new(0.0, 0.0, 0.0),
+                    Cues::default(),
+                )
+                .unwrap()
+                .place;
+            let far = Pose::new(0.7, 0.0, 0.0);
+            let expect = Cues {
+                aligned_heading_rad: None,
+                expected: Some(p),
+            };
+            let a = b.arrive(&corner(PlaceKind::A, true), far, expect).unwrap();
+            assert_eq!(a.place, p);
+            (a.recalibrated, b.map_pose(far).x_m)
+        };
+        assert_eq!(arrive_far(RecognitionParams::default()), (false, 0.7));
+        let loose = RecognitionParams {
+            firm_recalibration: false,
+            ..RecognitionParams::default()
+        };
+        let (recalibrated, x) = arrive_far(loose);
+        assert!(recalibrated && x.abs() < 1e-12, "{x}");
+        // Within the plain tolerance it recalibrates, as before.
+        let mut b = MapBuilder::new(RecognitionParams::default()).unwrap();
+        let p = b
+            .arrive(
+                &corner(PlaceKind::A, true),
+                Pose::new(0.0, 0.0, 0.0),
+                Cues::default(),
+            )
+            .unwrap()
+            .place;
+        let near = Cues {
+            aligned_heading_rad: None,
+            expected: Some(p),
+        };
+        let a = b
+            .arrive(&corner(PlaceKind::A, true), Pose::new(0.3, 0.0, 0.0), near)
+            .unwrap();
+        assert!(a.recalibrated);
     }
 
     #[test]

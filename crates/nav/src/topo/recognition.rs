@@ -30,7 +30,17 @@
 //! Matching a **concave** place from a concave situation **recalibrates**
 //! odometry: the robot's map position is reset to the place's (its two
 //! walls put the robot where it was when it recorded the place, to within
-//! the strategies' stopping precision) and `s` returns to 0.
+//! the strategies' stopping precision) and `s` returns to 0 — but only on
+//! a **firm** match ([`RecognitionParams::firm_recalibration`]): one that
+//! plain recognition would make too (same type, within the distance
+//! tolerance). The expected place matched only thanks to its extra
+//! tolerance or a compatible type is taken as the place, since the route
+//! says it should be there, but is weaker evidence of where the robot
+//! stands than its odometry: in a failing office route (issue 13) a stop
+//! 0.7 m and 43° off the expected place, on the other side of a room's
+//! corner, moved the map pose by 0.7 m, and no place was recognised for
+//! the rest of the route (40 legs between two new places on the goal's
+//! very spot).
 //!
 //! The **heading** is recalibrated too when both the place's heading and
 //! the robot's were measured **along a wall**: wall following that tracked
@@ -66,6 +76,12 @@ pub struct RecognitionParams {
     /// Steady wall tracking needed before a stop for its heading to count
     /// as aligned with the wall, metres. Default 1.0.
     pub align_min_run_m: f64,
+    /// Recalibrate only on a match that plain recognition would make too
+    /// (same type, within the distance tolerance): the expected place
+    /// matched only thanks to its extra tolerance or a compatible type
+    /// is taken as the place, but does not move the robot's map pose
+    /// (module docs). Default true.
+    pub firm_recalibration: bool,
 }
 
 impl Default for RecognitionParams {
@@ -77,6 +93,7 @@ impl Default for RecognitionParams {
             heading_tolerance_rad: std::f64::consts::FRAC_PI_4,
             expected_extra_m: 0.5,
             align_min_run_m: 1.0,
+            firm_recalibration: true,
         }
     }
 }

@@ -453,6 +453,12 @@ impl Executor {
         }
     }
 
+    /// A detour still going round its obstacle (not yet back on its
+    /// heading).
+    pub fn rounding(&self) -> bool {
+        self.rounding && self.strategy.detour_side().is_some()
+    }
+
     /// The strategy played.
     pub fn strategy(&self) -> Strategy {
         self.strategy

@@ -22,6 +22,11 @@ const STOPPED_MPS: f64 = 0.01;
 /// point, metres.
 const HOMING_REACHED_M: f64 = 0.2;
 
+/// A homing leg with a passing margin ([`Walker::start_homing`]) stops once
+/// it drives straight on this much farther from its point than the nearest
+/// it came, metres.
+pub const HOMING_PASSED_M: f64 = 0.25;
+
 /// A leg: where it started (if at a known place) and what it plays.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Leg {
@@ -80,6 +85,11 @@ pub struct Walker {
     unrecorded: bool,
     /// The point a homing leg heads for (map frame).
     homing_target: Option<(f64, f64)>,
+    /// A homing leg stops once past its point's closest approach, if that
+    /// came nearer than this, metres.
+    homing_stop_past: Option<f64>,
+    /// The nearest the homing leg has come to its point so far, metres.
+    homing_nearest_m: f64,
 }
 
 impl Walker {
@@ -103,6 +113,8 @@ impl Walker {
             odom: Pose::default(),
             unrecorded: false,
             homing_target: None,
+            homing_stop_past: None,
+            homing_nearest_m: f64::INFINITY,
         })
     }
 
@@ -129,6 +141,13 @@ impl Walker {
     /// The leg being played.
     pub fn leg(&self) -> Option<Leg> {
         self.leg.as_ref().map(|(l, _)| *l)
+    }
+
+    /// The nearest the last homing leg came to its point, driving
+    /// straight on (since its last detour), metres; infinite if it never
+    /// did.
+    pub fn homing_nearest_m(&self) -> f64 {
+        self.homing_nearest_m
     }
 
     /// The last odometry pose seen.
@@ -172,8 +191,14 @@ impl Walker {
     /// where the robot stands ([`Executor::homing`]), expecting nothing;
     /// the place it ends at is recognised or added, but no transition is
     /// recorded for it (its course depends on where it started from, not
-    /// on a strategy that could be played again).
-    pub fn start_homing(&mut self, target: (f64, f64), side: Option<Turn>) {
+    /// on a strategy that could be played again). With `stop_past`, the
+    /// leg also stops once, driving straight on (not rounding an
+    /// obstacle), it is [`HOMING_PASSED_M`] farther from the point than
+    /// the nearest it came, if that was nearer than `stop_past` metres:
+    /// it has passed the point's closest approach along its line, and
+    /// going on leads away from it ([`Walker::homing_nearest_m`] says how
+    /// near it came).
+    pub fn start_homing(&mut self, target: (f64, f64), side: Option<Turn>, stop_past: Option<f64>) {
         let here = self.builder.map_pose(self.odom);
         let bearing = (target.1 - here.y_m).atan2(target.0 - here.x_m);
         self.start(Action {
@@ -182,6 +207,8 @@ impl Walker {
         });
         if let Some((_, ex)) = &mut self.leg {
             self.homing_target = Some(target);
+            self.homing_stop_past = stop_past;
+            self.homing_nearest_m = f64::INFINITY;
             *ex = Executor::homing(
                 self.strategy,
                 self.odom.theta_rad,
@@ -259,8 +286,22 @@ impl Walker {
         let stopped = l.abs() < STOPPED_MPS && r.abs() < STOPPED_MPS;
         if let Some((x, y)) = self.homing_target {
             let here = self.builder.map_pose(p.odometry);
-            if (x - here.x_m).hypot(y - here.y_m) <= HOMING_REACHED_M {
+            let d = (x - here.x_m).hypot(y - here.y_m);
+            if d <= HOMING_REACHED_M {
                 ex.brake();
+            }
+            if ex.rounding() {
+                // Round an obstacle the distance may grow: measured again
+                // from where the detour is back on its heading.
+                self.homing_nearest_m = f64::INFINITY;
+            } else if ex.turned() {
+                if self
+                    .homing_stop_past
+                    .is_some_and(|m| self.homing_nearest_m < m && d > self.homing_nearest_m + HOMING_PASSED_M)
+                {
+                    ex.brake();
+                }
+                self.homing_nearest_m = self.homing_nearest_m.min(d);
             }
         }
         let progress = ex.step(&ring, p.odometry.theta_rad, stopped, dt_s);
