@@ -868,6 +868,9 @@ impl ContourTracker {
         let in_gap = self.gap.is_some();
         // Leave, or hit.
         let mut waiting = false;
+        // Seeking, stopped at a hit with the goal not ahead: turn to it on
+        // the spot, asking.
+        let mut turning_to_goal = false;
         match self.mode {
             ContourMode::Follow { hit_goal_m, .. } => {
                 let length = p.leave_clear_m.min(goal_m);
@@ -883,24 +886,25 @@ impl ContourTracker {
             }
             ContourMode::Seek => {
                 let blocked_ahead = !clear_along(&points, 0.0, half, p.hit_m);
-                // A hit is on the way to the goal: a robot still turning
-                // towards it has not hit anything yet (module docs, the
-                // leave rule).
-                let blocked_goal = goal_bearing.abs() < FACING_RAD
-                    && !clear_along(&points, goal_bearing, half, p.hit_m.min(goal_m));
+                let blocked_goal = !clear_along(&points, goal_bearing, half, p.hit_m.min(goal_m));
                 if blocked_ahead && blocked_goal && !in_gap {
                     // Stop and ask first: a person steps aside, a wall
-                    // does not.
+                    // does not. Then, if the goal is not ahead, turn to it
+                    // on the spot (still asking) before choosing the side
+                    // to follow: the side is chosen from a scan that sees
+                    // the goal's way (module docs, the leave rule).
                     let since = *self.hit_since.get_or_insert(time_s);
-                    if time_s - since >= p.hit_wait_s {
+                    if time_s - since < p.hit_wait_s {
+                        waiting = true;
+                    } else if goal_bearing.abs() >= FACING_RAD {
+                        turning_to_goal = true;
+                    } else {
                         let side = self.free_side(&points, goal_bearing, half);
                         self.mode = ContourMode::Follow {
                             side,
                             hit_goal_m: goal_m,
                         };
                         self.hit_since = None;
-                    } else {
-                        waiting = true;
                     }
                 } else {
                     self.hit_since = None;
@@ -943,9 +947,11 @@ impl ContourTracker {
         let free = free_ahead(&points, body);
         let slow_within = if in_gap { 0.3 } else { p.distance_m + 1.0 - body };
         let room = (free / slow_within).clamp(0.0, 1.0);
-        let mut held = waiting;
+        let mut held = waiting || turning_to_goal;
         if waiting {
             psi = 0.0;
+        } else if turning_to_goal {
+            self.turning = None;
         } else if room == 0.0 && (psi.abs() < FACING_RAD || self.turning.is_some()) {
             // Blocked the way it wants to go: turn on the spot, away from
             // the contour (or towards the freer side when seeking), and keep
@@ -973,7 +979,7 @@ impl ContourTracker {
             (p.k_heading * psi).clamp(-p.max_turn_radps, p.max_turn_radps)
         };
         let top = if in_gap { p.creep_mps } else { p.cruise_mps };
-        let wanted = if waiting {
+        let wanted = if waiting || turning_to_goal {
             0.0
         } else {
             top * psi.cos().max(0.0) * room
@@ -1005,7 +1011,7 @@ impl ContourTracker {
             })
         } else if held {
             let since = *self.held_since.get_or_insert(time_s);
-            (waiting || time_s - since >= p.ask_after_s).then_some(Request::StepAside {
+            (waiting || turning_to_goal || time_s - since >= p.ask_after_s).then_some(Request::StepAside {
                 radius_m: p.ask_radius_m,
             })
         } else {
