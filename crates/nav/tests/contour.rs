@@ -296,15 +296,15 @@ fn building_31_the_way_out_of_the_room_south_of_the_middle_corridor() {
 }
 
 #[test]
-fn levine_a_goal_behind_the_robot_is_faced_before_anything_is_hit() {
+fn levine_a_goal_behind_the_robot_is_faced_before_the_side_is_chosen() {
     // From south_west_end, arriving there facing south as a tour does, to
     // south_west (maps/levine/places.yaml): the goal is behind on the left,
     // round the corner to the north. Turning towards it, the robot faced
     // the corridor's wall, and its way "to the goal" counted as blocked
     // 20° into the turn: it followed the corridor south, round the loop,
-    // and arrived after 130–180 s or not at all (2 of 9 tours). A hit is
-    // now only on the way to the goal, facing it: 38 s here (35 s with the
-    // localizer in `lab run maps`).
+    // and arrived after 130–180 s or not at all (2 of 9 tours). The side
+    // is now chosen facing the goal, after the stop to ask (module docs,
+    // the leave rule).
     let world = real_map("levine");
     let (_, r) = seek(
         &world,
