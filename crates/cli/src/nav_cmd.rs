@@ -400,7 +400,7 @@ fn go(a: &GoArgs) -> Result<()> {
     print_legs(std::slice::from_ref(&leg), c.json)?;
     if let Some(path) = &a.html {
         let record = lab::suites::maps::leg_record(&leg)?;
-        let replay = lab::suites::maps::leg_replay(record, setup.world.grid(), &mut leg, to.pose.position())?;
+        let replay = lab::suites::maps::leg_replay(record, &setup, &mut leg, to.pose.position())?;
         let key = format!("{} → {} (seed {})", from.name, to.name, c.seed);
         lab::viewer::write_page(&replay, &lab::suites::maps::MARKERS, "nav go", &key, path)?;
     }

@@ -297,13 +297,9 @@ pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
 
 /// A leg run with a simulator trace ([`mission::LegSpec::trace`]) as a
 /// replay to draw, watch or export (`nav go --html`): its `record` (e.g.
-/// [`leg_record`]), the trace taken out of the leg, the map and the goal.
-pub fn leg_replay(
-    record: RunRecord,
-    grid: &sim::OccupancyGrid,
-    leg: &mut LegRun,
-    goal: Vec2,
-) -> Result<Replay> {
+/// [`leg_record`]), the trace taken out of the leg, the setup it ran in
+/// (map, robot) and the goal.
+pub fn leg_replay(record: RunRecord, setup: &MissionSetup, leg: &mut LegRun, goal: Vec2) -> Result<Replay> {
     Ok(Replay {
         record,
         trace: leg
@@ -311,10 +307,11 @@ pub fn leg_replay(
             .as_mut()
             .and_then(|s| s.trace.take())
             .context("the leg was run without a simulator trace")?,
-        grid: grid.clone(),
+        grid: setup.world.grid().clone(),
         goal: Some(goal),
-        robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
-        control_period_s: 0.1,
+        robot_radius_m: setup.robot.drive.radius_m,
+        // `mission::run_leg` runs at the simulator's default period.
+        control_period_s: sim::RunParams::default().control_period_s,
     })
 }
 
@@ -498,6 +495,6 @@ impl MapsSuite {
         let s = self.scenario(&job.scenario)?;
         let data = self.map(s.map)?;
         let k = (job.run % self.legs(s.map)?) as usize;
-        leg_replay(record, data.world.grid(), leg, data.stops[k + 1].pose.position())
+        leg_replay(record, &data.setup, leg, data.stops[k + 1].pose.position())
     }
 }
