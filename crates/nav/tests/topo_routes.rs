@@ -18,17 +18,22 @@ fn wall(from: [f64; 2], to: [f64; 2]) -> SegmentSpec {
     }
 }
 
+/// The four walls of a rectangle from (x0, y0) to (x1, y1).
+fn box_walls(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<SegmentSpec> {
+    vec![
+        wall([x0, y0], [x1, y0]),
+        wall([x1, y0], [x1, y1]),
+        wall([x1, y1], [x0, y1]),
+        wall([x0, y1], [x0, y0]),
+    ]
+}
+
 /// Two rooms of 4 m × 4 m side by side (x 1–5 and 5–9, y 1–5), joined by
 /// a 1.2 m door at the north end of the wall between them (y 3.8–5).
 fn two_rooms() -> World {
     let mut spec = WorldSpec::new(10.0, 6.0, 0.05);
-    spec.segments = vec![
-        wall([1.0, 1.0], [9.0, 1.0]),
-        wall([9.0, 1.0], [9.0, 5.0]),
-        wall([9.0, 5.0], [1.0, 5.0]),
-        wall([1.0, 5.0], [1.0, 1.0]),
-        wall([5.0, 1.0], [5.0, 3.8]),
-    ];
+    spec.segments = box_walls(1.0, 1.0, 9.0, 5.0);
+    spec.segments.push(wall([5.0, 1.0], [5.0, 3.8]));
     World::new(spec.rasterise().unwrap())
 }
 
@@ -46,13 +51,26 @@ fn map() -> FuzzyPetriNet {
 /// Drives from place 0 to place 1 for at most `time_s`; how it ended, the
 /// true distance to the goal's position, and the follower.
 fn drive(params: NavigateParams, seed: u64, time_s: f64) -> (NavState, f64, RouteFollower) {
-    let world = two_rooms();
-    let map = map();
-    let (start, goal) = (map.place_ids().next().unwrap(), map.place_ids().nth(1).unwrap());
-    let task = Task {
-        start: Pose::new(1.6, 3.0, std::f64::consts::PI),
-        goal: None,
-    };
+    let start = Pose::new(1.6, 3.0, std::f64::consts::PI);
+    let (end, follower) = follow(&two_rooms(), map(), start, params, seed, time_s, usize::MAX);
+    let d = end.position().dist(robot::Vec2::new(8.4, 3.0));
+    (follower.state(), d, follower)
+}
+
+/// Drives in `world` on `map` from place 0 (the robot at `start`) to place
+/// 1, `seed` for the simulation and the follower, until the follower is
+/// no longer going, has played `legs` legs, or `time_s` passed; the true
+/// final pose and the follower.
+fn follow(
+    world: &World,
+    map: FuzzyPetriNet,
+    start: Pose,
+    params: NavigateParams,
+    seed: u64,
+    time_s: f64,
+    legs: usize,
+) -> (Pose, RouteFollower) {
+    let (from, goal) = (map.place_ids().next().unwrap(), map.place_ids().nth(1).unwrap());
     let mut robot = RobotParams::sonar_ring();
     robot.odometry.large_slip_probability = 0.0;
     let run = RunParams {
@@ -60,11 +78,13 @@ fn drive(params: NavigateParams, seed: u64, time_s: f64) -> (NavState, f64, Rout
         collision_fatal: false,
         ..RunParams::default()
     };
-    let mut sim = Simulation::new(&world, robot, run, task, seed).unwrap();
-    let mut follower = RouteFollower::new(map, start, &[goal], params, seed).unwrap();
-    while sim.tick(&mut follower).is_none() && follower.state() == NavState::Going {}
-    let d = sim.pose().position().dist(robot::Vec2::new(8.4, 3.0));
-    (follower.state(), d, follower)
+    let mut sim = Simulation::new(world, robot, run, Task { start, goal: None }, seed).unwrap();
+    let mut follower = RouteFollower::new(map, from, &[goal], params, seed).unwrap();
+    while sim.tick(&mut follower).is_none()
+        && follower.state() == NavState::Going
+        && follower.legs().len() < legs
+    {}
+    (sim.pose(), follower)
 }
 
 #[test]
@@ -94,9 +114,8 @@ fn without_homing_the_robot_wanders() {
     assert!(arrived <= 2, "{arrived} of 6 arrived without homing");
 }
 
-/// Drives in `world` on `map` from place 0 (the robot at `start`) to place
-/// 1 until the follower has played `legs` legs (or `time_s` passed); the
-/// follower.
+/// The follower after `legs` legs from place 0 (the robot at `start`) in
+/// `world` on `map` (seed 1, at most 240 s).
 fn legs_in(
     world: &World,
     map: FuzzyPetriNet,
@@ -104,32 +123,13 @@ fn legs_in(
     params: NavigateParams,
     legs: usize,
 ) -> RouteFollower {
-    let (from, goal) = (map.place_ids().next().unwrap(), map.place_ids().nth(1).unwrap());
-    let mut robot = RobotParams::sonar_ring();
-    robot.odometry.large_slip_probability = 0.0;
-    let run = RunParams {
-        time_limit_s: 240.0,
-        collision_fatal: false,
-        ..RunParams::default()
-    };
-    let mut sim = Simulation::new(world, robot, run, Task { start, goal: None }, 1).unwrap();
-    let mut follower = RouteFollower::new(map, from, &[goal], params, 1).unwrap();
-    while sim.tick(&mut follower).is_none()
-        && follower.state() == NavState::Going
-        && follower.legs().len() < legs
-    {}
-    follower
+    follow(world, map, start, params, 1, 240.0, legs).1
 }
 
 /// One room of 10 m × 6 m (x 1–11, y 1–7).
 fn hall() -> World {
     let mut spec = WorldSpec::new(12.0, 8.0, 0.05);
-    spec.segments = vec![
-        wall([1.0, 1.0], [11.0, 1.0]),
-        wall([11.0, 1.0], [11.0, 7.0]),
-        wall([11.0, 7.0], [1.0, 7.0]),
-        wall([1.0, 7.0], [1.0, 1.0]),
-    ];
+    spec.segments = box_walls(1.0, 1.0, 11.0, 7.0);
     World::new(spec.rasterise().unwrap())
 }
 
