@@ -556,7 +556,8 @@ fn nearest_to(points: &[Vec2], q: Vec2) -> Option<Vec2> {
 const OFFSET_STEPS: usize = 4;
 
 /// The robot faces a direction within this angle of it, radians: only
-/// then is the way it wants to go blocked (a turn on the spot, a hit).
+/// then does a blocked way start a turn on the spot, and only then is the
+/// side to follow chosen at a hit.
 const FACING_RAD: f64 = 0.3;
 
 /// The point of the offset curve — `d` from the contour, no nearer to any
@@ -957,7 +958,10 @@ impl ContourTracker {
         let free = free_ahead(&points, body);
         let slow_within = if in_gap { 0.3 } else { p.distance_m + 1.0 - body };
         let room = (free / slow_within).clamp(0.0, 1.0);
-        let mut held = waiting || turning_to_goal;
+        // Stopped at a hit (waiting, or turning to the goal): held up, and
+        // asking at once.
+        let at_hit = waiting || turning_to_goal;
+        let mut held = at_hit;
         if waiting {
             psi = 0.0;
         } else if turning_to_goal {
@@ -989,7 +993,7 @@ impl ContourTracker {
             (p.k_heading * psi).clamp(-p.max_turn_radps, p.max_turn_radps)
         };
         let top = if in_gap { p.creep_mps } else { p.cruise_mps };
-        let wanted = if waiting || turning_to_goal {
+        let wanted = if at_hit {
             0.0
         } else {
             top * psi.cos().max(0.0) * room
@@ -1021,7 +1025,7 @@ impl ContourTracker {
             })
         } else if held {
             let since = *self.held_since.get_or_insert(time_s);
-            (waiting || turning_to_goal || time_s - since >= p.ask_after_s).then_some(Request::StepAside {
+            (at_hit || time_s - since >= p.ask_after_s).then_some(Request::StepAside {
                 radius_m: p.ask_radius_m,
             })
         } else {
