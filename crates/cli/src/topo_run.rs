@@ -139,7 +139,8 @@ pub fn explore(a: &ExploreArgs) -> Result<()> {
         topo::picture(world.grid(), &e.map, Some(&e.truth), poses.as_deref(), p)?;
     }
     let r = e.recognition;
-    let connected = topo::strongly_connected(&e.map);
+    let c = topo::connectivity(&e.map);
+    let connected = c.strongly_connected();
     if a.json {
         outln!(
             "{}",
@@ -150,7 +151,9 @@ pub fn explore(a: &ExploreArgs) -> Result<()> {
                 "places": e.map.num_places(),
                 "transitions": e.map.num_transitions(),
                 "stops": e.visits.len(),
+                "connected": c.connected,
                 "strongly_connected": connected,
+                "largest_strongly_connected_places": c.largest_strong,
                 "recognition": {
                     "true_positives": r.true_positives,
                     "false_positives": r.false_positives,
@@ -182,13 +185,24 @@ pub fn explore(a: &ExploreArgs) -> Result<()> {
                 ("transitions", e.map.num_transitions().to_string()),
                 ("stops", e.visits.len().to_string()),
                 (
-                    "strongly connected",
-                    if connected {
+                    "connected",
+                    if c.connected {
                         "yes"
                     } else {
-                        "no (some places cannot reach others)"
+                        "no (the net is in pieces)"
                     }
                     .to_string()
+                ),
+                (
+                    "strongly connected",
+                    if connected {
+                        "yes".to_string()
+                    } else {
+                        format!(
+                            "no (the largest part whose places all reach each other holds {} of {})",
+                            c.largest_strong, c.places
+                        )
+                    }
                 ),
                 (
                     "recognition",

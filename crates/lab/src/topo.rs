@@ -274,42 +274,106 @@ pub fn explore(world: &World, spec: &ExploreSpec) -> Result<Exploration> {
     })
 }
 
-/// Whether every place of `map` can reach every other (the net is strongly
-/// connected), following transitions not rejected outright (`λ > 0`).
-pub fn strongly_connected(map: &FuzzyPetriNet) -> bool {
-    let n = map.num_places();
-    if n <= 1 {
-        return true;
+/// How a map's places hang together, following transitions not rejected
+/// outright (`λ > 0`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Connectivity {
+    /// Places.
+    pub places: usize,
+    /// The net is connected (Murata's sense: its graph, arcs taken either
+    /// way, is in one piece).
+    pub connected: bool,
+    /// Places of the largest strongly connected part (every place of it
+    /// can reach every other).
+    pub largest_strong: usize,
+}
+
+impl Connectivity {
+    /// Every place can reach every other.
+    pub fn strongly_connected(&self) -> bool {
+        self.largest_strong == self.places
     }
-    let reach = |forward: bool| -> usize {
-        let mut seen = vec![false; n];
-        let mut stack = vec![0usize];
-        seen[0] = true;
-        let mut count = 1;
-        while let Some(p) = stack.pop() {
-            let id = PlaceId(p as u32);
-            let next: Vec<usize> = if forward {
-                map.leaving(id)
-                    .iter()
-                    .map(|&t| map.transition(t).to.0 as usize)
-                    .collect()
+}
+
+/// The connectivity of `map` (Kosaraju: a depth-first finishing order on
+/// the transitions, then the parts on the reversed ones, both iterative).
+pub fn connectivity(map: &FuzzyPetriNet) -> Connectivity {
+    let n = map.num_places();
+    let mut out: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut back: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for t in map.transitions().iter().filter(|t| t.lambda > 0.0) {
+        let (a, b) = (t.from.0 as usize, t.to.0 as usize);
+        out[a].push(b);
+        back[b].push(a);
+    }
+    // Finishing order of a depth-first search on `out`.
+    let mut order = Vec::with_capacity(n);
+    let mut seen = vec![false; n];
+    for root in 0..n {
+        if seen[root] {
+            continue;
+        }
+        seen[root] = true;
+        let mut stack = vec![(root, 0usize)];
+        while let Some((v, k)) = stack.pop() {
+            if let Some(&w) = out[v].get(k) {
+                stack.push((v, k + 1));
+                if !seen[w] {
+                    seen[w] = true;
+                    stack.push((w, 0));
+                }
             } else {
-                map.entering(id)
-                    .iter()
-                    .map(|&t| map.transition(t).from.0 as usize)
-                    .collect()
-            };
-            for q in next {
-                if !seen[q] {
-                    seen[q] = true;
-                    count += 1;
-                    stack.push(q);
+                order.push(v);
+            }
+        }
+    }
+    // Strong parts on `back`, latest finished first.
+    let mut part = vec![usize::MAX; n];
+    let mut largest_strong = 0;
+    for &root in order.iter().rev() {
+        if part[root] != usize::MAX {
+            continue;
+        }
+        part[root] = root;
+        let (mut size, mut stack) = (0, vec![root]);
+        while let Some(v) = stack.pop() {
+            size += 1;
+            for &w in &back[v] {
+                if part[w] == usize::MAX {
+                    part[w] = root;
+                    stack.push(w);
                 }
             }
         }
-        count
-    };
-    reach(true) == n && reach(false) == n
+        largest_strong = largest_strong.max(size);
+    }
+    // One piece with arcs either way.
+    let mut reached = vec![false; n];
+    let mut stack: Vec<usize> = (0..n.min(1)).collect();
+    let mut count = stack.len();
+    if let Some(&r) = stack.first() {
+        reached[r] = true;
+    }
+    while let Some(v) = stack.pop() {
+        for &w in out[v].iter().chain(&back[v]) {
+            if !reached[w] {
+                reached[w] = true;
+                count += 1;
+                stack.push(w);
+            }
+        }
+    }
+    Connectivity {
+        places: n,
+        connected: count == n,
+        largest_strong,
+    }
+}
+
+/// Whether every place of `map` can reach every other (the net is strongly
+/// connected), following transitions not rejected outright (`λ > 0`).
+pub fn strongly_connected(map: &FuzzyPetriNet) -> bool {
+    connectivity(map).strongly_connected()
 }
 
 /// How a route is driven.
@@ -705,6 +769,55 @@ mod tests {
             },
             transition: None,
         }
+    }
+
+    /// Places p1…pn and transitions `(from, to, λ)` (1-based places).
+    fn net(n: usize, arcs: &[(u32, u32, f64)]) -> FuzzyPetriNet {
+        use nav::topo::{Place, PlaceKind, Transition};
+        let mut net = FuzzyPetriNet::new();
+        for i in 0..n {
+            net.add_place(Place::new(i as f64, 0.0, 0.0, PlaceKind::A))
+                .unwrap();
+        }
+        for &(a, b, lambda) in arcs {
+            let mut t = Transition::new(
+                PlaceId(a - 1),
+                PlaceId(b - 1),
+                Strategy::FreeMovement,
+                Turn::Right,
+                1.0,
+            );
+            t.lambda = lambda;
+            net.add_transition(t).unwrap();
+        }
+        net
+    }
+
+    #[test]
+    fn connectivity_of_hand_made_nets() {
+        let c = |n, arcs: &[(u32, u32, f64)]| {
+            let k = connectivity(&net(n, arcs));
+            (k.connected, k.largest_strong, k.strongly_connected())
+        };
+        // A walk that never comes back to its start: connected, and only
+        // the cycle p2 → p3 → p4 → p2 is strongly connected.
+        assert_eq!(
+            c(
+                5,
+                &[(1, 2, 1.0), (2, 3, 1.0), (3, 4, 1.0), (4, 2, 1.0), (4, 5, 1.0)]
+            ),
+            (true, 3, false)
+        );
+        // Closed: strongly connected.
+        assert_eq!(c(3, &[(1, 2, 1.0), (2, 3, 1.0), (3, 1, 1.0)]), (true, 3, true));
+        // Two pieces (a failed leg left no transition).
+        assert_eq!(c(4, &[(1, 2, 1.0), (2, 1, 1.0), (3, 4, 1.0)]), (false, 2, false));
+        // A rejected transition (λ = 0) does not count.
+        assert_eq!(c(2, &[(1, 2, 1.0), (2, 1, 0.0)]), (true, 1, false));
+        assert_eq!(c(2, &[(1, 2, 0.0)]), (false, 1, false));
+        // One place; none.
+        assert_eq!(c(1, &[]), (true, 1, true));
+        assert_eq!(c(0, &[]), (true, 0, true));
     }
 
     #[test]

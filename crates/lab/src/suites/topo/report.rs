@@ -147,7 +147,7 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
     // 1. Explorations.
     blocks.push(Block::Heading("Exploring: the nets the robot built".into()));
     let mut md = String::from(
-        "| world | explorations | connected | places | transitions | stops | recognition precision | recall | recalibrations | odometry drift at the end (m) |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| world | explorations | connected | strongly connected | largest strongly connected part | places | transitions | stops | recognition precision | recall | recalibrations | odometry drift at the end (m) |\n|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let mut explanation = String::new();
     let mut figures = Vec::new();
@@ -158,6 +158,14 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
             continue;
         }
         let connected = Proportion::new(ex.iter().filter(|(_, r)| r.success).count(), ex.len(), CONFIDENCE);
+        let weakly = Proportion::new(
+            ex.iter()
+                .filter(|(_, r)| r.metric(metric::CONNECTED).is_some_and(|v| v > 0.5))
+                .count(),
+            ex.len(),
+            CONFIDENCE,
+        );
+        let share = mean_metric(&ex, metric::STRONG_SHARE);
         let (tp, fp, fn_) = (
             metric_sum(&ex, metric::TP),
             metric_sum(&ex, metric::FP),
@@ -169,9 +177,11 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
         let drift = Mean::new(&drift, CONFIDENCE);
         let _ = writeln!(
             md,
-            "| {world} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
+            "| {world} | {} | {} | {} | {:.0} % of the places | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
             ex.len(),
+            percent(&weakly),
             percent(&connected),
+            100.0 * share.mean,
             one_decimal(&mean_metric(&ex, metric::PLACES)),
             one_decimal(&mean_metric(&ex, metric::TRANSITIONS)),
             one_decimal(&mean_metric(&ex, metric::STOPS)),
@@ -182,9 +192,12 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
         );
         let _ = write!(
             explanation,
-            "**{world}.** {} of {} explorations built a strongly connected net. Over all their stops the robot recognised a place it truly stood at {tp:.0} times, took a place for another {fp:.0} times and failed to recognise one it knew {fn_:.0} times: precision {precision:.2}, recall {recall:.2} (a stop is at a known place when the true pose is within {} m of where that place was recorded and the robot faces the same way within 45°). ",
-            connected.successes,
+            "**{world}.** {} of {} explorations built a connected net (its graph in one piece) and {} a strongly connected one; on average the largest strongly connected part held {:.0} % of the places (the rest: places the robot left and never came back to, such as the first ones, found from where it happened to start, and the last ones, found just before the time ran out); {:.1} legs per exploration found no place, and after each the robot starts again from nowhere known, so the net falls into pieces unless it recognises the next place it stops at. Over all their stops the robot recognised a place it truly stood at {tp:.0} times, took a place for another {fp:.0} times and failed to recognise one it knew {fn_:.0} times: precision {precision:.2}, recall {recall:.2} (a stop is at a known place when the true pose is within {} m of where that place was recorded and the robot faces the same way within 45°). ",
+            weakly.successes,
             connected.n,
+            connected.successes,
+            100.0 * share.mean,
+            mean_metric(&ex, metric::FAILED_LEGS).mean,
             topo::SAME_PLACE_M
         );
         let _ = writeln!(
