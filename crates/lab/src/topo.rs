@@ -771,26 +771,21 @@ mod tests {
         }
     }
 
-    /// Places p1…pn and transitions `(from, to, λ)` (1-based places).
+    /// Places p1…pn and transitions `(from, to, λ)` (1-based places), as
+    /// a map file would hold them.
     fn net(n: usize, arcs: &[(u32, u32, f64)]) -> FuzzyPetriNet {
-        use nav::topo::{Place, PlaceKind, Transition};
-        let mut net = FuzzyPetriNet::new();
-        for i in 0..n {
-            net.add_place(Place::new(i as f64, 0.0, 0.0, PlaceKind::A))
-                .unwrap();
-        }
-        for &(a, b, lambda) in arcs {
-            let mut t = Transition::new(
-                PlaceId(a - 1),
-                PlaceId(b - 1),
-                Strategy::FreeMovement,
-                Turn::Right,
-                1.0,
-            );
-            t.lambda = lambda;
-            net.add_transition(t).unwrap();
-        }
-        net
+        let places: Vec<serde_json::Value> = (1..=n)
+            .map(|i| serde_json::json!({"name": format!("p{i}"), "x_m": i as f64, "y_m": 0.0, "heading_rad": 0.0, "kind": "a", "concave": false, "heading_aligned": false, "visits": 1}))
+            .collect();
+        let transitions: Vec<serde_json::Value> = arcs
+            .iter()
+            .map(|&(a, b, lambda)| {
+                serde_json::json!({"from": format!("p{a}"), "to": format!("p{b}"), "strategy": "free_movement",
+                    "exit_turn": "right", "duration_s": 1.0, "cost": 1.0, "lambda": lambda, "attempts": 0, "failures": 0})
+            })
+            .collect();
+        let file = serde_json::json!({"format": "petrinav-fpn", "version": 1, "places": places, "transitions": transitions});
+        FuzzyPetriNet::from_json(&file.to_string()).unwrap()
     }
 
     #[test]
