@@ -295,78 +295,50 @@ impl Connectivity {
     }
 }
 
-/// The connectivity of `map` (Kosaraju: a depth-first finishing order on
-/// the transitions, then the parts on the reversed ones, both iterative).
+/// Successor lists of a map's places.
+struct Adjacency(Vec<Vec<u32>>);
+
+impl petri::scc::Successors for Adjacency {
+    fn num_nodes(&self) -> usize {
+        self.0.len()
+    }
+
+    fn successors(&self, v: u32) -> &[u32] {
+        &self.0[v as usize]
+    }
+}
+
+impl Adjacency {
+    /// Nodes of the largest strongly connected component.
+    fn largest_component(&self) -> usize {
+        let mut largest = 0;
+        let Ok(()) = petri::scc::tarjan(
+            self,
+            |_| true,
+            |c| {
+                largest = largest.max(c.len());
+                Ok::<(), std::convert::Infallible>(())
+            },
+        );
+        largest
+    }
+}
+
+/// The connectivity of `map` (Tarjan's components of its transitions, and
+/// of its transitions taken either way for the pieces).
 pub fn connectivity(map: &FuzzyPetriNet) -> Connectivity {
     let n = map.num_places();
-    let mut out: Vec<Vec<usize>> = vec![Vec::new(); n];
-    let mut back: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut out = Adjacency(vec![Vec::new(); n]);
+    let mut either = Adjacency(vec![Vec::new(); n]);
     for t in map.transitions().iter().filter(|t| t.lambda > 0.0) {
-        let (a, b) = (t.from.0 as usize, t.to.0 as usize);
-        out[a].push(b);
-        back[b].push(a);
-    }
-    // Finishing order of a depth-first search on `out`.
-    let mut order = Vec::with_capacity(n);
-    let mut seen = vec![false; n];
-    for root in 0..n {
-        if seen[root] {
-            continue;
-        }
-        seen[root] = true;
-        let mut stack = vec![(root, 0usize)];
-        while let Some((v, k)) = stack.pop() {
-            if let Some(&w) = out[v].get(k) {
-                stack.push((v, k + 1));
-                if !seen[w] {
-                    seen[w] = true;
-                    stack.push((w, 0));
-                }
-            } else {
-                order.push(v);
-            }
-        }
-    }
-    // Strong parts on `back`, latest finished first.
-    let mut part = vec![usize::MAX; n];
-    let mut largest_strong = 0;
-    for &root in order.iter().rev() {
-        if part[root] != usize::MAX {
-            continue;
-        }
-        part[root] = root;
-        let (mut size, mut stack) = (0, vec![root]);
-        while let Some(v) = stack.pop() {
-            size += 1;
-            for &w in &back[v] {
-                if part[w] == usize::MAX {
-                    part[w] = root;
-                    stack.push(w);
-                }
-            }
-        }
-        largest_strong = largest_strong.max(size);
-    }
-    // One piece with arcs either way.
-    let mut reached = vec![false; n];
-    let mut stack: Vec<usize> = (0..n.min(1)).collect();
-    let mut count = stack.len();
-    if let Some(&r) = stack.first() {
-        reached[r] = true;
-    }
-    while let Some(v) = stack.pop() {
-        for &w in out[v].iter().chain(&back[v]) {
-            if !reached[w] {
-                reached[w] = true;
-                count += 1;
-                stack.push(w);
-            }
-        }
+        out.0[t.from.index()].push(t.to.0);
+        either.0[t.from.index()].push(t.to.0);
+        either.0[t.to.index()].push(t.from.0);
     }
     Connectivity {
         places: n,
-        connected: count == n,
-        largest_strong,
+        connected: either.largest_component() == n,
+        largest_strong: out.largest_component(),
     }
 }
 

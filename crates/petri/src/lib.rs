@@ -52,7 +52,7 @@ pub mod net;
 pub mod properties;
 pub mod reachability;
 mod rows;
-mod scc;
+pub mod scc;
 pub mod simulation;
 pub mod steady_state;
 mod vanishing;

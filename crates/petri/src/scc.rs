@@ -6,7 +6,7 @@
 //! from it has been reported before.
 
 /// A directed graph whose successor lists are slices.
-pub(crate) trait Successors {
+pub trait Successors {
     /// Number of nodes, `0..n`.
     fn num_nodes(&self) -> usize;
     /// Successors of `v` (may contain `v` itself and duplicates).
@@ -18,7 +18,7 @@ const UNVISITED: u32 = u32::MAX;
 /// Runs Tarjan's algorithm on the subgraph induced by the nodes for which
 /// `include` is true, calling `on_scc` with each component. `on_scc` may stop
 /// the search by returning an error.
-pub(crate) fn tarjan<G: Successors, E>(
+pub fn tarjan<G: Successors, E>(
     g: &G,
     include: impl Fn(u32) -> bool,
     mut on_scc: impl FnMut(&[u32]) -> Result<(), E>,
