@@ -344,7 +344,7 @@ use robot::{Command, Controller, Event, Notes, Perception, Step};
 use super::TopoError;
 use super::builder::MapBuilder;
 use super::explore::{TopoParams, Visit, place_event};
-use super::fpn::{FuzzyPetriNet, PlaceId, PlaceKind, Strategy, ThresholdParams, TransitionId, Turn};
+use super::fpn::{FuzzyPetriNet, PlaceId, Strategy, ThresholdParams, TransitionId, Turn};
 use super::propagation::{Plan, PlanMode, plan};
 use super::strategy::{Action, actions_at};
 use super::walker::{Walker, WalkerStep};
@@ -642,10 +642,14 @@ impl RouteFollower {
         if !place.allows(back) {
             return None;
         }
-        let exit_turn = match (place.kind, back) {
-            (PlaceKind::A, _) | (PlaceKind::C, Strategy::WallFollowLeft) => Turn::Right,
-            _ => Turn::Left,
-        };
+        // The turn the place's actions leave with for that strategy, or
+        // the place's own turn.
+        let actions = super::strategy::actions_at(place.kind, place.concave);
+        let exit_turn = actions
+            .iter()
+            .find(|a| a.strategy == back)
+            .unwrap_or(&actions[0])
+            .exit_turn;
         Some((
             at,
             Action {
