@@ -411,7 +411,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         } else if it_without.is_empty() {
             " Nothing to compare with."
         } else {
-            " Not everywhere shorter."
+            " Not everywhere shorter. Planning weighs in only once `mark_sum` proves a revisit (above `mark_min`, 25: a 5 × 5 neighbourhood entered once per cell), so the first loops in the U are driven by odometry goal seeking alone, and the IR-only robot that leaves the U as down a corridor (see 6) is out before planning has taken over. With the earlier `mark_min` 6 / `mark_max` 20 (planning on the first turn at a wall) this held — I_T 35.4 / 46.7 / 38.0 s on fields 12–14 — but planning then took weight from the search in the narrowest passage and lost field 11 (0.86, outside IR + sonar's interval: 9 does not hold); of the two, 9 is kept — a planning layer should not cost the fields it is not needed on. The activity-trace layer (e5) gives the time back: its recovery drives the robot out before planning has to."
         }
     );
     let outside: Vec<String> = (1..=11)
@@ -443,7 +443,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         if outside.is_empty() {
             ""
         } else {
-            " Where it lingers — hesitating in front of a slot, sliding to and fro along the wall — `mark_sum` passes `mark_min`, and the temporary goal, the least-visited direction, leads the robot away from the opening it was about to take: the planner cannot tell a trap from a search. The cause is `mark_min` (6): a path that never revisits a cell can enter up to 25 cells of the 5 × 5 neighbourhood, so planning weighs in on the first turn at the wall, before anything has been revisited. Measured and not kept: `mark_min` 25 and `mark_max` 50 (by the pigeonhole rule, a sum above 25 proves a revisit): e4 on field 11 0.96, within e3's interval, and fields 1–10 unchanged within one run; but on the traps planning then starts later — I_R 0.98 / 0.64 / 0.94 on fields 12–14 (0.96 / 0.94 / 0.94 now), I_T 61.5 / 98.2 / 62.9 s — so it no longer shortens the time against IR alone (about 56 s) and the deep trap runs out of time: one observation traded for another."
+            " Where it lingers — hesitating in front of a slot, sliding to and fro along the wall — `mark_sum` passes `mark_min`, and the temporary goal, the least-visited direction, leads the robot away from the opening it was about to take: the planner cannot tell a trap from a search. `mark_min` (25) is the sum one pass without any revisit can leave in the 5 × 5 neighbourhood; below it planning would weigh in on the first turn at the wall (with 6 / 20, measured: field 11 0.86 against 0.98)."
         }
     );
 
