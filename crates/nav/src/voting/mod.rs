@@ -107,7 +107,7 @@ pub struct VotingParams {
     /// `mark_sum` at which planning starts to weigh in. Default 25.
     ///
     /// **Decision**: the sum over the default 5 × 5 neighbourhood
-    /// ([`MemoryParams::radius_cells`] 2) that a path without any revisit
+    /// ([`MemoryParams::neighbourhood`] 2) that a path without any revisit
     /// can reach — each cell entered once — so that, by the pigeonhole
     /// rule, a sum above it proves the robot came back to a cell: the
     /// source's "belief of being trapped" starts with evidence, not on the
