@@ -79,6 +79,7 @@
 //! | [`people`], [`spatial_hash`], [`routes`] | social-force crowd; neighbour buckets; walking-distance fields to exhibits |
 //! | [`world`], [`robot_params`] | world and robot set-up |
 //! | [`simulation`] | the control loop, outcomes, run summary |
+//! | [`disturbance`] | pushes while braked, wheel slip on floor patches, groups closing round the robot: true localisation loss |
 //! | [`trace`] | optional per-tick record, JSON lines |
 //! | [`scripted`] | a controller playing a list of commands |
 //! | [`noise`] | seeded random streams |
@@ -86,6 +87,7 @@
 #![warn(missing_docs)]
 
 pub mod clearance;
+pub mod disturbance;
 pub mod distance_field;
 pub mod error;
 mod fast_math;
@@ -112,6 +114,10 @@ mod validate;
 pub mod world;
 
 pub use distance_field::{DistanceField, NearestObstacle};
+pub use disturbance::{
+    DisturbanceCounts, DisturbanceEvent, DisturbanceKind, DisturbanceParams, PushParams, SlipParams, SlipPatch,
+    SurroundParams,
+};
 pub use error::{Error, Result};
 pub use grid::{Cell, CellCounts, CellIndex, OccupancyGrid};
 pub use kinematics::DriveParams;

@@ -32,6 +32,12 @@ pub(crate) mod streams {
     pub const IR: u64 = 3;
     /// Sonar.
     pub const SONAR: u64 = 4;
+    /// Pushes while braked ([`crate::disturbance`]).
+    pub const PUSH: u64 = 8;
+    /// Wheel slip on floor patches ([`crate::disturbance`]).
+    pub const SLIP: u64 = 9;
+    /// Groups closing round the robot ([`crate::disturbance`]).
+    pub const SURROUND: u64 = 10;
     /// Laser `k` uses stream `LASER0 + k`.
     pub const LASER0: u64 = 16;
 }

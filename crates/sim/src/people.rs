@@ -71,6 +71,15 @@
 //! same Poisson process. At the default rate 0 nothing of this happens and
 //! no number is drawn: the crowd moves exactly as without it.
 //!
+//! **Curious groups.** [`Crowd::surround`] (the simulator's surround
+//! disturbance, [`crate::disturbance`]) sends the people nearest the robot
+//! to it at once, as visitors, for a set time: they come and stand all
+//! around it as above, but until their time is up nothing sends them away —
+//! not the robot moving off or out of range, not being stuck, not a request
+//! to step aside (they are not asked at all: no number is drawn for them).
+//! They are marked by [`Person::curious_until_s`]; unused, it stays `None`
+//! and the crowd moves exactly as without it.
+//!
 //! **Asked to step aside.** When the robot asks ([`robot::Request`]), each
 //! person whose centre is within the request's radius complies with
 //! probability `step_aside_compliance`; after a reaction delay (uniform in
@@ -386,6 +395,12 @@ pub struct Person {
     pub waypoint: Option<usize>,
     /// A request to step aside the person will act on.
     pub asked: Option<Asked>,
+    /// Part of a curious group closing round the robot until this time,
+    /// seconds ([`Crowd::surround`]): until then the person stays with the
+    /// robot and ignores requests to step aside. `None` for everybody
+    /// unless [`Crowd::surround`] is used.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub curious_until_s: Option<f64>,
 }
 
 /// A request to step aside, pending until its reaction time.
@@ -612,6 +627,7 @@ impl Crowd {
             activity,
             waypoint,
             asked: None,
+            curious_until_s: None,
         }
     }
 
@@ -661,7 +677,10 @@ impl Crowd {
         let p = world.crowd();
         let mut asked = 0;
         for me in &mut self.people {
-            if me.asked.is_some() || dist(me.position, robot_at) > radius_m {
+            if me.asked.is_some()
+                || dist(me.position, robot_at) > radius_m
+                || me.curious_until_s.is_some_and(|u| time_s < u)
+            {
                 continue;
             }
             if !self.rng.chance(p.step_aside_compliance) {
@@ -676,6 +695,84 @@ impl Crowd {
             asked += 1;
         }
         asked
+    }
+
+    /// The indices of the people whose disc comes within `gap_m` (rim to
+    /// rim) of the disc `(centre, radius_m)`, ascending, into `out`
+    /// (cleared first). Looked up in the crowd's buckets: `O(people
+    /// nearby)`, no allocation once `out` has grown.
+    pub fn within_gap(&self, centre: Vec2, radius_m: f64, gap_m: f64, out: &mut Vec<usize>) {
+        out.clear();
+        let reach = radius_m + self.radius_m + gap_m;
+        if !(reach.is_finite() && reach >= 0.0) {
+            return;
+        }
+        self.hash.for_each_near(centre, reach, |k| {
+            if dist(self.people[k].position, centre) <= reach {
+                out.push(k);
+            }
+        });
+        out.sort_unstable();
+    }
+
+    /// A curious group closes round the robot (footprint `robot`: centre,
+    /// radius) at `time_s`: the `count` people nearest its centre, within
+    /// `range_m` of it, come to see it as visitors do (module docs: they
+    /// walk straight to the gather distance on their side and stand there,
+    /// all around it) and stay until `until_s`. Until then they ignore
+    /// requests to step aside (a pending request is dropped), keep coming
+    /// however long it takes or wherever the robot goes (no range, stuck
+    /// or time-out rule), and take no interest of their own; at `until_s`
+    /// they go back to their usual behaviour, as after any visit.
+    ///
+    /// People are taken nearest first (ties by index), skipping those
+    /// already in a curious group and those who cannot walk straight to
+    /// their spot by the robot (a wall between: the three rays of the
+    /// module docs); people stepping aside or already with the robot join.
+    /// Fewer than `count` come if fewer are there. No random number is
+    /// drawn. Returns the people who came, nearest first.
+    ///
+    /// Cost: `O(n log n)` for the `n` people in range, and three rays per
+    /// person tried.
+    pub fn surround(
+        &mut self,
+        world: &World,
+        robot: (Vec2, f64),
+        count: usize,
+        range_m: f64,
+        time_s: f64,
+        until_s: f64,
+    ) -> Vec<usize> {
+        let (c, rr) = robot;
+        let r = self.radius_m;
+        let by = gather_distance_m(world.crowd(), r, rr);
+        let mut near: Vec<(f64, usize)> = self
+            .people
+            .iter()
+            .enumerate()
+            .filter(|(_, q)| q.curious_until_s.is_none())
+            .map(|(k, q)| (dist(q.position, c), k))
+            .filter(|&(d, _)| d <= range_m)
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut came = Vec::with_capacity(count.min(near.len()));
+        for (_, k) in near {
+            if came.len() >= count {
+                break;
+            }
+            let me = &mut self.people[k];
+            let spot = spot_by_robot(me.position, c, by);
+            if !walkable(world, me.position, spot, r) {
+                continue;
+            }
+            me.target = spot;
+            me.waypoint = None;
+            me.asked = None;
+            me.activity = Activity::coming_to_robot(me.position, time_s);
+            me.curious_until_s = Some(until_s);
+            came.push(k);
+        }
+        came
     }
 
     /// Where a person asked to step aside goes (module docs).
@@ -722,6 +819,11 @@ impl Crowd {
         };
         for i in 0..self.people.len() {
             let mut me = self.people[i];
+            // Part of a curious group ([`Crowd::surround`]) until when?
+            if me.curious_until_s.is_some_and(|u| time_s >= u) {
+                me.curious_until_s = None;
+            }
+            let curious = me.curious_until_s.is_some();
             // Asked to step aside, and time to move?
             if let Some(asked) = me.asked
                 && time_s >= asked.react_at_s
@@ -793,14 +895,16 @@ impl Crowd {
                     checkpoint,
                     checkpoint_s,
                 } => match robot {
-                    Some((c, rr)) if dist(me.position, c) <= p.robot_interest_range_m => {
+                    Some((c, rr)) if curious || dist(me.position, c) <= p.robot_interest_range_m => {
                         let by = gather_distance_m(p, r, rr);
                         me.target = spot_by_robot(me.position, c, by);
                         if dist(me.position, c) <= by {
-                            me.activity = Activity::AtRobot {
-                                until_s: time_s + self.rng.exponential(p.robot_linger_mean_s),
+                            let until_s = match me.curious_until_s {
+                                Some(u) => u,
+                                None => time_s + self.rng.exponential(p.robot_linger_mean_s),
                             };
-                        } else {
+                            me.activity = Activity::AtRobot { until_s };
+                        } else if !curious {
                             // Progress check and time out, as for any walk.
                             if time_s - checkpoint_s >= p.stuck_timeout_s {
                                 new_target = dist(me.position, checkpoint) < r;
@@ -817,7 +921,9 @@ impl Crowd {
                     _ => new_target = true,
                 },
                 Activity::AtRobot { until_s } => match robot {
-                    Some((c, rr)) if time_s < until_s && dist(me.position, c) <= p.robot_interest_range_m => {
+                    Some((c, rr))
+                        if time_s < until_s && (curious || dist(me.position, c) <= p.robot_interest_range_m) =>
+                    {
                         me.target = spot_by_robot(me.position, c, gather_distance_m(p, r, rr));
                     }
                     // Time to go, or the robot has gone out of range.
@@ -827,6 +933,7 @@ impl Crowd {
             if new_target {
                 (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
                 me.activity = Activity::walking(me.position, time_s);
+                me.curious_until_s = None;
             }
             // Forces.
             let desired = match me.activity {

@@ -28,6 +28,7 @@
 
 use robot::{Command, Controller, Notes, Perception, Pose, Request, Step, Vec2};
 
+use crate::disturbance::{DisturbanceCounts, DisturbanceEvent, DisturbanceParams, Disturbances};
 use crate::error::{Error, Result};
 use crate::grid::OccupancyGrid;
 use crate::noise::{RandomStream, streams};
@@ -146,6 +147,10 @@ pub struct RunResult {
     pub odometry_error_m: f64,
     /// Final distance from the true position to the goal, metres.
     pub goal_distance_m: Option<f64>,
+    /// Totals of the disturbances ([`Simulation::with_disturbances`]); all
+    /// zero, and left out of the serialised summary, without them.
+    #[serde(skip_serializing_if = "DisturbanceCounts::is_zero")]
+    pub disturbances: DisturbanceCounts,
 }
 
 /// One run in progress (module docs).
@@ -185,6 +190,7 @@ pub struct Simulation {
     min_clearance_m: f64,
     contact: bool,
     outcome: Option<Outcome>,
+    disturbance: Option<Disturbances>,
 }
 
 impl Simulation {
@@ -292,6 +298,7 @@ impl Simulation {
             min_clearance_m: f64::INFINITY,
             contact: false,
             outcome: None,
+            disturbance: None,
             robot,
         };
         sim.min_clearance_m = sim.clearance_m();
@@ -299,6 +306,35 @@ impl Simulation {
             sim.outcome = Some(Outcome::Goal);
         }
         Ok(sim)
+    }
+
+    /// The same run with physical disturbances ([`crate::disturbance`]):
+    /// pushes while braked, wheel slip on floor patches, groups closing
+    /// round the robot. Their processes start at the current time (call it
+    /// before the first tick); they replace any given before, and the
+    /// default ([`DisturbanceParams::default`], all off) leaves the run
+    /// exactly as without them.
+    ///
+    /// Errors: [`Error::InvalidValue`] naming a bad parameter.
+    pub fn with_disturbances(mut self, params: DisturbanceParams) -> Result<Simulation> {
+        self.disturbance = Disturbances::new(params, self.seed, self.time_s())?;
+        Ok(self)
+    }
+
+    /// The disturbances' parameters, if any is on.
+    pub fn disturbance_params(&self) -> Option<&DisturbanceParams> {
+        self.disturbance.as_ref().map(Disturbances::params)
+    }
+
+    /// Every disturbance so far, in the order they began (empty without
+    /// them).
+    pub fn disturbances(&self) -> &[DisturbanceEvent] {
+        self.disturbance.as_ref().map_or(&[], Disturbances::events)
+    }
+
+    /// Whether the robot is being pushed now (held: wheels at 0).
+    pub fn pushed(&self) -> bool {
+        self.disturbance.as_ref().is_some_and(Disturbances::held)
     }
 
     /// The world.
@@ -381,6 +417,10 @@ impl Simulation {
             final_estimate: est,
             odometry_error_m: self.pose.position().dist(est.position()),
             goal_distance_m: self.task.goal.map(|g| g.dist(self.pose.position())),
+            disturbances: self
+                .disturbance
+                .as_ref()
+                .map_or_else(DisturbanceCounts::default, Disturbances::counts),
         }
     }
 
@@ -524,26 +564,75 @@ impl Simulation {
         let target = c.wheels(drive.wheel_base_m);
         let mut contact = false;
         for k in 0..n {
-            self.wheels_mps = drive.limit(self.wheels_mps, target, dt);
-            let (l, r) = self.wheels_mps;
-            let next = kinematics::integrate(self.pose, l, r, drive.wheel_base_m, dt);
-            self.odometry.step(self.wheels_mps, drive.wheel_base_m, dt);
-            if self.footprint_hits(self.world.grid(), next.position(), drive.radius_m) {
-                contact = true;
-                if self.run.collision_fatal {
-                    self.path_length_m += kinematics::arc_length_m(l, r, dt);
+            let end_s = time_s + (k + 1) as f64 * dt;
+            // Disturbances (module docs of `disturbance`): slip ratios of
+            // a patch the centre is in, a push holding the robot.
+            let (slip, held) = match &mut self.disturbance {
+                Some(d) => (
+                    d.slip_at(self.pose.position(), time_s + k as f64 * dt),
+                    d.held(),
+                ),
+                None => (None, false),
+            };
+            if held {
+                self.wheels_mps = (0.0, 0.0);
+                self.odometry.step(self.wheels_mps, drive.wheel_base_m, dt);
+                let (grid, crowd, radius) = (self.world.grid(), &self.crowd, drive.radius_m);
+                if let Some(d) = &mut self.disturbance {
+                    let before = self.pose.position();
+                    self.pose = d.push_step(self.pose, dt, end_s, |at| {
+                        grid.disc_blocked(at, radius) || crowd.overlaps(at, radius)
+                    });
+                    self.path_length_m += fast_math::dist(before, self.pose.position());
+                }
+            } else {
+                self.wheels_mps = drive.limit(self.wheels_mps, target, dt);
+                let (l, r) = self.wheels_mps;
+                // The wheels' true rim travel: slipped in a patch.
+                let (tl, tr) = match slip {
+                    Some((sl, sr)) => ((1.0 - sl) * l, (1.0 - sr) * r),
+                    None => (l, r),
+                };
+                let next = kinematics::integrate(self.pose, tl, tr, drive.wheel_base_m, dt);
+                self.odometry.step(self.wheels_mps, drive.wheel_base_m, dt);
+                let moved = if self.footprint_hits(self.world.grid(), next.position(), drive.radius_m) {
+                    contact = true;
+                    self.run.collision_fatal
+                } else {
+                    true
+                };
+                if moved {
+                    self.path_length_m += kinematics::arc_length_m(tl, tr, dt);
                     self.pose = next;
+                }
+                if slip.is_some()
+                    && let Some(d) = &mut self.disturbance
+                {
+                    let true_m = if moved { kinematics::arc_length_m(tl, tr, dt) } else { 0.0 };
+                    d.slipped(true_m, kinematics::arc_length_m(l, r, dt));
+                }
+                if contact && self.run.collision_fatal {
                     self.outcome = Some(Outcome::Collision);
                     return true;
                 }
-                self.wheels_mps = (0.0, 0.0);
-            } else {
-                self.path_length_m += kinematics::arc_length_m(l, r, dt);
-                self.pose = next;
+                if !moved {
+                    self.wheels_mps = (0.0, 0.0);
+                }
             }
             let robot = Some((self.pose.position(), drive.radius_m));
-            self.crowd
-                .step(&self.world, robot, time_s + (k + 1) as f64 * dt, dt);
+            self.crowd.step(&self.world, robot, end_s, dt);
+            if let Some(d) = &mut self.disturbance {
+                d.after_substep(
+                    &self.world,
+                    &mut self.crowd,
+                    self.pose,
+                    drive.radius_m,
+                    self.wheels_mps,
+                    target,
+                    end_s,
+                    dt,
+                );
+            }
         }
         contact
     }

@@ -234,6 +234,7 @@ mod tests {
             activity: Activity::Lingering { until_s: 1e9 },
             waypoint: None,
             asked: None,
+            curious_until_s: None,
         }
     }
 
