@@ -286,7 +286,13 @@ impl PushParams {
             self.distance_max_m,
             ">= distance_min_m",
         )?;
-        validate::within("disturbance.push.turn_max_rad", self.turn_max_rad, 0.0, PI, "in [0, pi]")?;
+        validate::within(
+            "disturbance.push.turn_max_rad",
+            self.turn_max_rad,
+            0.0,
+            PI,
+            "in [0, pi]",
+        )?;
         validate::within(
             "disturbance.push.direction_jitter_rad",
             self.direction_jitter_rad,
@@ -341,8 +347,14 @@ impl SlipParams {
     pub fn validate(&self) -> Result<()> {
         for (k, patch) in self.patches.iter().enumerate() {
             for axis in 0..2 {
-                validate::finite(&format!("disturbance.slip.patches[{k}].min[{axis}]"), patch.min[axis])?;
-                validate::finite(&format!("disturbance.slip.patches[{k}].max[{axis}]"), patch.max[axis])?;
+                validate::finite(
+                    &format!("disturbance.slip.patches[{k}].min[{axis}]"),
+                    patch.min[axis],
+                )?;
+                validate::finite(
+                    &format!("disturbance.slip.patches[{k}].max[{axis}]"),
+                    patch.max[axis],
+                )?;
                 if patch.max[axis] <= patch.min[axis] {
                     return Err(Error::InvalidValue {
                         what: format!("disturbance.slip.patches[{k}].max[{axis}]"),
@@ -880,5 +892,203 @@ impl Disturbances {
                 state.draw(p, start_s);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sets field `field` of the parameters to `v`.
+    fn with(field: &str, v: f64) -> DisturbanceParams {
+        let mut d = DisturbanceParams::default();
+        let (p, s, g) = (&mut d.push, &mut d.slip, &mut d.surround);
+        match field {
+            "push.rate_per_person_s" => p.rate_per_person_s = v,
+            "push.reach_m" => p.reach_m = v,
+            "push.braked_after_s" => p.braked_after_s = v,
+            "push.braked_speed_mps" => p.braked_speed_mps = v,
+            "push.distance_min_m" => p.distance_min_m = v,
+            "push.distance_max_m" => p.distance_max_m = v,
+            "push.turn_max_rad" => p.turn_max_rad = v,
+            "push.direction_jitter_rad" => p.direction_jitter_rad = v,
+            "push.speed_mps" => p.speed_mps = v,
+            "push.turn_rate_radps" => p.turn_rate_radps = v,
+            "slip.slip_max" => s.slip_max = v,
+            "surround.rate_per_s" => g.rate_per_s = v,
+            "surround.duration_min_s" => g.duration_min_s = v,
+            "surround.duration_max_s" => g.duration_max_s = v,
+            "surround.range_m" => g.range_m = v,
+            _ => unreachable!("{field}"),
+        }
+        d
+    }
+
+    fn named(d: &DisturbanceParams) -> String {
+        match d.validate() {
+            Err(Error::InvalidValue { what, .. }) => what,
+            other => panic!("{d:?}: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn defaults_are_valid_and_off() {
+        let d = DisturbanceParams::default();
+        assert!(d.validate().is_ok() && d.is_off());
+        assert!(Disturbances::new(d, 1, 0.0).unwrap().is_none(), "nothing to run");
+        assert_eq!(PushParams::default().reach_m, 0.4);
+        assert_eq!(SlipParams::default().slip_max, 0.2);
+        assert_eq!(SurroundParams::default().group_max, 10);
+    }
+
+    #[test]
+    fn bad_parameters_are_errors_naming_them() {
+        let fields = [
+            "push.rate_per_person_s",
+            "push.reach_m",
+            "push.braked_after_s",
+            "push.braked_speed_mps",
+            "push.distance_min_m",
+            "push.distance_max_m",
+            "push.turn_max_rad",
+            "push.direction_jitter_rad",
+            "push.speed_mps",
+            "push.turn_rate_radps",
+            "slip.slip_max",
+            "surround.rate_per_s",
+            "surround.duration_min_s",
+            "surround.duration_max_s",
+            "surround.range_m",
+        ];
+        for field in fields {
+            for v in [-1.0, f64::NAN, f64::INFINITY] {
+                assert_eq!(
+                    named(&with(field, v)),
+                    format!("disturbance.{field}"),
+                    "{field} = {v}"
+                );
+            }
+        }
+        // Out of range but finite.
+        for (field, v) in [
+            ("push.turn_max_rad", 4.0),
+            ("push.direction_jitter_rad", 3.5),
+            ("push.braked_speed_mps", 0.0),
+            ("push.speed_mps", 0.0),
+            ("push.turn_rate_radps", 0.0),
+            ("slip.slip_max", 1.5),
+        ] {
+            assert_eq!(named(&with(field, v)), format!("disturbance.{field}"));
+        }
+        // Minimum above maximum: the maximum is named.
+        assert_eq!(
+            named(&with("push.distance_min_m", 3.0)),
+            "disturbance.push.distance_max_m"
+        );
+        assert_eq!(
+            named(&with("surround.duration_min_s", 61.0)),
+            "disturbance.surround.duration_max_s"
+        );
+        let mut d = DisturbanceParams::default();
+        d.surround.group_max = 5;
+        assert_eq!(named(&d), "disturbance.surround.group_max");
+        d.surround.group_min = 0;
+        assert_eq!(named(&d), "disturbance.surround.group_min");
+        // Patches: finite corners, min < max on both axes.
+        let patch = |min: [f64; 2], max: [f64; 2]| DisturbanceParams {
+            slip: SlipParams {
+                patches: vec![
+                    SlipPatch {
+                        min: [0.0, 0.0],
+                        max: [1.0, 1.0],
+                    },
+                    SlipPatch { min, max },
+                ],
+                ..SlipParams::default()
+            },
+            ..DisturbanceParams::default()
+        };
+        assert!(patch([0.0, 0.0], [1.0, 2.0]).validate().is_ok());
+        assert_eq!(
+            named(&patch([1.0, 0.0], [1.0, 2.0])),
+            "disturbance.slip.patches[1].max[0]"
+        );
+        assert_eq!(
+            named(&patch([0.0, 3.0], [1.0, 2.0])),
+            "disturbance.slip.patches[1].max[1]"
+        );
+        assert_eq!(
+            named(&patch([f64::NAN, 0.0], [1.0, 2.0])),
+            "disturbance.slip.patches[1].min[0]"
+        );
+        assert_eq!(
+            named(&patch([0.0, 0.0], [1.0, f64::INFINITY])),
+            "disturbance.slip.patches[1].max[1]"
+        );
+    }
+
+    #[test]
+    fn draws_come_in_a_fixed_order_per_event() {
+        let p = PushParams {
+            rate_per_person_s: 1.0,
+            ..PushParams::default()
+        };
+        let mut rng = RandomStream::new(5, streams::PUSH);
+        let a = PushDraw::new(&mut rng, &p);
+        let b = PushDraw::new(&mut rng, &p);
+        // By hand from the same stream: E, d, φ, ψ, u per push.
+        let mut r = RandomStream::new(5, streams::PUSH);
+        for draw in [a, b] {
+            assert_eq!(draw.threshold, r.exponential(1.0));
+            assert_eq!(draw.distance_m, r.uniform_in(0.3, 2.0));
+            assert_eq!(draw.rotation_rad, r.uniform_in(-FRAC_PI_2, FRAC_PI_2));
+            assert_eq!(draw.jitter_rad, r.uniform_in(-FRAC_PI_6, FRAC_PI_6));
+            assert_eq!(draw.pick, r.uniform());
+        }
+        assert!((0.3..2.0).contains(&a.distance_m) && a.rotation_rad.abs() <= FRAC_PI_2);
+        // Surround: gap, size, duration; sizes cover [min, max].
+        let s = SurroundParams {
+            rate_per_s: 0.1,
+            group_min: 2,
+            group_max: 4,
+            ..SurroundParams::default()
+        };
+        let mut state = SurroundState {
+            rng: RandomStream::new(5, streams::SURROUND),
+            next_s: 0.0,
+            group: 0,
+            duration_s: 0.0,
+        };
+        let mut seen = [0; 5];
+        let mut t = 0.0;
+        for _ in 0..300 {
+            state.draw(&s, t);
+            assert!(state.next_s >= t && (20.0..60.0).contains(&state.duration_s));
+            t = state.next_s;
+            seen[state.group] += 1;
+        }
+        assert_eq!(seen[..2], [0, 0]);
+        assert!(seen[2..].iter().all(|&k| k > 60), "{seen:?}");
+        // 300 gaps of mean 10 s.
+        assert!((t / 300.0 - 10.0).abs() < 2.0, "{}", t / 300.0);
+    }
+
+    #[test]
+    fn events_serialise_flat_with_their_kind() {
+        let e = DisturbanceEvent {
+            start_s: 1.5,
+            end_s: None,
+            kind: DisturbanceKind::Surround {
+                group_size: 3,
+                duration_s: 20.0,
+                people: vec![4, 2],
+            },
+        };
+        let json = serde_json::to_string(&e).unwrap();
+        assert_eq!(
+            json,
+            r#"{"start_s":1.5,"end_s":null,"kind":"surround","group_size":3,"duration_s":20.0,"people":[4,2]}"#
+        );
+        assert_eq!(e.kind.name(), "surround");
     }
 }

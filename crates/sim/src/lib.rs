@@ -87,8 +87,8 @@
 #![warn(missing_docs)]
 
 pub mod clearance;
-pub mod disturbance;
 pub mod distance_field;
+pub mod disturbance;
 pub mod error;
 mod fast_math;
 mod font;
@@ -115,8 +115,8 @@ pub mod world;
 
 pub use distance_field::{DistanceField, NearestObstacle};
 pub use disturbance::{
-    DisturbanceCounts, DisturbanceEvent, DisturbanceKind, DisturbanceParams, PushParams, SlipParams, SlipPatch,
-    SurroundParams,
+    DisturbanceCounts, DisturbanceEvent, DisturbanceKind, DisturbanceParams, PushParams, SlipParams,
+    SlipPatch, SurroundParams,
 };
 pub use error::{Error, Result};
 pub use grid::{Cell, CellCounts, CellIndex, OccupancyGrid};

@@ -922,7 +922,8 @@ impl Crowd {
                 },
                 Activity::AtRobot { until_s } => match robot {
                     Some((c, rr))
-                        if time_s < until_s && (curious || dist(me.position, c) <= p.robot_interest_range_m) =>
+                        if time_s < until_s
+                            && (curious || dist(me.position, c) <= p.robot_interest_range_m) =>
                     {
                         me.target = spot_by_robot(me.position, c, gather_distance_m(p, r, rr));
                     }
@@ -1451,6 +1452,72 @@ mod tests {
             0.0,
             "off by default"
         );
+    }
+
+    #[test]
+    fn a_surrounding_group_is_the_nearest_who_can_come_and_ignores_requests_until_its_time() {
+        // Nearest first: B 1.5 m, A 1.6, D 1.7, C 1.8, F 4.9; E (5.5 m)
+        // has the pillar between it and the robot.
+        let positions = vec![
+            Vec2::new(2.5, 4.6),
+            Vec2::new(1.0, 3.0),
+            Vec2::new(2.5, 1.2),
+            Vec2::new(4.2, 3.0),
+            Vec2::new(8.0, 3.0),
+            Vec2::new(7.0, 5.0),
+        ];
+        let w = room()
+            .with_crowd(CrowdParams {
+                positions,
+                ..CrowdParams::default()
+            })
+            .unwrap();
+        let robot = (Vec2::new(2.5, 3.0), 0.3);
+        let mut c = Crowd::new(&w, 4, &[robot]).unwrap();
+        assert!(c.people().iter().all(|q| q.curious_until_s.is_none()));
+        assert_eq!(c.surround(&w, robot, 3, 6.0, 0.0, 25.0), vec![1, 0, 3]);
+        let mut d = Crowd::new(&w, 4, &[robot]).unwrap();
+        assert_eq!(d.surround(&w, robot, 10, 6.0, 0.0, 25.0), vec![1, 0, 3, 2, 5]);
+        assert_eq!(
+            d.surround(&w, robot, 10, 1.55, 0.0, 25.0),
+            Vec::<usize>::new(),
+            "already curious"
+        );
+        let mut near = Vec::new();
+        // Rim to rim: B 0.95 m, A 1.05, D 1.15, C 1.25, F 4.4, E 4.95.
+        d.within_gap(robot.0, robot.1, 1.0, &mut near);
+        assert_eq!(near, vec![1]);
+        d.within_gap(robot.0, robot.1, 1.3, &mut near);
+        assert_eq!(near, vec![0, 1, 2, 3], "ascending");
+        let came = [0, 1, 2, 3, 5];
+        for t in 1..=200 {
+            d.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        // At 20 s they all stand round the robot, and a request to step
+        // aside asks nobody.
+        for &k in &came {
+            let q = d.people()[k];
+            assert_eq!(q.activity, Activity::AtRobot { until_s: 25.0 }, "person {k}");
+            assert!(dist(q.position, robot.0) <= 1.0, "person {k} at {:?}", q.position);
+            assert_eq!(q.curious_until_s, Some(25.0));
+        }
+        assert_eq!(d.people()[4].curious_until_s, None);
+        assert_eq!(d.ask_to_step_aside(&w, robot.0, 2.0, 20.0), 0);
+        for t in 201..=249 {
+            d.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        assert!(came.iter().all(|&k| d.people()[k].activity.with_robot()));
+        // Their time is up: they go about their business, and can be
+        // asked again.
+        d.step(&w, Some(robot), 25.0, 0.1);
+        for &k in &came {
+            let q = d.people()[k];
+            assert!(
+                !q.activity.with_robot() && q.curious_until_s.is_none(),
+                "person {k}: {q:?}"
+            );
+        }
+        assert!(d.ask_to_step_aside(&w, robot.0, 2.0, 25.0) >= 4);
     }
 
     #[test]

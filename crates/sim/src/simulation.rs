@@ -568,10 +568,7 @@ impl Simulation {
             // Disturbances (module docs of `disturbance`): slip ratios of
             // a patch the centre is in, a push holding the robot.
             let (slip, held) = match &mut self.disturbance {
-                Some(d) => (
-                    d.slip_at(self.pose.position(), time_s + k as f64 * dt),
-                    d.held(),
-                ),
+                Some(d) => (d.slip_at(self.pose.position(), time_s + k as f64 * dt), d.held()),
                 None => (None, false),
             };
             if held {
@@ -608,7 +605,11 @@ impl Simulation {
                 if slip.is_some()
                     && let Some(d) = &mut self.disturbance
                 {
-                    let true_m = if moved { kinematics::arc_length_m(tl, tr, dt) } else { 0.0 };
+                    let true_m = if moved {
+                        kinematics::arc_length_m(tl, tr, dt)
+                    } else {
+                        0.0
+                    };
                     d.slipped(true_m, kinematics::arc_length_m(l, r, dt));
                 }
                 if contact && self.run.collision_fatal {
