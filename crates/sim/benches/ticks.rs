@@ -7,6 +7,14 @@
 //!   30 m) wandering along the corridors of the real `building_31` SLAM map
 //!   (693 × 648 cells at 0.05 m, ROS map_server format, in
 //!   the repository's `maps/`) among 30 wandering people. Target ≥ 20 000 ticks/s.
+//! - `laser_hall_crowd`: the same robot in an open museum hall among 0 to
+//!   300 visitors walking between exhibits.
+//! - `laser_hall_disturbed`: the hall with every disturbance on
+//!   ([`sim::disturbance`]): pushes at 0.2 per person per second of
+//!   standing, four slippery strips across the hall, a curious group every
+//!   50 s on average; the robot wanders (`wander`) or stands (`stand`:
+//!   braked all along, the push hazard looked up every sub-step, groups
+//!   round it). Compare with `laser_hall_crowd` at the same crowd.
 //!
 //! Collisions are not fatal here, so every sample runs its full number of
 //! ticks; each sample is a fresh run with its own seed. The allocation
@@ -21,8 +29,8 @@ use divan::{AllocProfiler, Bencher};
 use robot::Vec2;
 use robot::{Command, Controller, Notes, Perception, Pose, Step};
 use sim::{
-    Cell, CellIndex, CrowdParams, CrowdSize, OccupancyGrid, RobotParams, RunParams, Simulation, Task, World,
-    generators,
+    Cell, CellIndex, CrowdParams, CrowdSize, DisturbanceParams, OccupancyGrid, PushParams, RobotParams,
+    RunParams, Simulation, SlipParams, SlipPatch, SurroundParams, Task, World, generators,
 };
 
 #[global_allocator]
@@ -210,6 +218,72 @@ fn laser_hall_crowd(bencher: Bencher, people: usize) {
             let mut c = LaserWander;
             for _ in 0..TICKS {
                 sim.tick(&mut c);
+            }
+        });
+}
+
+/// Stands still.
+struct Stand;
+
+impl Controller for Stand {
+    fn step(&mut self, _p: &Perception, _notes: &mut Notes) -> Step {
+        Step::Run(Command::Stop)
+    }
+}
+
+#[divan::bench(sample_count = 10, args = [("wander", 30), ("stand", 30), ("wander", 100), ("stand", 100)])]
+fn laser_hall_disturbed(bencher: Bencher, (mode, people): (&str, usize)) {
+    let (grid, exhibits) = hall();
+    let world = World::new(grid)
+        .with_crowd(CrowdParams {
+            size: CrowdSize::Count { people },
+            waypoints: exhibits,
+            ..CrowdParams::default()
+        })
+        .unwrap();
+    let disturbances = DisturbanceParams {
+        push: PushParams {
+            rate_per_person_s: 0.2,
+            ..PushParams::default()
+        },
+        slip: SlipParams {
+            patches: (0..4)
+                .map(|k| SlipPatch {
+                    min: [0.0, 4.0 + 7.0 * k as f64],
+                    max: [15.0, 5.0 + 7.0 * k as f64],
+                })
+                .collect(),
+            ..SlipParams::default()
+        },
+        surround: SurroundParams {
+            rate_per_s: 0.02,
+            ..SurroundParams::default()
+        },
+    };
+    let seed = SeedCell::new(0u64);
+    bencher
+        .counter(ItemsCount::new(TICKS))
+        .with_inputs(|| {
+            seed.set(seed.get() + 1);
+            let task = Task {
+                start: Pose::new(7.0, 2.0, std::f64::consts::FRAC_PI_2),
+                goal: None,
+            };
+            Simulation::new(&world, RobotParams::jinny(), run_params(), task, seed.get())
+                .unwrap()
+                .with_disturbances(disturbances.clone())
+                .unwrap()
+        })
+        .bench_local_refs(|sim| {
+            if mode == "stand" {
+                for _ in 0..TICKS {
+                    sim.tick(&mut Stand);
+                }
+            } else {
+                let mut c = LaserWander;
+                for _ in 0..TICKS {
+                    sim.tick(&mut c);
+                }
             }
         });
 }

@@ -15,6 +15,14 @@
 //! 4. goal (true position within `goal_tolerance_m`); a controller that
 //!    answered `Done` away from the goal ends the run as `Lost`; time limit.
 //!
+//! With disturbances ([`Simulation::with_disturbances`],
+//! [`crate::disturbance`]) a sub-step also applies the slip of a floor
+//! patch the centre is in (the pose moves with slipped wheels, the
+//! encoders measure the commanded ones), moves a robot being pushed instead
+//! of driving it (wheels held at 0), and at its end updates the braked
+//! clock and the push hazard and sends a curious group to the robot when
+//! one is due. Without them none of this runs.
+//!
 //! **Collision rule.** A footprint that overlaps a blocked cell or a person
 //! after a sub-step is a collision. If `collision_fatal` (the default) the
 //! run ends there (outcome [`Outcome::Collision`], the robot left where it
