@@ -820,7 +820,8 @@ impl Crowd {
         for i in 0..self.people.len() {
             let mut me = self.people[i];
             // Part of a curious group ([`Crowd::surround`]) until when?
-            if me.curious_until_s.is_some_and(|u| time_s >= u) {
+            let group_over = me.curious_until_s.is_some_and(|u| time_s >= u);
+            if group_over {
                 me.curious_until_s = None;
             }
             let curious = me.curious_until_s.is_some();
@@ -863,6 +864,9 @@ impl Crowd {
             // What to do.
             let mut new_target = false;
             match me.activity {
+                // A curious group's time is up (some may not have arrived
+                // yet): they go, as after any visit.
+                Activity::ComingToRobot { .. } | Activity::AtRobot { .. } if group_over => new_target = true,
                 Activity::Lingering { until_s } => new_target = time_s >= until_s,
                 Activity::Walking {
                     since_s,
@@ -1518,6 +1522,18 @@ mod tests {
             );
         }
         assert!(d.ask_to_step_aside(&w, robot.0, 2.0, 25.0) >= 4);
+        // A group whose time is up before they arrive goes all the same.
+        let mut e = Crowd::new(&w, 4, &[robot]).unwrap();
+        assert_eq!(e.surround(&w, robot, 5, 6.0, 0.0, 1.0), vec![1, 0, 3, 2, 5]);
+        for t in 1..=10 {
+            e.step(&w, Some(robot), t as f64 * 0.1, 0.1);
+        }
+        let far = e.people()[5];
+        assert!(dist(far.position, robot.0) > 2.0, "{far:?}");
+        assert!(
+            !far.activity.with_robot() && far.curious_until_s.is_none(),
+            "{far:?}"
+        );
     }
 
     #[test]

@@ -138,7 +138,8 @@ pub struct RunResult {
     pub time_s: f64,
     /// Control ticks executed.
     pub ticks: u64,
-    /// Length of the true path of the robot's centre, metres.
+    /// Length of the true path of the robot's centre, metres (a push's
+    /// included: [`crate::disturbance`]).
     pub path_length_m: f64,
     /// Contact episodes (module docs).
     pub collisions: u32,
