@@ -46,7 +46,10 @@ fn the_readme_opens_with_the_main_job_and_scripts_test() {
     let commands = readme_commands();
     assert!(commands[0].starts_with("cargo run --release -- "), "{commands:?}");
     assert_eq!(readme_test_command(), "scripts/test");
-    let mode = std::fs::metadata(repo("scripts/test")).unwrap().permissions().mode();
+    let mode = std::fs::metadata(repo("scripts/test"))
+        .unwrap()
+        .permissions()
+        .mode();
     assert!(mode & 0o111 != 0, "scripts/test is executable");
 }
 
@@ -102,6 +105,14 @@ impl Sandbox {
     /// The real `tool` on the PATH too.
     fn real(&self, tool: &str) {
         std::os::unix::fs::symlink(on_path(tool), self.root.join("bin").join(tool)).unwrap();
+    }
+
+    /// The real tools the script runs once its checks pass (the checks
+    /// themselves need none).
+    fn real_tools_after_the_checks(&self) {
+        for tool in ["mktemp", "tee", "awk", "sed", "rm"] {
+            self.real(tool);
+        }
     }
 
     /// What a fake was called with, one line a call; `None` if never.
@@ -163,7 +174,10 @@ fn assert_stopped_before_cargo(sandbox: &Sandbox, run: &(ExitStatus, String, Str
     let (status, _, stderr, elapsed) = run;
     assert!(!status.success(), "scripts/test succeeded: {stderr}");
     assert_eq!(sandbox.calls("cargo"), None, "scripts/test ran cargo: {stderr}");
-    assert!(*elapsed < Duration::from_secs(10), "scripts/test took {elapsed:?} to stop");
+    assert!(
+        *elapsed < Duration::from_secs(10),
+        "scripts/test took {elapsed:?} to stop"
+    );
 }
 
 #[test]
@@ -191,7 +205,9 @@ fn without_chromium_it_installs_it_with_apt_get_as_root_only() {
         let calls = sandbox.calls("apt-get").unwrap_or_default();
         assert!(calls.lines().any(|l| l.starts_with("update")), "{calls}");
         assert!(
-            calls.lines().any(|l| l.starts_with("install -y") && l.ends_with(" chromium")),
+            calls
+                .lines()
+                .any(|l| l.starts_with("install -y") && l.ends_with(" chromium")),
             "{calls}"
         );
         assert!(stderr.contains("still fails"), "{stderr}");
@@ -209,7 +225,11 @@ fn a_petrinav_chromium_that_does_not_run_stops_it_and_installs_nothing() {
     sandbox.fake("chromium", "echo Chromium 1.0");
     let run = sandbox.run(&[], &[("PETRINAV_CHROMIUM", "/no/such/chrome")]);
     assert_stopped_before_cargo(&sandbox, &run);
-    assert!(run.2.contains("PETRINAV_CHROMIUM=/no/such/chrome does not run"), "{}", run.2);
+    assert!(
+        run.2.contains("PETRINAV_CHROMIUM=/no/such/chrome does not run"),
+        "{}",
+        run.2
+    );
     assert_eq!(sandbox.calls("apt-get"), None);
 }
 
@@ -222,7 +242,8 @@ fn with_a_python_package_and_no_python_it_names_python3_venv_too() {
     let run = sandbox.run(&[], &[]);
     assert_stopped_before_cargo(&sandbox, &run);
     assert!(
-        run.2.contains("sudo apt-get install chromium python3 python3-venv"),
+        run.2
+            .contains("sudo apt-get install chromium python3 python3-venv"),
         "{}",
         run.2
     );
@@ -237,15 +258,16 @@ fn with_chromium_it_runs_cargo_test_on_the_workspace_and_sums_up() {
         "echo 'test result: ok. 3 passed; 0 failed; 1 ignored; 0 measured; 0 filtered out; finished in 0.01s'\n\
          echo 'test result: ok. 2 passed; 0 failed; 0 ignored; 0 measured; 0 filtered out; finished in 0.01s'",
     );
-    for tool in ["mktemp", "tee", "awk", "rm"] {
-        sandbox.real(tool);
-    }
+    sandbox.real_tools_after_the_checks();
     let (status, stdout, stderr, _) = sandbox.run(&["--", "--nocapture"], &[]);
     assert!(status.success(), "{stdout}\n{stderr}");
     let calls = sandbox.calls("cargo").unwrap();
     assert_eq!(calls.trim(), "test --workspace --no-fail-fast -- --nocapture");
     assert!(stdout.contains("Chromium 1.0"), "{stdout}");
-    assert!(stdout.contains("rust     ok  5 passed, 0 failed, 1 ignored"), "{stdout}");
+    assert!(
+        stdout.contains("rust     ok  5 passed, 0 failed, 1 ignored"),
+        "{stdout}"
+    );
     assert!(stdout.contains("python   none"), "{stdout}");
 }
 
@@ -258,10 +280,11 @@ fn a_failing_cargo_test_fails_it_and_says_so_in_the_summary() {
         "echo 'test result: FAILED. 3 passed; 1 failed; 0 ignored; 0 measured; 0 filtered out; finished in 0.01s'\n\
          exit 101",
     );
-    for tool in ["mktemp", "tee", "awk", "rm"] {
-        sandbox.real(tool);
-    }
+    sandbox.real_tools_after_the_checks();
     let (status, stdout, stderr, _) = sandbox.run(&[], &[]);
     assert_eq!(status.code(), Some(1), "{stdout}\n{stderr}");
-    assert!(stdout.contains("rust     FAILED  3 passed, 1 failed, 0 ignored"), "{stdout}");
+    assert!(
+        stdout.contains("rust     FAILED  3 passed, 1 failed, 0 ignored"),
+        "{stdout}"
+    );
 }
