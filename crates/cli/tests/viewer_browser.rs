@@ -6,7 +6,9 @@
 //!
 //! Needs Chromium: Debian's `chromium` package (`apt-get install
 //! chromium`), or `PETRINAV_CHROMIUM=/path/to/chrome`. Without it these
-//! tests fail, saying so; `.ci/run` installs it.
+//! tests fail, saying so; `scripts/test` (the README's test command, which
+//! `.ci/run` calls) looks for it the same way and installs it, as root, or
+//! stops before compiling.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -46,7 +48,8 @@ fn chromium() -> PathBuf {
     }
     panic!(
         "the viewer's browser tests need Chromium and found none ({}): install Debian's `chromium` package \
-         (`apt-get install -y chromium`) or set PETRINAV_CHROMIUM to a Chromium or Chrome binary",
+         (`apt-get install -y chromium`) or set PETRINAV_CHROMIUM to a Chromium or Chrome binary; \
+         `scripts/test` installs it when run as root",
         candidates
             .iter()
             .map(|c| c.display().to_string())
