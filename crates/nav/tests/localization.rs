@@ -10,7 +10,7 @@
 mod harness;
 
 use harness::{DriveSetup, drive};
-use nav::localization::LocalizationStatus;
+use nav::localization::{LocalizationStatus, MclParams, StatusParams};
 
 fn assert_tracks(setup: &DriveSetup) {
     let s = drive(setup);
@@ -71,9 +71,14 @@ fn same_seeds_give_identical_estimates_and_another_seed_does_not() {
 }
 
 #[test]
-fn people_hiding_the_walls_raise_warnings() {
+fn people_hiding_the_walls_raise_warnings_under_the_source_rule_only() {
+    let source = MclParams {
+        status: StatusParams::explained(),
+        ..MclParams::default()
+    };
     let quiet = DriveSetup {
         max_distance_m: 60.0,
+        params: source,
         ..DriveSetup::tracking("building_31")
     };
     let crowded = DriveSetup {
@@ -83,7 +88,7 @@ fn people_hiding_the_walls_raise_warnings() {
     let q = drive(&quiet);
     let c = drive(&crowded);
     eprintln!(
-        "Warning: {:.1} % of the iterations without people, {:.1} % with 60; errors max {:.3} / {:.3} m",
+        "source rule: Warning {:.1} % of the iterations without people, {:.1} % with 60; errors max {:.3} / {:.3} m",
         100.0 * q.warning_fraction(),
         100.0 * c.warning_fraction(),
         q.max_error_m(),
@@ -105,6 +110,23 @@ fn people_hiding_the_walls_raise_warnings() {
         v.iter().sum::<f64>() / v.len().max(1) as f64
     };
     assert!(mean(&c, LocalizationStatus::Warning) < mean(&c, LocalizationStatus::Success));
+    // The contradiction rule (the default) tells crowded from lost: the
+    // same crowd raises no Warning, and the estimate is as good.
+    let contradiction = drive(&DriveSetup {
+        params: MclParams::default(),
+        ..crowded.clone()
+    });
+    eprintln!(
+        "contradiction rule: Warning {:.1} % with 60 people, error max {:.3} m",
+        100.0 * contradiction.warning_fraction(),
+        contradiction.max_error_m()
+    );
+    assert!(contradiction.warning_fraction() < 0.02);
+    assert!(
+        contradiction.max_error_m() <= 0.3,
+        "{}",
+        contradiction.max_error_m()
+    );
 }
 
 #[test]

@@ -348,6 +348,24 @@ impl LikelihoodField {
         self.inside[k / 64] >> (k % 64) & 1 == 1
     }
 
+    /// Whether the cell of index `k` (`j · width + i`) is occupied.
+    #[inline]
+    pub(crate) fn occupied_index(&self, k: usize) -> bool {
+        self.inside[k / 64] >> (k % 64) & 1 == 1
+    }
+
+    /// Distance between the centre of cell `k` and the nearest centre of a
+    /// cell of the other class, in cells (at least the cap when capped).
+    #[inline]
+    pub(crate) fn centre_distance_cells(&self, k: usize) -> f64 {
+        f64::from(self.dist_sq[k]).sqrt()
+    }
+
+    /// The map frame's heading in the world, radians.
+    pub fn origin_theta_rad(&self) -> f64 {
+        self.origin.theta_rad
+    }
+
     /// The signed distance of cell `c`: positive outside obstacles,
     /// negative inside (the cap off the map).
     fn signed_distance_m(&self, c: CellIndex) -> f64 {

@@ -144,11 +144,13 @@
 //! One filter iteration with 500 particles and 60 of 181 beams on
 //! building_31 takes about 0.16 ms (`benches/localization.rs`).
 
+pub mod consistency;
 pub mod gaussian;
 pub mod kld;
 pub mod likelihood_field;
 pub mod motion_model;
 pub mod recovery;
+pub mod relocalization;
 pub mod resampling;
 pub mod status;
 
@@ -158,6 +160,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use robot::{Cell, GridMap, LaserScan, Pose, Vec2, wrap_angle};
 
+pub use consistency::{ConsistencyTolerances, Neighbourhood, ScanConsistency};
 pub use gaussian::Gaussian;
 pub use kld::KldParams;
 pub use likelihood_field::{
@@ -166,8 +169,9 @@ pub use likelihood_field::{
 };
 pub use motion_model::{OdometryIncrement, OdometryMotionModel};
 pub use recovery::{Recovery, RecoveryParams};
+pub use relocalization::{RecoveryStage, RelocalizationParams};
 pub use resampling::{effective_sample_size, low_variance_resample};
-pub use status::{LocalizationStatus, MatchOutcome, StatusMachine, StatusParams};
+pub use status::{LocalizationStatus, MatchOutcome, StatusMachine, StatusParams, StatusRule};
 
 /// Why the localizer refused something.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -240,9 +244,13 @@ pub struct MclParams {
     pub kld: KldParams,
     /// Random-particle injection (default off).
     pub recovery: RecoveryParams,
-    /// Success/Warning judgement (within 0.1 m, margin 0.02, 0.8
-    /// explained).
+    /// Success/Warning judgement (by default the contradiction rule:
+    /// through tolerance 0.25 m, at most 0.1 contradicted, 10 beams of
+    /// evidence, a check every 0.25 s).
     pub status: StatusParams,
+    /// Recovery after a contradiction Warning (a cloud of 3 000 within
+    /// 2.5 m and 90°, global after 20 s).
+    pub relocalization: RelocalizationParams,
 }
 
 impl Default for MclParams {
@@ -260,9 +268,18 @@ impl Default for MclParams {
             kld: KldParams::default(),
             recovery: RecoveryParams::default(),
             status: StatusParams::default(),
+            relocalization: RelocalizationParams::default(),
         }
     }
 }
+
+/// Share of the particles a correction resets ([`Localizer::update`],
+/// sensor resetting).
+pub const SENSOR_RESET_SHARE: f64 = 0.2;
+
+/// Clusters of a recovery cloud whose means are scored against the scan
+/// ([`relocalization`]).
+pub const RECOVERY_CANDIDATES: usize = 8;
 
 /// Largest particle count accepted.
 pub const MAX_PARTICLES: usize = 10_000_000;
@@ -356,7 +373,28 @@ impl MclParams {
         )?;
         non_negative("status.explained_within_m", self.status.explained_within_m)?;
         unit("status.margin", self.status.margin)?;
-        unit("status.min_explained", self.status.min_explained)
+        unit("status.min_explained", self.status.min_explained)?;
+        non_negative("status.through_tolerance_m", self.status.through_tolerance_m)?;
+        non_negative("status.through_tolerance_rad", self.status.through_tolerance_rad)?;
+        unit("status.max_contradiction", self.status.max_contradiction)?;
+        check(
+            self.status.min_evidence_beams <= 100_000,
+            "status.min_evidence_beams",
+            "at most 100 000",
+            self.status.min_evidence_beams as f64,
+        )?;
+        non_negative("status.check_period_s", self.status.check_period_s)?;
+        let r = &self.relocalization;
+        count("relocalization.particles", r.particles)?;
+        positive("relocalization.radius_m", r.radius_m)?;
+        check(
+            r.heading_rad > 0.0 && r.heading_rad <= std::f64::consts::PI,
+            "relocalization.heading_rad",
+            "in (0, π]",
+            r.heading_rad,
+        )?;
+        positive("relocalization.period_s", r.period_s)?;
+        positive("relocalization.global_after_s", r.global_after_s)
     }
 }
 
@@ -404,6 +442,19 @@ pub struct UpdateInfo {
     pub outcome: MatchOutcome,
     /// The state after this iteration.
     pub status: LocalizationStatus,
+    /// The scan's consistency with the map at the estimate (the
+    /// contradiction rule only).
+    pub consistency: Option<ScanConsistency>,
+    /// Whether this was a filter iteration (`false`: a status check
+    /// between iterations, the particles untouched).
+    pub filtered: bool,
+    /// Where a recovery stands after this iteration.
+    pub recovery: RecoveryStage,
+    /// A pose near the estimate that explains a scan the estimate
+    /// contradicts (the contradiction rule's neighbourhood): the robot is
+    /// off, not lost; after a filter iteration the cloud was partly reset
+    /// there ([`Localizer::update`], sensor resetting).
+    pub correction: Option<Pose>,
 }
 
 /// The particle filter (module docs).
@@ -443,6 +494,17 @@ pub struct Localizer {
     iterations: u64,
     machine: StatusMachine,
     recovery: Recovery,
+    /// Time of the last filter iteration and of the last judgement
+    /// ([`Localizer::update_at`]), seconds.
+    last_filter_s: Option<f64>,
+    last_judged_s: Option<f64>,
+    /// The time given with the scan being processed.
+    now_s: Option<f64>,
+    /// The recovery after a contradiction Warning, and when its stage began.
+    stage: RecoveryStage,
+    stage_since_s: Option<f64>,
+    /// The cluster the recovery's estimate came from.
+    recovery_bin: Option<(i64, i64, i64)>,
 }
 
 impl Localizer {
@@ -528,6 +590,12 @@ impl Localizer {
             iterations: 0,
             machine: StatusMachine::new(),
             recovery: Recovery::new(params.recovery),
+            last_filter_s: None,
+            last_judged_s: None,
+            now_s: None,
+            stage: RecoveryStage::Idle,
+            stage_since_s: None,
+            recovery_bin: None,
             params,
         }
     }
@@ -552,6 +620,10 @@ impl Localizer {
         self.machine = StatusMachine::new();
         self.recovery.reset();
         self.initialised = true;
+        self.stage = RecoveryStage::Idle;
+        self.stage_since_s = None;
+        self.last_filter_s = None;
+        self.last_judged_s = None;
     }
 
     /// Places `particles` particles around `pose`: Gaussian with standard
@@ -623,6 +695,11 @@ impl Localizer {
         self.weight.resize(n, 1.0 / n as f64);
         let mean = self.weighted_mean();
         self.reset_after_init(mean);
+        // A global cloud is a recovery from the start: its estimate is the
+        // best cluster's, and its first Warning scatters nothing.
+        if self.params.status.rule == StatusRule::Contradiction && self.params.relocalization.enabled {
+            self.stage = RecoveryStage::Global;
+        }
     }
 
     /// The weighted mean of the particles: positions averaged, headings by
@@ -642,6 +719,124 @@ impl Localizer {
             return self.mean;
         }
         Pose::new(sx / sw, sy / sw, ss.atan2(sc))
+    }
+
+    /// The bin of particle `i` for clustering (0.5 m × 0.5 m × 0.5 rad)
+    /// and the number of heading bins.
+    fn cluster_key(&self, i: usize) -> ((i64, i64, i64), i64) {
+        const XY: f64 = 0.5;
+        const TH: f64 = 0.5;
+        let bins_th = (std::f64::consts::TAU / TH).ceil() as i64;
+        (
+            (
+                (self.x[i] / XY).floor() as i64,
+                (self.y[i] / XY).floor() as i64,
+                (((self.theta[i] + std::f64::consts::PI) / TH).floor() as i64).rem_euclid(bins_th),
+            ),
+            bins_th,
+        )
+    }
+
+    /// The `k` bins with the largest total weight, heaviest first (ties:
+    /// bin order). `O(n log n)`.
+    fn heaviest_bins(&self, k: usize) -> Vec<(i64, i64, i64)> {
+        let mut bins: std::collections::BTreeMap<(i64, i64, i64), f64> = std::collections::BTreeMap::new();
+        for i in 0..self.x.len() {
+            *bins.entry(self.cluster_key(i).0).or_insert(0.0) += self.weight[i];
+        }
+        let mut v: Vec<((i64, i64, i64), f64)> = bins.into_iter().collect();
+        v.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        v.into_iter().take(k).map(|(b, _)| b).collect()
+    }
+
+    /// The particles of the cluster around `bin`: it and its 26
+    /// neighbours.
+    fn cluster_members(&self, bin: (i64, i64, i64)) -> Vec<bool> {
+        (0..self.x.len())
+            .map(|i| {
+                let (k, bins_th) = self.cluster_key(i);
+                let dt = (k.2 - bin.2).rem_euclid(bins_th);
+                (k.0 - bin.0).abs() <= 1 && (k.1 - bin.1).abs() <= 1 && (dt <= 1 || dt >= bins_th - 1)
+            })
+            .collect()
+    }
+
+    /// The weighted mean of the particles in `keep` (the last estimate if
+    /// they weigh nothing).
+    fn masked_mean(&self, keep: &[bool]) -> Pose {
+        let (mut sx, mut sy, mut ss, mut sc, mut sw) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for i in (0..self.x.len()).filter(|&i| keep[i]) {
+            let w = self.weight[i];
+            sx += w * self.x[i];
+            sy += w * self.y[i];
+            let (s, c) = self.theta[i].sin_cos();
+            ss += w * s;
+            sc += w * c;
+            sw += w;
+        }
+        if sw <= 0.0 {
+            return self.mean;
+        }
+        Pose::new(sx / sw, sy / sw, ss.atan2(sc))
+    }
+
+    /// The estimate while recovering (module [`relocalization`]): among
+    /// the clusters around the [`RECOVERY_CANDIDATES`] heaviest bins, the
+    /// mean that contradicts the scan least (`(through + 1)/(hit + through
+    /// + 2)`, so that more evidence counts; ties: the heavier).
+    /// The mean of a cloud with several modes lies between them, where the
+    /// robot is not, and the heaviest mode of a flat likelihood is often
+    /// a wrong one. Remembers the cluster for [`Localizer::collapse_to_cluster`].
+    fn recovery_estimate(&mut self, scan: &LaserScan) -> Pose {
+        let tol = self.params.status.tolerances();
+        let mut best: Option<(f64, Pose, (i64, i64, i64))> = None;
+        for bin in self.heaviest_bins(RECOVERY_CANDIDATES) {
+            let mean = self.masked_mean(&self.cluster_members(bin));
+            let c = self.field.consistency(&mean, scan, tol);
+            // The contradiction with one pseudo-beam each way: a pose that
+            // agrees with many walls beats one that agrees with a few.
+            let score = (c.through as f64 + 1.0) / (c.evidence() as f64 + 2.0);
+            if best.is_none_or(|(b, _, _)| score < b) {
+                best = Some((score, mean, bin));
+            }
+        }
+        match best {
+            Some((_, mean, bin)) => {
+                self.recovery_bin = Some(bin);
+                mean
+            }
+            None => self.weighted_mean(),
+        }
+    }
+
+    /// Ends a recovery: resamples the tracking count of particles from the
+    /// heaviest cluster only, so that the other modes of the recovery
+    /// cloud cannot pull the estimate away later.
+    fn collapse_to_cluster(&mut self) {
+        let Some(bin) = self.recovery_bin.take() else {
+            return;
+        };
+        let keep = self.cluster_members(bin);
+        let mut sum = 0.0;
+        for (w, &k) in self.weight.iter_mut().zip(&keep) {
+            if !k {
+                *w = 0.0;
+            }
+            sum += *w;
+        }
+        if sum.is_nan() || sum <= 0.0 {
+            return;
+        }
+        self.weight.iter_mut().for_each(|w| *w /= sum);
+        let n_out = self.params.particles;
+        let u = self.noise.uniform();
+        low_variance_resample(&self.weight, n_out, u, &mut self.picks);
+        self.gather();
+        std::mem::swap(&mut self.x, &mut self.nx);
+        std::mem::swap(&mut self.y, &mut self.ny);
+        std::mem::swap(&mut self.theta, &mut self.ntheta);
+        self.weight.clear();
+        self.weight.resize(n_out, 1.0 / n_out as f64);
     }
 
     fn check_scan(scan: &LaserScan) -> Result<(), LocalizationError> {
@@ -669,13 +864,47 @@ impl Localizer {
     /// an initialisation and whenever the odometry moved at least
     /// `update_min_d_m` or turned at least `update_min_a_rad` since the
     /// last iteration; otherwise only records the odometry (the scan is not
-    /// used) and returns `None`.
+    /// used) and returns `None`. Without a clock there are no status
+    /// checks between iterations and no timed recovery iterations: use
+    /// [`Localizer::update_at`] on a robot.
     ///
     /// Errors (the localizer is left unchanged): not initialised, a
     /// non-finite odometry pose, a scan with a non-finite mount or angles
     /// or a maximum range that is NaN or ≤ 0.
     pub fn update(
         &mut self,
+        odometry: Pose,
+        scan: &LaserScan,
+    ) -> Result<Option<UpdateInfo>, LocalizationError> {
+        self.update_inner(None, odometry, scan)
+    }
+
+    /// [`Localizer::update`] at time `time_s` (seconds, non-decreasing):
+    /// also, between filter iterations, judges the scan at the current
+    /// estimate every `status.check_period_s` (the contradiction rule), and
+    /// while recovering runs a filter iteration every
+    /// `relocalization.period_s` even without motion
+    /// ([`relocalization`]). A check returns an [`UpdateInfo`] with
+    /// `filtered: false`.
+    pub fn update_at(
+        &mut self,
+        time_s: f64,
+        odometry: Pose,
+        scan: &LaserScan,
+    ) -> Result<Option<UpdateInfo>, LocalizationError> {
+        if !time_s.is_finite() {
+            return Err(LocalizationError::InvalidParameter {
+                name: "time_s",
+                requirement: "a finite number",
+                value: time_s,
+            });
+        }
+        self.update_inner(Some(time_s), odometry, scan)
+    }
+
+    fn update_inner(
+        &mut self,
+        time_s: Option<f64>,
         odometry: Pose,
         scan: &LaserScan,
     ) -> Result<Option<UpdateInfo>, LocalizationError> {
@@ -690,19 +919,183 @@ impl Localizer {
         }
         Localizer::check_scan(scan)?;
         self.odometry = Some(odometry);
+        self.now_s = time_s;
+        let since = |last: Option<f64>| match (time_s, last) {
+            (Some(t), Some(l)) => t - l,
+            _ => 0.0,
+        };
         let inc = match self.filter_odometry {
             None => OdometryIncrement::default(),
             Some(from) => {
                 let inc = OdometryIncrement::between(&from, &odometry);
-                if inc.distance_m() < self.params.update_min_d_m
-                    && inc.rotation_rad().abs() < self.params.update_min_a_rad
-                {
+                let moved = inc.distance_m() >= self.params.update_min_d_m
+                    || inc.rotation_rad().abs() >= self.params.update_min_a_rad;
+                let recovery_due = self.stage != RecoveryStage::Idle
+                    && since(self.last_filter_s) >= self.params.relocalization.period_s;
+                if !(moved || recovery_due) {
+                    let s = &self.params.status;
+                    if s.rule == StatusRule::Contradiction
+                        && s.check_period_s > 0.0
+                        && since(self.last_judged_s) >= s.check_period_s
+                    {
+                        let check = self.status_check(scan);
+                        // Off, not lost: a filter iteration now resets part
+                        // of the cloud at the correction (the robot may
+                        // stand for long, and no iteration would run).
+                        if check.correction.is_some() && self.stage == RecoveryStage::Idle {
+                            return Ok(Some(self.iterate(&inc, odometry, scan)));
+                        }
+                        return Ok(Some(check));
+                    }
                     return Ok(None);
                 }
                 inc
             }
         };
         Ok(Some(self.iterate(&inc, odometry, scan)))
+    }
+
+    /// Judges `scan` at the current estimate without touching the
+    /// particles (the contradiction rule between filter iterations).
+    fn status_check(&mut self, scan: &LaserScan) -> UpdateInfo {
+        let estimate = self.estimate();
+        let warning = self.machine.status() == LocalizationStatus::Warning;
+        let (outcome, c, correction) = self
+            .params
+            .status
+            .judge_scan(&self.field, &estimate, scan, warning);
+        let status = self.machine.observe(outcome);
+        self.last_judged_s = self.now_s;
+        self.after_judgement(status);
+        let n = self.x.len();
+        UpdateInfo {
+            iteration: self.iterations,
+            particles: n,
+            beams_used: 0,
+            beams_skipped: 0,
+            effective_sample_size: effective_sample_size(&self.weight),
+            resampled: false,
+            particles_after: self.x.len(),
+            injected: 0,
+            estimate,
+            odometry_pose: estimate,
+            score_estimate: 1.0 - c.contradiction(),
+            score_odometry: 1.0 - c.contradiction(),
+            outcome,
+            status,
+            consistency: Some(c),
+            filtered: false,
+            recovery: self.stage,
+            correction,
+        }
+    }
+
+    /// After a judgement that left the machine in `status`:
+    /// starts, escalates or ends a recovery (module [`relocalization`]).
+    fn after_judgement(&mut self, status: LocalizationStatus) {
+        let r = self.params.relocalization;
+        if self.params.status.rule != StatusRule::Contradiction || !r.enabled {
+            return;
+        }
+        match status {
+            LocalizationStatus::Success => match self.stage {
+                RecoveryStage::Idle => {}
+                // A recovery cloud's other modes go at once.
+                RecoveryStage::Scattered => {
+                    self.collapse_to_cluster();
+                    self.stage = RecoveryStage::Idle;
+                    self.stage_since_s = None;
+                }
+                // A global cloud shrinks by KLD-sampling: the cluster
+                // estimate holds until it is down to the tracking size.
+                RecoveryStage::Global => {
+                    if self.x.len() <= self.params.particles {
+                        self.recovery_bin = None;
+                        self.stage = RecoveryStage::Idle;
+                        self.stage_since_s = None;
+                    }
+                }
+            },
+            LocalizationStatus::Warning => {
+                let elapsed = match (self.now_s, self.stage_since_s) {
+                    (Some(t), Some(s)) => t - s,
+                    _ => 0.0,
+                };
+                if self.stage == RecoveryStage::Idle {
+                    self.scatter_recovery_cloud();
+                } else if elapsed >= r.global_after_s {
+                    if self.stage == RecoveryStage::Scattered {
+                        self.scatter_global();
+                    } else {
+                        self.scatter_recovery_cloud();
+                    }
+                }
+            }
+        }
+    }
+
+    /// Sensor resetting (S. Lenser, M. Veloso, *Sensor resetting
+    /// localization for poorly modelled mobile robots*, ICRA 2000): a
+    /// [`SENSOR_RESET_SHARE`] of the particles, evenly spread over the
+    /// cloud, is moved to `q` (the nearest pose that explains a scan the
+    /// estimate contradicts) with the tracking spread of a fresh start
+    /// (0.05 m, 1°); all weights equal.
+    fn reset_part_at(&mut self, q: &Pose) {
+        let n = self.x.len();
+        let k = ((n as f64 * SENSOR_RESET_SHARE).round() as usize).min(n);
+        if k == 0 {
+            return;
+        }
+        let stride = n / k;
+        for i in (0..n).step_by(stride.max(1)).take(k) {
+            self.x[i] = q.x_m + self.noise.gaussian(0.05);
+            self.y[i] = q.y_m + self.noise.gaussian(0.05);
+            self.theta[i] = wrap_angle(q.theta_rad + self.noise.gaussian(1f64.to_radians()));
+        }
+        self.weight.iter_mut().for_each(|w| *w = 1.0 / n as f64);
+    }
+
+    /// Adds a recovery cloud around the last estimate to the particles,
+    /// all weights equal.
+    fn scatter_recovery_cloud(&mut self) {
+        let r = self.params.relocalization;
+        let centre = self.mean;
+        for _ in 0..r.particles {
+            let u = [self.noise.uniform(), self.noise.uniform(), self.noise.uniform()];
+            let p = r.scatter(&centre, u);
+            self.x.push(p.x_m);
+            self.y.push(p.y_m);
+            self.theta.push(p.theta_rad);
+        }
+        let n = self.x.len();
+        self.weight.clear();
+        self.weight.resize(n, 1.0 / n as f64);
+        self.stage = RecoveryStage::Scattered;
+        self.stage_since_s = self.now_s;
+    }
+
+    /// Replaces the particles by a global cloud, keeping the status (a
+    /// recovery's second stage).
+    fn scatter_global(&mut self) {
+        let n = self.params.global_particles;
+        self.x.clear();
+        self.y.clear();
+        self.theta.clear();
+        for _ in 0..n {
+            let p = self.random_free_pose();
+            self.x.push(p.x_m);
+            self.y.push(p.y_m);
+            self.theta.push(p.theta_rad);
+        }
+        self.weight.clear();
+        self.weight.resize(n, 1.0 / n as f64);
+        self.stage = RecoveryStage::Global;
+        self.stage_since_s = self.now_s;
+    }
+
+    /// Where a recovery stands.
+    pub fn recovery_stage(&self) -> RecoveryStage {
+        self.stage
     }
 
     /// One filter iteration (module docs).
@@ -712,7 +1105,9 @@ impl Localizer {
         if *inc != OdometryIncrement::default() {
             // A global cloud not yet shrunk to the tracking size explores
             // with the larger noise.
-            let model = if n > self.params.particles {
+            // (A recovery cloud already spans the kidnap: it moves with
+            // the tracking noise, module [`relocalization`].)
+            let model = if n > self.params.particles && self.stage != RecoveryStage::Scattered {
                 &self.params.global_motion
             } else {
                 &self.params.motion
@@ -734,13 +1129,39 @@ impl Localizer {
         // 2. Measurement.
         let (beams_used, beams_skipped) = self.weigh(scan);
         let effective_sample_size = effective_sample_size(&self.weight);
-        // 3. Estimate.
-        let estimate = self.weighted_mean();
+        // 3. Estimate (while recovering, the heaviest cluster's).
+        let estimate = if self.stage == RecoveryStage::Idle {
+            self.weighted_mean()
+        } else {
+            self.recovery_estimate(scan)
+        };
         // 4. Status.
-        let within = self.params.status.explained_within_m;
-        let (score_estimate, valid) = self.field.explained_fraction(&estimate, scan, within);
-        let (score_odometry, _) = self.field.explained_fraction(&odometry_pose, scan, within);
-        let outcome = self.params.status.judge(score_estimate, score_odometry, valid);
+        let mut correction = None;
+        let (score_estimate, score_odometry, outcome, consistency) = match self.params.status.rule {
+            StatusRule::Explained => {
+                let within = self.params.status.explained_within_m;
+                let (score_estimate, valid) = self.field.explained_fraction(&estimate, scan, within);
+                let (score_odometry, _) = self.field.explained_fraction(&odometry_pose, scan, within);
+                let outcome = self.params.status.judge(score_estimate, score_odometry, valid);
+                (score_estimate, score_odometry, outcome, None)
+            }
+            StatusRule::Contradiction => {
+                let tol = self.params.status.tolerances();
+                let warning = self.machine.status() == LocalizationStatus::Warning;
+                let (outcome, at_estimate, found) =
+                    self.params
+                        .status
+                        .judge_scan(&self.field, &estimate, scan, warning);
+                correction = found;
+                let at_odometry = self.field.consistency(&odometry_pose, scan, tol);
+                (
+                    1.0 - at_estimate.contradiction(),
+                    1.0 - at_odometry.contradiction(),
+                    outcome,
+                    Some(at_estimate),
+                )
+            }
+        };
         let status = self.machine.observe(outcome);
         // 5. Resampling.
         let p_inject = self.recovery.injection_probability();
@@ -752,6 +1173,14 @@ impl Localizer {
         self.mean = estimate;
         self.filter_odometry = Some(odometry);
         self.iterations += 1;
+        self.last_filter_s = self.now_s;
+        self.last_judged_s = self.now_s;
+        if let Some(q) = correction
+            && self.stage == RecoveryStage::Idle
+        {
+            self.reset_part_at(&q);
+        }
+        self.after_judgement(status);
         UpdateInfo {
             iteration: self.iterations,
             particles: n,
@@ -767,6 +1196,10 @@ impl Localizer {
             score_odometry,
             outcome,
             status,
+            consistency,
+            filtered: true,
+            recovery: self.stage,
+            correction,
         }
     }
 
