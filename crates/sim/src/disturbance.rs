@@ -50,9 +50,12 @@
 //! stands still, to get it out of their way or for fun; its wheels are
 //! braked (or held by the motors), so they skid or the robot is dragged,
 //! and the encoders count nothing: a kidnapping the odometry does not see.
-//! The robot is *braked* once the wheel speeds driven and the wheel speeds
-//! commanded have all been below `braked_speed_mps` for `braked_after_s`
-//! (per physics sub-step, at its end). While it is braked and not already
+//! The robot is *braked* once its forward speed, driven and commanded, has
+//! been below `braked_speed_mps` for `braked_after_s` (per physics
+//! sub-step, at its end): standing with its brakes on, or turning on the
+//! spot, when its motors hold it against a push along the floor as brakes
+//! would (a robot surrounded by visitors turns to and fro looking for a
+//! way out, and is pushed all the same). While it is braked and not already
 //! being pushed, each person whose disc comes within `reach_m` of the
 //! footprint (rim to rim) pushes it with hazard `rate_per_person_s`: the
 //! pushes form a non-homogeneous Poisson process of intensity
@@ -234,8 +237,8 @@ pub struct PushParams {
     /// The robot is braked after this long with its wheels and its command
     /// stopped, seconds. Default 1.0.
     pub braked_after_s: f64,
-    /// Wheel rim speeds (driven and commanded) below this count as
-    /// stopped, m/s, > 0. Default 0.01.
+    /// Forward speeds (driven and commanded, the mean of the wheel rim
+    /// speeds) below this count as standing, m/s, > 0. Default 0.01.
     pub braked_speed_mps: f64,
     /// Smallest translation of a push, metres. Default 0.3.
     pub distance_min_m: f64,
@@ -824,9 +827,15 @@ impl Disturbances {
         let at = pose.position();
         if let Some(state) = &mut self.push {
             let p = &self.params.push;
-            let still = [wheels_mps.0, wheels_mps.1, commanded_mps.0, commanded_mps.1]
-                .iter()
-                .all(|v| v.abs() < p.braked_speed_mps);
+            // Standing: neither driving nor commanded to drive forward or
+            // back (turning on the spot the motors hold the robot as
+            // brakes would).
+            let still = [
+                0.5 * (wheels_mps.0 + wheels_mps.1),
+                0.5 * (commanded_mps.0 + commanded_mps.1),
+            ]
+            .iter()
+            .all(|v| v.abs() < p.braked_speed_mps);
             state.still_for_s = if still { state.still_for_s + dt_s } else { 0.0 };
             // Tolerance for a clock summed in steps of dt.
             if state.active.is_none() && still && state.still_for_s >= p.braked_after_s - 1e-9 {
