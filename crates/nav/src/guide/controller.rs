@@ -32,13 +32,17 @@
 
 use robot::{Command, Controller, Event, GridMap, Notes, Perception, Pose, Request, Step, Vec2};
 
+use crate::supervisor::credit::CreditSupervisor;
+use crate::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel, CrowdMeter, Segment, SegmentEnd};
 use crate::supervisor::log::{DecisionLog, Sojourn, StateName};
 use crate::supervisor::reference::Reference;
 use crate::supervisor::{Rates, Supervisor};
 
 use super::automove::{AutoMove, AutoMoveError, AutoMoveParams};
 use super::contour::{ContourMode, ContourParams, ContourTracker, Side};
-use crate::localization::{LocalizationError, LocalizationStatus, Localizer, MclParams};
+use crate::localization::{
+    LocalizationError, LocalizationStatus, Localizer, MclParams, RecoveryStage, ScanConsistency,
+};
 use crate::supervisor::Behaviour;
 
 /// Parameters of the guide controller.
@@ -148,13 +152,18 @@ pub enum Policy {
     /// Contour tracking while the localizer warns, AutoMove while it
     /// succeeds.
     Rule,
-    /// The rule, and the GSPN supervisor's decisions.
-    Supervisor(Box<SupervisorPlan>),
+    /// The crediting GSPN supervisor ([`crate::supervisor::credit`]): the
+    /// net decides at the start, at every Warning and at every return to
+    /// Success, with rates learnt per behaviour and crowd context.
+    Supervisor(Box<CreditPlan>),
+    /// The source's GSPN supervisor: the rule, and `f_auto` against
+    /// `f_cont` at the start and on every return to Success.
+    SupervisorSource(Box<SupervisorPlan>),
 }
 
 impl Policy {
     /// A short name: `automove`, `contour`, `automove_then_contour`, `rule`,
-    /// `supervisor`.
+    /// `supervisor`, `supervisor_source`.
     pub fn name(&self) -> &'static str {
         match self {
             Policy::Fixed(Behaviour::AutoMove) => "automove",
@@ -162,12 +171,23 @@ impl Policy {
             Policy::AutoMoveThenContour => "automove_then_contour",
             Policy::Rule => "rule",
             Policy::Supervisor(_) => "supervisor",
+            Policy::SupervisorSource(_) => "supervisor_source",
         }
     }
 }
 
-/// What the supervisor decides with: the net compiled, the learnt rates and
-/// the behaviours' references.
+/// What the crediting supervisor decides with: the net checked and
+/// compiled, and what it learnt from the log.
+#[derive(Debug, Clone)]
+pub struct CreditPlan {
+    /// The supervisor.
+    pub supervisor: CreditSupervisor,
+    /// The rates learnt per crowd context, and AutoMove's reference.
+    pub model: CreditModel,
+}
+
+/// What the source's supervisor decides with: the net compiled, the learnt
+/// rates and the behaviours' references.
 #[derive(Debug, Clone)]
 pub struct SupervisorPlan {
     /// The supervisor.
@@ -195,6 +215,9 @@ pub struct GuideSummary {
     pub time_contour_s: f64,
     /// The supervisor's decisions.
     pub decisions: Vec<DecisionLog>,
+    /// The mission in segments of one state each (crediting supervisor's
+    /// learning, [`crate::supervisor::credit_learning`]).
+    pub segments: Vec<Segment>,
 }
 
 /// What the controller counted over its mission.
@@ -247,6 +270,8 @@ pub struct GuideController {
     /// The scores of the last filter iteration (estimate, odometry) and
     /// its effective sample size, for the notes.
     last_scores: Option<[f64; 3]>,
+    /// The scan's consistency at the last judgement (contradiction rule).
+    last_consistency: Option<ScanConsistency>,
     abnormal: bool,
     asking: bool,
     request: Option<Request>,
@@ -259,7 +284,22 @@ pub struct GuideController {
     sojourns_loc: Vec<Sojourn>,
     sojourns_plan: Vec<Sojourn>,
     decisions: Vec<DecisionLog>,
+    /// The crowd seen (unmapped objects per scan, ~10 s mean).
+    crowd: CrowdMeter,
+    /// Closed segments, and the open one with its state.
+    segments: Vec<Segment>,
+    open: Option<(SegmentKey, Segment)>,
+    /// Remaining length along the crediting supervisor's reference at the
+    /// last step, metres.
+    last_remaining_m: Option<f64>,
 }
+
+/// The state a segment is in: behaviour, localized, planner Normal,
+/// crowd context.
+type SegmentKey = (Behaviour, bool, bool, usize);
+
+/// Seconds over which the crowd is averaged for the context.
+pub const CROWD_WINDOW_S: f64 = 10.0;
 
 impl GuideController {
     /// A controller on `map`, starting from the known pose `start` (the
@@ -296,7 +336,10 @@ impl GuideController {
         let contour = ContourTracker::new(params.contour).map_err(GuideError::Params)?;
         let active = match &policy {
             Policy::Fixed(b) => *b,
-            Policy::AutoMoveThenContour | Policy::Rule | Policy::Supervisor(_) => Behaviour::AutoMove,
+            Policy::AutoMoveThenContour
+            | Policy::Rule
+            | Policy::Supervisor(_)
+            | Policy::SupervisorSource(_) => Behaviour::AutoMove,
         };
         Ok(GuideController {
             p: params,
@@ -309,6 +352,7 @@ impl GuideController {
             last_time_s: None,
             status: LocalizationStatus::Success,
             last_scores: None,
+            last_consistency: None,
             abnormal: false,
             asking: false,
             request: None,
@@ -319,6 +363,10 @@ impl GuideController {
             sojourns_loc: Vec::new(),
             sojourns_plan: Vec::new(),
             decisions: Vec::new(),
+            crowd: CrowdMeter::new(CROWD_WINDOW_S),
+            segments: Vec::new(),
+            open: None,
+            last_remaining_m: None,
         })
     }
 
@@ -369,12 +417,20 @@ impl GuideController {
             duration_s: (end_s - self.plan_since_s).max(0.0),
             ended: false,
         });
+        let mut segments = self.segments.clone();
+        if let Some((_, open)) = self.open {
+            segments.push(Segment {
+                end: SegmentEnd::Mission,
+                ..open
+            });
+        }
         GuideSummary {
             localizer,
             planner,
             time_automove_s: self.stats.time_automove_s,
             time_contour_s: self.stats.time_contour_s,
             decisions: self.decisions.clone(),
+            segments,
         }
     }
 
@@ -401,7 +457,7 @@ impl GuideController {
     /// the behaviour it chooses, or the active one when it cannot decide
     /// (an event says why).
     fn decide(&mut self, reason: &str, t: f64, estimate: Pose, notes: &mut Notes) -> Behaviour {
-        let Policy::Supervisor(plan) = &self.policy else {
+        let Policy::SupervisorSource(plan) = &self.policy else {
             return self.active;
         };
         let mut rates = plan.rates;
@@ -426,12 +482,13 @@ impl GuideController {
                 self.decisions.push(DecisionLog {
                     time_s: t,
                     reason: reason.to_string(),
-                    rates: rates.as_array(),
+                    rates: rates.as_array().to_vec(),
                     f_auto: d.f_auto,
                     f_cont: d.f_cont,
                     p_loc_succ: d.p_loc_succ,
                     p_loc_warn: d.p_loc_warn,
                     choice: d.choice,
+                    context: None,
                 });
                 d.choice
             }
@@ -439,6 +496,113 @@ impl GuideController {
                 notes.event(Event::new("decision_error", t).with("error", err.to_string()));
                 self.active
             }
+        }
+    }
+
+    /// The crediting supervisor's decision at `t` (`reason`: `start`,
+    /// `warning` or `recovered`), the localizer `localized` or not: the
+    /// behaviour it chooses, or the active one when it cannot decide (an
+    /// event says why).
+    fn decide_credit(
+        &mut self,
+        reason: &str,
+        t: f64,
+        estimate: Pose,
+        localized: bool,
+        notes: &mut Notes,
+    ) -> Behaviour {
+        let Policy::Supervisor(plan) = &self.policy else {
+            return self.active;
+        };
+        let context = self.crowd.context();
+        let remaining = plan.model.reference.remaining_m(estimate.position());
+        let rates = plan.model.rates(context, remaining);
+        match plan.supervisor.decide(&rates, localized) {
+            Ok(d) => {
+                let mut e = Event::new("decision", t)
+                    .at(estimate.position())
+                    .with("reason", reason)
+                    .with("f_auto", d.f_auto)
+                    .with("f_cont", d.f_cont)
+                    .with("choice", behaviour_name(d.choice))
+                    .with("p_success", d.p_success)
+                    .with("p_loc_warn", d.p_loc_warn)
+                    .with("context", CONTEXT_NAMES[context])
+                    .with("crowd", self.crowd.mean())
+                    .with("remaining_m", remaining);
+                for i in 3..=15 {
+                    e = e.with(format!("lambda{i}"), rates.get(i));
+                }
+                notes.event(e);
+                self.decisions.push(DecisionLog {
+                    time_s: t,
+                    reason: reason.to_string(),
+                    rates: rates.as_array().to_vec(),
+                    f_auto: d.f_auto,
+                    f_cont: d.f_cont,
+                    p_loc_succ: 1.0 - d.p_loc_warn,
+                    p_loc_warn: d.p_loc_warn,
+                    choice: d.choice,
+                    context: Some(context),
+                });
+                d.choice
+            }
+            Err(err) => {
+                notes.event(Event::new("decision_error", t).with("error", err.to_string()));
+                self.active
+            }
+        }
+    }
+
+    /// Accounts the control cycle that just ended (`dt` seconds, in the
+    /// state the controller is in now) to the segments, with the progress
+    /// made along the crediting supervisor's reference to `estimate`.
+    fn account_segment(&mut self, dt: f64, estimate: Pose) {
+        let remaining = match &self.policy {
+            Policy::Supervisor(plan) => Some(plan.model.reference.remaining_m(estimate.position())),
+            _ => None,
+        };
+        let progress = match (self.last_remaining_m, remaining) {
+            (Some(a), Some(b)) => Some(a - b),
+            _ => None,
+        };
+        self.last_remaining_m = remaining;
+        let key: SegmentKey = (
+            self.active,
+            self.status == LocalizationStatus::Success,
+            !self.abnormal || self.active == Behaviour::Contour,
+            self.crowd.context(),
+        );
+        if let Some((k, seg)) = self.open
+            && k != key
+        {
+            let end = if k.1 != key.1 {
+                SegmentEnd::Localizer
+            } else if k.2 != key.2 {
+                SegmentEnd::Planner
+            } else if k.0 != key.0 {
+                SegmentEnd::Behaviour
+            } else {
+                SegmentEnd::Context
+            };
+            self.segments.push(Segment { end, ..seg });
+            self.open = None;
+        }
+        let (_, seg) = self.open.get_or_insert((
+            key,
+            Segment {
+                behaviour: key.0,
+                localized: key.1,
+                normal: key.2,
+                context: key.3,
+                duration_s: 0.0,
+                progress_m: remaining.map(|_| 0.0),
+                end: SegmentEnd::Mission,
+            },
+        ));
+        seg.duration_s += dt;
+        if let (Some(p), Some(acc)) = (progress, seg.progress_m.as_mut()) {
+            *acc += p;
         }
     }
 
@@ -481,6 +645,8 @@ impl Controller for GuideController {
                 Behaviour::AutoMove => self.stats.time_automove_s += dt,
                 Behaviour::Contour => self.stats.time_contour_s += dt,
             }
+            let estimate = self.localizer.estimate();
+            self.account_segment(dt, estimate);
         }
         self.last_time_s = Some(t);
         self.request = None;
@@ -488,15 +654,19 @@ impl Controller for GuideController {
             notes.event(Event::new("no_laser", t));
             return Step::GiveUp;
         };
-        match self.localizer.update(p.odometry, scan) {
+        match self.localizer.update_at(t, p.odometry, scan) {
             Ok(Some(info)) => {
-                self.stats.filter_iterations += 1;
+                self.stats.filter_iterations += u64::from(info.filtered);
+                if let Some(c) = info.consistency {
+                    self.last_consistency = Some(c);
+                    self.crowd.observe(t, c.unmapped_objects as f64);
+                }
                 self.last_scores = Some([
                     info.score_estimate,
                     info.score_odometry,
                     info.effective_sample_size,
                 ]);
-                if notes.is_enabled() {
+                if notes.is_enabled() && info.filtered {
                     notes.cloud(PARTICLES_CLOUD, self.localizer.particles().map(|p| p.pose));
                 }
                 if info.status != self.status {
@@ -526,6 +696,12 @@ impl Controller for GuideController {
                     let at = info.estimate;
                     match (&self.policy, info.status) {
                         (Policy::Fixed(_), _) => {}
+                        (Policy::Supervisor(_), status) => {
+                            let localized = status == LocalizationStatus::Success;
+                            let reason = if localized { "recovered" } else { "warning" };
+                            let choice = self.decide_credit(reason, t, at, localized, notes);
+                            self.switch(choice, "decision", t, at.position(), notes);
+                        }
                         (_, LocalizationStatus::Warning) => {
                             self.switch(Behaviour::Contour, "warning", t, at.position(), notes)
                         }
@@ -533,7 +709,7 @@ impl Controller for GuideController {
                         (Policy::Rule, LocalizationStatus::Success) => {
                             self.switch(Behaviour::AutoMove, "success", t, at.position(), notes)
                         }
-                        (Policy::Supervisor(_), LocalizationStatus::Success) => {
+                        (Policy::SupervisorSource(_), LocalizationStatus::Success) => {
                             let choice = self.decide("recovered", t, at, notes);
                             self.switch(choice, "decision", t, at.position(), notes);
                         }
@@ -551,9 +727,20 @@ impl Controller for GuideController {
             self.started = true;
             self.loc_since_s = t;
             self.plan_since_s = t;
-            if matches!(self.policy, Policy::Supervisor(_)) {
-                let choice = self.decide("start", t, estimate, notes);
-                self.switch(choice, "decision", t, estimate.position(), notes);
+            match self.policy {
+                Policy::SupervisorSource(_) => {
+                    let choice = self.decide("start", t, estimate, notes);
+                    self.switch(choice, "decision", t, estimate.position(), notes);
+                }
+                Policy::Supervisor(_) => {
+                    let localized = self.status == LocalizationStatus::Success;
+                    let choice = self.decide_credit("start", t, estimate, localized, notes);
+                    self.switch(choice, "decision", t, estimate.position(), notes);
+                }
+                _ => {}
+            }
+            if let Policy::Supervisor(plan) = &self.policy {
+                self.last_remaining_m = Some(plan.model.reference.remaining_m(estimate.position()));
             }
         }
         if notes.is_enabled() {
@@ -569,6 +756,19 @@ impl Controller for GuideController {
                 notes.value("score_odometry", odometry);
                 notes.value("effective_sample_size", ess);
             }
+            if let Some(c) = self.last_consistency {
+                notes.value("contradiction", c.contradiction());
+                notes.value("evidence_beams", c.evidence() as f64);
+                notes.value("unmapped_objects", c.unmapped_objects as f64);
+            }
+            notes.value(
+                "recovering",
+                match self.localizer.recovery_stage() {
+                    RecoveryStage::Idle => 0.0,
+                    RecoveryStage::Scattered => 1.0,
+                    RecoveryStage::Global => 2.0,
+                },
+            );
         }
         if estimate.position().dist(self.goal) <= self.p.arrive_m {
             notes.event(Event::new("arrived", t).at(estimate.position()));

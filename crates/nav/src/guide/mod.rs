@@ -9,6 +9,6 @@ pub mod scan;
 pub use automove::{AutoMove, AutoMoveError, AutoMoveParams, AutoMoveStep, Exception};
 pub use contour::{ContourMode, ContourParams, ContourStep, ContourTracker, Side};
 pub use controller::{
-    GuideController, GuideError, GuideMap, GuideParams, GuideStats, GuideSummary, PARTICLES_CLOUD, Policy,
-    SupervisorPlan,
+    CreditPlan, GuideController, GuideError, GuideMap, GuideParams, GuideStats, GuideSummary,
+    PARTICLES_CLOUD, Policy, SupervisorPlan,
 };

@@ -107,8 +107,10 @@ fn check(what: impl Fn() -> String, value: f64) -> Result<f64, LearnError> {
     }
 }
 
-/// A reference from a behaviour's successful calibration runs.
-fn reference(runs: &[&CalibrationRun], behaviour: Behaviour) -> Result<Reference, LearnError> {
+/// A behaviour's reference from its successful calibration runs: mean time
+/// and speed, and the median-time run's trajectory;
+/// [`LearnError::NoCalibration`] without one.
+pub fn reference_of(runs: &[&CalibrationRun], behaviour: Behaviour) -> Result<Reference, LearnError> {
     let ok: Vec<&&CalibrationRun> = runs
         .iter()
         .filter(|r| r.behaviour == behaviour && r.success && r.duration_s > 0.0)
@@ -164,7 +166,7 @@ fn learn_with(entries: &[Entry], lenient: bool) -> Result<Learned, LearnError> {
             Entry::Calibration(_) => None,
         })
         .collect();
-    let with_prior = |b: Behaviour, rate: f64| match reference(&calibration, b) {
+    let with_prior = |b: Behaviour, rate: f64| match reference_of(&calibration, b) {
         Err(LearnError::NoCalibration(_)) if lenient => Ok(Reference::prior(1.0 / rate)),
         other => other,
     };
@@ -232,6 +234,8 @@ mod tests {
             duration_s: t,
             path_m: len,
             trajectory: vec![[0.0, 0.0], [len, 0.0]],
+            outcome: String::new(),
+            segments: Vec::new(),
         })
     }
 
@@ -254,6 +258,7 @@ mod tests {
             time_automove_s: 100.0,
             time_contour_s: 0.0,
             decisions: Vec::new(),
+            segments: Vec::new(),
         })
     }
 

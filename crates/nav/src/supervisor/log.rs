@@ -19,6 +19,7 @@ use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use super::Behaviour;
+use super::credit_learning::Segment;
 
 /// One stretch of time in one state.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -53,8 +54,9 @@ pub struct DecisionLog {
     pub time_s: f64,
     /// Why it was taken: `start` or `recovered` (Warning → Success).
     pub reason: String,
-    /// λ1…λ11 used.
-    pub rates: [f64; super::NUM_RATES],
+    /// The rates used, λ1 first (eleven for the source's net, fifteen for
+    /// the crediting one).
+    pub rates: Vec<f64>,
     /// Throughput of AutoMove's completion under the AutoMove hypothesis.
     pub f_auto: f64,
     /// Throughput of Contour tracking's completion under its hypothesis.
@@ -65,6 +67,9 @@ pub struct DecisionLog {
     pub p_loc_warn: f64,
     /// The behaviour chosen.
     pub choice: Behaviour,
+    /// The crowd context the rates were taken for (crediting supervisor).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub context: Option<usize>,
 }
 
 /// A calibration run: one behaviour alone from the start to the goal.
@@ -80,6 +85,12 @@ pub struct CalibrationRun {
     pub path_m: f64,
     /// The trajectory as the robot estimated it, world frame, every 0.5 m.
     pub trajectory: Vec<[f64; 2]>,
+    /// How it ended (`goal`, `collision`, …); empty in the source's logs.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub outcome: String,
+    /// Its segments, for the crediting supervisor ([`super::credit_learning`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub segments: Vec<Segment>,
 }
 
 /// A mission: what the supervisor learns from.
@@ -103,6 +114,9 @@ pub struct MissionRecord {
     pub time_contour_s: f64,
     /// The supervisor's decisions.
     pub decisions: Vec<DecisionLog>,
+    /// Its segments, for the crediting supervisor ([`super::credit_learning`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub segments: Vec<Segment>,
 }
 
 /// One line of the log.
@@ -335,6 +349,7 @@ mod tests {
             time_automove_s: 60.0,
             time_contour_s: 0.0,
             decisions: Vec::new(),
+            segments: Vec::new(),
         })
     }
 

@@ -23,6 +23,9 @@
 //! localizer and planner probabilities are read under the hypothesis that was
 //! chosen — the behaviour the robot is about to run.
 
+pub mod check;
+pub mod credit;
+pub mod credit_learning;
 pub mod learning;
 pub mod log;
 pub mod reference;
@@ -49,8 +52,11 @@ pub enum SupervisorError {
     /// The net does not have the supervisor's structure.
     #[error("not a supervisor net: {0}")]
     Model(String),
-    /// A rate outside (0, ∞) or an index outside 1..=11.
-    #[error("λ{index} = {value}: rates are finite numbers > 0, indexed 1 to 11")]
+    /// The net failed its check ([`check`]).
+    #[error(transparent)]
+    Refused(#[from] check::NetRefused),
+    /// A rate outside (0, ∞) or an index outside the net's rates.
+    #[error("λ{index} = {value}: rates are finite numbers > 0, indexed from 1 to the net's last")]
     BadRate {
         /// 1-based index.
         index: usize,
@@ -196,6 +202,35 @@ impl Hypothesis {
     }
 }
 
+/// The hypotheses the source's supervisor solves, for [`check::check_net`].
+pub fn source_variants() -> Vec<check::Variant<'static>> {
+    vec![
+        check::Variant {
+            name: "AutoMove hypothesis",
+            without: &["t1"],
+            params: Params::new().with("p", 1.0),
+        },
+        check::Variant {
+            name: "contour hypothesis",
+            without: &["t0"],
+            params: Params::new().with("p", 0.0),
+        },
+    ]
+}
+
+/// A net's identity: its name and an FNV-1a hash of its text as written in
+/// TOML. Mission logs name it, so that rates learnt for one net are never
+/// read for another.
+pub fn net_id(net: &Net) -> Result<String, SupervisorError> {
+    let text = petri::io::write_string(net, petri::io::Format::Toml)?;
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    Ok(format!("{}-{h:016x}", net.name))
+}
+
 /// Names of the places and transitions the supervisor reads.
 #[derive(Debug, Clone, Copy)]
 struct Ids {
@@ -241,16 +276,14 @@ impl Supervisor {
         Supervisor::from_net(&net)
     }
 
-    /// Compiles a supervisor net of the same structure (places `P0`…`P8`,
-    /// transitions `t0`…`t14`, rates `lambda1`…`lambda11`, weight `p`).
+    /// Checks ([`check`]: bounded, live, no dead marking, a home state, as
+    /// written and under both hypotheses) and compiles a supervisor net of
+    /// the same structure (places `P0`…`P8`, transitions `t0`…`t14`, rates
+    /// `lambda1`…`lambda11`, weight `p`); a net failing its check is
+    /// refused with the property ([`SupervisorError::Refused`]).
     pub fn from_net(net: &Net) -> Result<Supervisor, SupervisorError> {
-        let text = petri::io::write_string(net, petri::io::Format::Toml)?;
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        for b in text.bytes() {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x0100_0000_01b3);
-        }
-        let net_id = format!("{}-{h:016x}", net.name);
+        check::check_net(net, &source_variants()).require()?;
+        let net_id = net_id(net)?;
         let auto = Hypothesis::new(net, "t1", 1.0, SLOW_SWITCH, FAST_SWITCH)?;
         let cont = Hypothesis::new(net, "t0", 0.0, FAST_SWITCH, SLOW_SWITCH)?;
         let auto_ids = ids(&auto.compiled)?;
