@@ -34,6 +34,26 @@ pub enum GuideCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Checks a supervisor net with petrinav's own engine before any robot uses it: every
+    /// place bounded, no dead marking, every transition live, a home state — for the net as
+    /// written and for every hypothesis the supervisor solves (each leaves transitions out).
+    ///
+    /// Without NET, both shipped nets (models/supervisor.toml, the source's;
+    /// models/supervisor_credit.toml, the crediting one). A NET file (.toml, .pnpro,
+    /// .pnml) is checked as a crediting net if it has the transition `t15`, else as the
+    /// source's. The robot refuses a net that fails, naming the property; so does this
+    /// command (exit code 1). Examples:
+    ///
+    ///   petrinav guide check
+    ///
+    ///   petrinav guide check my_supervisor.toml --json
+    Check {
+        /// A supervisor net file; both shipped nets if left out.
+        net: Option<PathBuf>,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -52,15 +72,157 @@ pub fn run(cmd: GuideCommand) -> Result<()> {
     match cmd {
         GuideCommand::Log(LogCommand::Show { log, json }) => show(&log, json),
         GuideCommand::Learn { log, json } => learn(&log, json),
+        GuideCommand::Check { net, json } => check(net.as_deref(), json),
     }
 }
 
-/// Reads a log of the shipped supervisor net, reporting a torn last line.
+/// Which supervisor a net or a log is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Source,
+    Credit,
+}
+
+fn check(path: Option<&Path>, json: bool) -> Result<()> {
+    use nav::supervisor::check::check_net;
+    use nav::supervisor::credit::{CREDIT_MODEL, credit_variants};
+    use nav::supervisor::{MODEL, source_variants};
+    let nets: Vec<(String, petri::Net)> = match path {
+        Some(p) => vec![(
+            p.display().to_string(),
+            petri::io::read_file(p).with_context(|| format!("loading {}", p.display()))?,
+        )],
+        None => vec![
+            (
+                "models/supervisor.toml".into(),
+                petri::io::read_str(MODEL, petri::io::Format::Toml, "models/supervisor.toml")?,
+            ),
+            (
+                "models/supervisor_credit.toml".into(),
+                petri::io::read_str(
+                    CREDIT_MODEL,
+                    petri::io::Format::Toml,
+                    "models/supervisor_credit.toml",
+                )?,
+            ),
+        ],
+    };
+    let mut verdicts = Vec::new();
+    let mut refused = Vec::new();
+    for (name, net) in &nets {
+        let kind = if net.transition_id("t15").is_some() {
+            Kind::Credit
+        } else {
+            Kind::Source
+        };
+        let c = match kind {
+            Kind::Credit => check_net(net, &credit_variants()),
+            Kind::Source => check_net(net, &source_variants()),
+        };
+        if let Err(e) = c.require() {
+            refused.push(format!("{name}: {e}"));
+        }
+        verdicts.push((name.clone(), kind, c));
+    }
+    if json {
+        let v: Vec<serde_json::Value> = verdicts
+            .iter()
+            .map(|(name, kind, c)| {
+                serde_json::json!({
+                    "file": name,
+                    "supervisor": match kind { Kind::Credit => "credit", Kind::Source => "source" },
+                    "accepted": c.passed(),
+                    "refused": c.require().err().map(|e| e.to_string()),
+                    "check": c,
+                })
+            })
+            .collect();
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
+    } else {
+        for (name, kind, c) in &verdicts {
+            outln!(
+                "{name} ({} supervisor, net `{}`)",
+                match kind {
+                    Kind::Credit => "crediting",
+                    Kind::Source => "the source's",
+                },
+                c.net
+            )?;
+            let mut t = Table::new([
+                "variant",
+                "left out",
+                "markings",
+                "bounded",
+                "dead markings",
+                "live",
+                "home state",
+                "M0 home state",
+            ]);
+            for v in &c.variants {
+                t.row([
+                    v.variant.clone(),
+                    if v.without.is_empty() {
+                        "-".into()
+                    } else {
+                        v.without.join(", ")
+                    },
+                    v.markings.map_or("-".into(), |m| m.to_string()),
+                    yes_no(v.bounded),
+                    v.dead_markings.to_string(),
+                    if v.not_live.is_empty() {
+                        "yes".into()
+                    } else {
+                        format!("no: {}", v.not_live.join(", "))
+                    },
+                    yes_no(v.home_state),
+                    yes_no(v.reversible),
+                ]);
+            }
+            outln!("{}", t.render().trim_end())?;
+            match c.require() {
+                Ok(()) => outln!("verdict: accepted\n")?,
+                Err(e) => outln!("verdict: REFUSED — {}: {}\n", e.variant, e.property)?,
+            }
+        }
+    }
+    if !refused.is_empty() {
+        anyhow::bail!("{}", refused.join("; "));
+    }
+    Ok(())
+}
+
+fn yes_no(b: bool) -> String {
+    if b { "yes" } else { "no" }.to_string()
+}
+
+/// Reads a log of the shipped source supervisor net, reporting a torn last
+/// line.
 pub fn read(path: &Path) -> Result<Vec<Entry>> {
+    Ok(read_any(path)?.0)
+}
+
+/// Reads a log of either shipped supervisor net (the one its lines name).
+fn read_any(path: &Path) -> Result<(Vec<Entry>, Kind)> {
     if !path.exists() {
         anyhow::bail!("{}: no such mission log", path.display());
     }
-    let net = Supervisor::new()?.net_id().to_string();
+    let source = Supervisor::new()?.net_id().to_string();
+    let credit = nav::supervisor::credit::CreditSupervisor::new()?
+        .net_id()
+        .to_string();
+    let first_net = std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| !l.trim().is_empty())
+                .and_then(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        })
+        .and_then(|v| v.get("net").and_then(|n| n.as_str()).map(str::to_string));
+    let (net, kind) = if first_net.as_deref() == Some(credit.as_str()) {
+        (credit, Kind::Credit)
+    } else {
+        (source, Kind::Source)
+    };
     let log = MissionLog::read(path, &net)?;
     if let Some(t) = log.torn() {
         eprintln!(
@@ -70,7 +232,46 @@ pub fn read(path: &Path) -> Result<Vec<Entry>> {
             t.bytes
         );
     }
-    Ok(log.entries().to_vec())
+    Ok((log.entries().to_vec(), kind))
+}
+
+/// The crediting supervisor's rates per crowd context, at the whole
+/// reference's length.
+fn credit_text(entries: &[Entry]) -> Result<String> {
+    use nav::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel};
+    let m = CreditModel::learn(entries)?;
+    let length = m.reference.length_m();
+    let mut t = Table::new(["rate", "quiet", "busy", "crowded", "meaning"]);
+    let meaning = [
+        (3, "localizer Success → Warning"),
+        (4, "localizer Warning → Success"),
+        (5, "planner Normal → Abnormal"),
+        (6, "planner Abnormal → Normal"),
+        (7, "AutoMove completes (progress speed / remaining length)"),
+        (8, "contour tracking completes"),
+        (9, "AutoMove fails, planner Abnormal"),
+        (10, "contour tracking fails, lost"),
+        (12, "AutoMove fails, lost"),
+        (13, "AutoMove fails, localized"),
+        (14, "contour tracking fails, localized"),
+    ];
+    let rates: Vec<_> = (0..CONTEXT_NAMES.len()).map(|c| m.rates(c, length)).collect();
+    for (i, what) in meaning {
+        t.row([
+            format!("λ{i}"),
+            format!("{:.6}", rates[0].get(i)),
+            format!("{:.6}", rates[1].get(i)),
+            format!("{:.6}", rates[2].get(i)),
+            what.to_string(),
+        ]);
+    }
+    Ok(format!(
+        "learnt from {} missions ({} reached the goal) and the calibration runs, at the start ({} m from the goal):\n{}",
+        m.missions,
+        m.successes,
+        num(length),
+        t.render()
+    ))
 }
 
 fn sojourn_total(s: &[nav::supervisor::log::Sojourn], state: StateName) -> (usize, f64) {
@@ -107,7 +308,52 @@ fn rates_text(l: &Learned) -> String {
 }
 
 fn show(path: &Path, json: bool) -> Result<()> {
-    let entries = read(path)?;
+    let (entries, kind) = read_any(path)?;
+    if kind == Kind::Credit && !json {
+        for (k, e) in entries.iter().enumerate() {
+            let line = match e {
+                Entry::Calibration(c) => format!(
+                    "{:>3}  calibration {:<8} {:<10} {} s",
+                    k + 1,
+                    format!("{:?}", c.behaviour).to_lowercase(),
+                    c.outcome,
+                    num(c.duration_s)
+                ),
+                Entry::Mission(m) => format!(
+                    "{:>3}  mission {:<12} {:<10} {} s, automove {} s, contour {} s, {} decisions, {} segments",
+                    k + 1,
+                    m.mission,
+                    m.outcome,
+                    num(m.duration_s),
+                    num(m.time_automove_s),
+                    num(m.time_contour_s),
+                    m.decisions.len(),
+                    m.segments.len()
+                ),
+            };
+            outln!("{line}")?;
+        }
+        outln!()?;
+        match credit_text(&entries) {
+            Ok(t) => outln!("{}", t.trim_end())?,
+            Err(e) => outln!("no rates yet: {e}")?,
+        }
+        return Ok(());
+    }
+    if kind == Kind::Credit {
+        for e in &entries {
+            outln!("{}", serde_json::to_string(e)?)?;
+        }
+        let m = nav::supervisor::credit_learning::CreditModel::learn(&entries);
+        match &m {
+            Ok(m) => outln!("{}", serde_json::json!({ "learned": m }))?,
+            Err(e) => outln!(
+                "{}",
+                serde_json::json!({ "learned": null, "error": e.to_string() })
+            )?,
+        }
+        return Ok(());
+    }
     let learned = learning::learn(&entries);
     if json {
         for e in &entries {
@@ -204,7 +450,22 @@ fn show(path: &Path, json: bool) -> Result<()> {
 }
 
 fn learn(path: &Path, json: bool) -> Result<()> {
-    let entries = read(path)?;
+    let (entries, kind) = read_any(path)?;
+    if kind == Kind::Credit {
+        if json {
+            let m = nav::supervisor::credit_learning::CreditModel::learn(&entries)
+                .with_context(|| format!("learning from {}", path.display()))?;
+            outln!("{}", serde_json::to_string_pretty(&m)?)?;
+        } else {
+            outln!(
+                "{}",
+                credit_text(&entries)
+                    .with_context(|| format!("learning from {}", path.display()))?
+                    .trim_end()
+            )?;
+        }
+        return Ok(());
+    }
     let l = learning::learn(&entries).with_context(|| format!("learning from {}", path.display()))?;
     if json {
         outln!("{}", serde_json::to_string_pretty(&l)?)?;

@@ -5,9 +5,11 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use lab::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop};
-use nav::guide::{Policy, SupervisorPlan};
+use nav::guide::{CreditPlan, Policy, SupervisorPlan};
 use nav::supervisor::Behaviour;
 use nav::supervisor::Supervisor;
+use nav::supervisor::credit::CreditSupervisor;
+use nav::supervisor::credit_learning::CreditModel;
 use nav::supervisor::learning;
 use nav::supervisor::log::MissionLog;
 use robot::{Pose, Vec2};
@@ -46,8 +48,27 @@ enum BehaviourArg {
     AutomoveThenContour,
     /// Contour tracking while the localizer warns, AutoMove while it succeeds.
     Rule,
-    /// The GSPN supervisor with the rates learnt from --log (which needs calibration runs).
+    /// The GSPN supervisor of --net with the rates learnt from --log (which needs
+    /// calibration runs): the crediting net decides at the start, at every Warning and at
+    /// every return to Success; the source's net as the source did.
     Supervisor,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum NetArg {
+    /// models/supervisor_credit.toml: failures credited to each behaviour, per crowd context.
+    Credit,
+    /// models/supervisor.toml: the source's net.
+    Source,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum WarningArg {
+    /// Warning when the scan sees past the mapped walls: the robot is lost (default).
+    Contradiction,
+    /// The source's: Warning when the map explains less than 80 % of the scan (people
+    /// hiding the walls raise it).
+    Explained,
 }
 
 #[derive(Args, Debug)]
@@ -84,6 +105,12 @@ struct Common {
     /// Log the legs as calibration runs of the behaviour (automove or contour).
     #[arg(long, requires = "log")]
     calibration: bool,
+    /// The supervisor net the log belongs to and `--behaviour supervisor` decides with.
+    #[arg(long, value_enum, default_value_t = NetArg::Credit)]
+    net: NetArg,
+    /// What makes the localizer warn.
+    #[arg(long, value_enum, default_value_t = WarningArg::Contradiction)]
+    warning: WarningArg,
 }
 
 #[derive(Args, Debug)]
@@ -241,6 +268,9 @@ fn setup(c: &Common, grid: OccupancyGrid, anchors: &[Vec2], start: Vec2) -> Resu
     }
     let mut setup = MissionSetup::new(world, c.time_limit);
     setup.people = people;
+    if c.warning == WarningArg::Explained {
+        setup.guide.mcl.status = nav::localization::StatusParams::explained();
+    }
     Ok(setup)
 }
 
@@ -258,14 +288,26 @@ fn policy(c: &Common) -> Result<Policy> {
                 );
             };
             let entries = crate::guide_cmd::read(path)?;
-            let learned =
-                learning::learn(&entries).with_context(|| format!("learning from {}", path.display()))?;
-            Policy::Supervisor(Box::new(SupervisorPlan {
-                supervisor: Supervisor::new()?,
-                rates: learned.rates,
-                automove: learned.automove,
-                contour: learned.contour,
-            }))
+            match c.net {
+                NetArg::Source => {
+                    let learned = learning::learn(&entries)
+                        .with_context(|| format!("learning from {}", path.display()))?;
+                    Policy::SupervisorSource(Box::new(SupervisorPlan {
+                        supervisor: Supervisor::new()?,
+                        rates: learned.rates,
+                        automove: learned.automove,
+                        contour: learned.contour,
+                    }))
+                }
+                NetArg::Credit => {
+                    let model = CreditModel::learn(&entries)
+                        .with_context(|| format!("learning from {}", path.display()))?;
+                    Policy::Supervisor(Box::new(CreditPlan {
+                        supervisor: CreditSupervisor::new()?,
+                        model,
+                    }))
+                }
+            }
         }
     })
 }
@@ -275,7 +317,10 @@ fn log_legs(c: &Common, legs: &[LegRun], policy: &Policy) -> Result<()> {
     let Some(path) = &c.log else {
         return Ok(());
     };
-    let net = Supervisor::new()?.net_id().to_string();
+    let net = match c.net {
+        NetArg::Source => Supervisor::new()?.net_id().to_string(),
+        NetArg::Credit => CreditSupervisor::new()?.net_id().to_string(),
+    };
     let mut log = MissionLog::open(path, &net)?;
     if let Some(t) = log.torn() {
         eprintln!(
@@ -290,7 +335,8 @@ fn log_legs(c: &Common, legs: &[LegRun], policy: &Policy) -> Result<()> {
         .filter(|l| l.result.outcome != LegOutcome::Unreachable)
     {
         let entry = match (c.calibration, policy) {
-            (true, Policy::Fixed(b)) => mission::calibration_entry(leg, *b),
+            (true, Policy::Fixed(b)) if c.net == NetArg::Source => mission::calibration_entry(leg, *b),
+            (true, Policy::Fixed(b)) => mission::credit_calibration_entry(leg, *b),
             (true, _) => bail!("--calibration runs one behaviour alone: --behaviour automove or contour"),
             (false, _) => mission::mission_entry(leg, log.missions() + 1),
         };

@@ -80,7 +80,32 @@ pub struct LocalizationSummary {
     pub warnings: u32,
     /// Time in Warning, seconds.
     pub time_in_warning_s: f64,
+    /// Time the robot was truly lost (true error over
+    /// [`TRUE_LOSS_M`] or [`TRUE_LOSS_RAD`]), seconds.
+    #[serde(default)]
+    pub lost_s: f64,
+    /// Time in Warning while truly lost, seconds.
+    #[serde(default)]
+    pub warning_lost_s: f64,
+    /// Time in Warning while the true error was under
+    /// [`FINE_ERROR_M`], seconds.
+    #[serde(default)]
+    pub warning_fine_s: f64,
+    /// Time the true error was under [`FINE_ERROR_M`], seconds.
+    #[serde(default)]
+    pub fine_s: f64,
 }
+
+/// A position error above this is a true loss, metres (issue's and
+/// the report's definition, with [`TRUE_LOSS_RAD`]).
+pub const TRUE_LOSS_M: f64 = 0.5;
+
+/// A heading error above this is a true loss, radians (20°).
+pub const TRUE_LOSS_RAD: f64 = 20.0 * std::f64::consts::PI / 180.0;
+
+/// A true error under this is a good estimate: a Warning then is a false
+/// alarm, metres.
+pub const FINE_ERROR_M: f64 = 0.2;
 
 /// AutoMove over a leg.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -146,6 +171,9 @@ pub struct MissionSetup {
     /// A true error above this for `lost_after_s` ends the leg as lost,
     /// metres. Default 2.
     pub lost_error_m: f64,
+    /// Physical causes of true loss (pushes, slips, groups closing round
+    /// the robot; [`sim::DisturbanceParams`]). Default: none.
+    pub disturbances: sim::DisturbanceParams,
     /// Seconds, see `lost_error_m`. Default 5.
     pub lost_after_s: f64,
     /// The map prepared for the controller ([`MissionSetup::prepare`]).
@@ -165,6 +193,7 @@ impl MissionSetup {
             goal_tolerance_m: 0.3,
             lost_error_m: 2.0,
             lost_after_s: 5.0,
+            disturbances: sim::DisturbanceParams::default(),
             prepared: None,
         }
     }
@@ -227,6 +256,8 @@ pub struct LegRun {
     pub trace: LegTrace,
     /// What the simulator measured (`None` for a leg not run).
     pub sim: Option<SimSummary>,
+    /// The physical disturbances that happened (pushes, slips, groups).
+    pub disturbances: Vec<sim::DisturbanceEvent>,
 }
 
 /// What the simulator measured over a leg.
@@ -343,6 +374,7 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
             ..LegTrace::default()
         },
         sim: None,
+        disturbances: Vec::new(),
     };
     let prepared = match &setup.prepared {
         Some(m) if m.is_for(&map, &setup.guide) => Ok(std::borrow::Cow::Borrowed(&**m)),
@@ -390,11 +422,14 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         None => std::borrow::Cow::Borrowed(&setup.world),
     };
     let mut sim = Simulation::new(&world, setup.robot.clone(), run, task, seed)
+        .and_then(|s| s.with_disturbances(setup.disturbances.clone()))
         .with_context(|| format!("leg {from} → {to}"))?;
     let mut trace = LegTrace::default();
     let mut errors = Vec::new();
     let mut far_since: Option<f64> = None;
     let mut lost = false;
+    let period = run.control_period_s;
+    let mut truth_watch = TruthWatch::default();
     let mut watch = Watch {
         inner: &mut controller,
         notes: Notes::enabled(),
@@ -406,6 +441,13 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         let estimate = watch.inner.estimate();
         let error = truth.position().dist(estimate.position());
         errors.push(error);
+        let heading_error = robot::wrap_angle(truth.theta_rad - estimate.theta_rad).abs();
+        truth_watch.tick(
+            period,
+            error,
+            heading_error,
+            watch.inner.status() == nav::localization::LocalizationStatus::Warning,
+        );
         trace.times.push(time_s);
         trace.poses.push(truth);
         trace.estimates.push(estimate);
@@ -474,13 +516,19 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
             max_error_m: max,
             warnings: stats.warnings,
             time_in_warning_s: stats.time_in_warning_s,
+            lost_s: truth_watch.lost_s,
+            warning_lost_s: truth_watch.warning_lost_s,
+            warning_fine_s: truth_watch.warning_fine_s,
+            fine_s: truth_watch.fine_s,
         },
         planner: PlannerSummary {
             abnormal_episodes: stats.abnormal_episodes,
             time_abnormal_s: stats.time_abnormal_s,
         },
     };
+    let disturbances = sim.disturbances().to_vec();
     Ok(LegRun {
+        disturbances,
         result,
         final_estimate: controller.estimate(),
         final_pose: r.final_pose,
@@ -494,6 +542,35 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
             trace: sim.take_trace(),
         }),
     })
+}
+
+/// Time in Warning against the truth, tick by tick (the Warning of the
+/// state after the tick's control step, the error of the estimate then).
+#[derive(Debug, Clone, Copy, Default)]
+struct TruthWatch {
+    lost_s: f64,
+    warning_lost_s: f64,
+    warning_fine_s: f64,
+    fine_s: f64,
+}
+
+impl TruthWatch {
+    fn tick(&mut self, dt: f64, error_m: f64, heading_error_rad: f64, warning: bool) {
+        let lost = error_m > TRUE_LOSS_M || heading_error_rad > TRUE_LOSS_RAD;
+        let fine = error_m < FINE_ERROR_M;
+        if lost {
+            self.lost_s += dt;
+            if warning {
+                self.warning_lost_s += dt;
+            }
+        }
+        if fine {
+            self.fine_s += dt;
+            if warning {
+                self.warning_fine_s += dt;
+            }
+        }
+    }
 }
 
 /// A named place or a pose.
@@ -730,7 +807,22 @@ pub fn calibration_entry(leg: &LegRun, behaviour: Behaviour) -> Entry {
         duration_s: leg.result.time_s,
         path_m: leg.result.path_m,
         trajectory: thin(&leg.trace.estimates, 0.5),
+        outcome: String::new(),
+        segments: Vec::new(),
     })
+}
+
+/// [`calibration_entry`] with the run's outcome and segments, for the
+/// crediting supervisor's log (which learns from calibration runs too).
+pub fn credit_calibration_entry(leg: &LegRun, behaviour: Behaviour) -> Entry {
+    match calibration_entry(leg, behaviour) {
+        Entry::Calibration(c) => Entry::Calibration(CalibrationRun {
+            outcome: outcome_name(leg.result.outcome).to_string(),
+            segments: leg.summary.segments.clone(),
+            ..c
+        }),
+        other => other,
+    }
 }
 
 /// A leg as mission `number` of the mission log: outcome, duration, the
@@ -748,6 +840,7 @@ pub fn mission_entry(leg: &LegRun, number: u32) -> Entry {
         time_automove_s: s.time_automove_s,
         time_contour_s: s.time_contour_s,
         decisions: s.decisions.clone(),
+        segments: s.segments.clone(),
     })
 }
 
@@ -826,6 +919,7 @@ mod tests {
             summary: GuideSummary::default(),
             trace: LegTrace::default(),
             sim: None,
+            disturbances: Vec::new(),
         }
     }
 

@@ -1,18 +1,28 @@
 //! The guide robot's policies in the museum, from their events: the rule
-//! hands the robot to contour tracking at every Warning; the supervisor
-//! decides only at the start and on returns from Warning to Success, with
-//! λ7, λ8 from the remaining reference trajectories.
+//! hands the robot to contour tracking at every Warning; the source's
+//! supervisor decides only at the start and on returns from Warning to
+//! Success, with λ7, λ8 from the remaining reference trajectories (both on
+//! the source's localizer, whose Warnings people raise); the crediting
+//! supervisor decides at the start, at every Warning and at every return.
 
 use lab::mission::{self, LegSpec, MissionSetup, PeoplePlan};
-use lab::suites::tourguide::{EXHIBITS, GOAL, START, museum};
-use nav::guide::{Policy, SupervisorPlan};
+use lab::suites::tourguide::{
+    EXHIBITS, GOAL, LOST_AFTER_S, START, disturbances, museum, museum_with_patches, source_guide,
+};
+use nav::guide::{CreditPlan, Policy, SupervisorPlan};
+use nav::supervisor::Behaviour;
+use nav::supervisor::credit::CreditSupervisor;
+use nav::supervisor::credit_learning::CreditModel;
+use nav::supervisor::log::{CalibrationRun, Entry};
 use nav::supervisor::reference::Reference;
 use nav::supervisor::{Rates, Supervisor};
 use robot::{Event, Vec2};
 use sim::TraceParams;
 
+/// The museum with the source's localizer (people raise its Warnings).
 fn setup(people: usize) -> MissionSetup {
     let mut s = MissionSetup::new(museum().unwrap(), 300.0);
+    s.guide = source_guide();
     s.people = Some(PeoplePlan {
         count: people,
         anchors: EXHIBITS.to_vec(),
@@ -111,9 +121,9 @@ fn plan() -> SupervisorPlan {
 }
 
 #[test]
-fn the_supervisor_decides_at_the_start_and_on_returns_to_success_only() {
+fn the_source_supervisor_decides_at_the_start_and_on_returns_to_success_only() {
     let p = plan();
-    let events = run(Policy::Supervisor(Box::new(p.clone())), 5);
+    let events = run(Policy::SupervisorSource(Box::new(p.clone())), 5);
     let decisions: Vec<&Event> = events.iter().filter(|e| e.kind == "decision").collect();
     assert!(decisions.len() >= 2, "{} decisions", decisions.len());
     assert_eq!(decisions[0].time_s, 0.0);
@@ -188,4 +198,74 @@ fn a_prepared_map_runs_the_same_mission() {
     )
     .unwrap();
     assert_eq!(a.trace.poses, b.trace.poses);
+}
+
+fn calibration(b: Behaviour, t: f64, len: f64) -> Entry {
+    Entry::Calibration(CalibrationRun {
+        behaviour: b,
+        success: true,
+        duration_s: t,
+        path_m: len,
+        trajectory: vec![[START.x_m, START.y_m], [START.x_m, START.y_m + len]],
+        outcome: "goal".into(),
+        segments: Vec::new(),
+    })
+}
+
+#[test]
+fn the_crediting_supervisor_decides_at_the_start_at_every_warning_and_every_return() {
+    // The packed museum with its pushes, slips and groups: pushes make the
+    // localizer (the contradiction rule) warn.
+    let (world, patches) = museum_with_patches().unwrap();
+    let mut s = MissionSetup::new(world, 300.0);
+    s.people = Some(PeoplePlan {
+        count: 60,
+        anchors: EXHIBITS.to_vec(),
+        spread_m: 2.5,
+        keep_clear_m: 1.0,
+    });
+    s.disturbances = disturbances(60, &patches);
+    s.lost_after_s = LOST_AFTER_S;
+    s.prepare().unwrap();
+    let log = vec![
+        calibration(Behaviour::AutoMove, 60.0, 24.0),
+        calibration(Behaviour::Contour, 130.0, 40.0),
+    ];
+    let plan = CreditPlan {
+        supervisor: CreditSupervisor::new().unwrap(),
+        model: CreditModel::learn(&log).unwrap(),
+    };
+    // The first seed whose mission has a Warning.
+    let (events, segments) = (1..=40)
+        .map(|seed| {
+            let leg = mission::run_leg(&s, &spec(Policy::Supervisor(Box::new(plan.clone())), seed)).unwrap();
+            (leg.trace.events, leg.summary.segments)
+        })
+        .find(|(e, _)| e.iter().any(|e| e.kind == "warning"))
+        .expect("a packed museum with pushes makes the localizer warn");
+    let decisions: Vec<&Event> = events.iter().filter(|e| e.kind == "decision").collect();
+    assert_eq!(decisions[0].time_s, 0.0);
+    assert_eq!(decisions[0].text("reason"), Some("start"));
+    for (kind, reason) in [("warning", "warning"), ("success", "recovered")] {
+        for t in at(&events, kind) {
+            let d = decisions
+                .iter()
+                .find(|d| d.time_s == t)
+                .unwrap_or_else(|| panic!("no decision at the {kind} at {t}"));
+            assert_eq!(d.text("reason"), Some(reason));
+            assert!(d.text("context").is_some());
+            assert!(d.number("lambda12").is_some_and(|x| x > 0.0));
+        }
+    }
+    assert_eq!(
+        decisions.len(),
+        1 + at(&events, "warning").len() + at(&events, "success").len(),
+        "one decision at the start and at every change of the localizer"
+    );
+    // Switches happen only at decisions.
+    let moments: Vec<f64> = decisions.iter().map(|d| d.time_s).collect();
+    assert!(at(&events, "switch").iter().all(|t| moments.contains(t)));
+    // The mission's segments cover it and name the states.
+    assert!(!segments.is_empty());
+    assert!(segments.iter().any(|s| !s.localized));
 }

@@ -1,7 +1,7 @@
 //! The tour-guide suite (tour-guide.md, "The museum experiment"): the
 //! guide robot takes visitors from the start (8.1, 6.4) to the goal
 //! (8.5, 27.5) of a 15 m × 35 m museum hall (`museum.toml`), mission after
-//! mission, among visitors at three densities, with five strategies:
+//! mission, among visitors, with six strategies:
 //!
 //! | strategy | behaviour |
 //! |---|---|
@@ -9,23 +9,44 @@
 //! | `automove_then_contour` | AutoMove, and contour tracking from the localizer's first Warning on |
 //! | `contour` | contour tracking only |
 //! | `rule` | the rule alone: contour tracking while the localizer warns, AutoMove while it succeeds |
-//! | `supervisor` | the GSPN supervisor: the rule, and `f_auto` against `f_cont` at the start of a mission and on every return from Warning to Success, with rates learnt from the mission log |
+//! | `supervisor` | the crediting GSPN supervisor ([`nav::supervisor::credit`]): the net decides at the start, at every Warning and at every return to Success, with failure rates credited to each behaviour and learnt per crowd context from the campaign's log |
+//! | `supervisor_source` | the source's supervisor and localizer: the rule, and `f_auto` against `f_cont` at the start and on returns to Success, the localizer warning by the explained fraction |
 //!
-//! A **campaign** is sequential: for the supervisor, ten calibration runs
-//! (each behaviour alone five times, as the source did) then 24 missions,
-//! each learning from the log of all before it — the campaign's earlier
-//! records carry their log entries (`state`), so a resumed campaign learns
-//! exactly what it would have. The other strategies learn nothing and run
-//! their 24 missions only. Mission `m` of campaign `c` at a density meets
-//! the same visitors and noise under every strategy (common random numbers),
-//! so the strategies are compared mission by mission. Campaign 0 of the
-//! supervisor at moderate density is the source's experiment.
+//! All but `supervisor_source` run the localizer whose Warning means lost
+//! (the contradiction rule, `nav::localization::status`).
 //!
-//! **Decision — densities.** The hall's free area is about 449 m²: `empty`
-//! is nobody, `moderate` 25 visitors (5.6 per 100 m²: a few people at most
-//! exhibits), `packed` 60 (13 per 100 m²: groups at every exhibit and
-//! people in every passage). Visitors walk between the exhibits, gather
-//! around them and linger, and step aside when the robot asks.
+//! **Conditions.** Three crowd densities and a museum day: `empty` (nobody),
+//! `moderate` (25 visitors), `packed` (60), and `day`, whose 24 missions
+//! meet 0, 25, 60 and 25 visitors by quarters (the museum opens, fills, is
+//! packed at midday, empties) — the right behaviour may change within one
+//! campaign, and the supervisor must learn it online. In every condition
+//! the physical causes of true loss occur at their rates
+//! ([`disturbances`]): visitors pushing the braked robot, wheel slip on
+//! the polished threshold between the galleries, groups closing round the
+//! robot.
+//!
+//! A **campaign** is sequential: for each supervisor, ten calibration runs
+//! (each behaviour alone five times, as the source did; at the campaign's
+//! first density) then 24 missions, each learning from the log of all
+//! before it — the campaign's earlier records carry their log entries
+//! (`state`), so a resumed campaign learns exactly what it would have. The
+//! other strategies learn nothing and run their 24 missions only. Mission
+//! `m` of campaign `c` in a condition meets the same visitors, noise and
+//! disturbance draws under every strategy (common random numbers), so the
+//! strategies are compared mission by mission.
+//!
+//! **The source's experiment** is its own scenario, `source/…`: one
+//! campaign of `supervisor_source` among 25 visitors without the
+//! disturbances (the source reports none), on the seeds the moderate
+//! campaign 0 has always had — its table (the source's Table IV: the
+//! learnt λ3…λ6, `f_auto`, `f_cont` and the choice mission by mission)
+//! reproduces run for run.
+//!
+//! **Decision — densities.** The hall's free area is about 449 m²:
+//! `moderate` 25 visitors (5.6 per 100 m²: a few people at most exhibits),
+//! `packed` 60 (13 per 100 m²: groups at every exhibit and people in every
+//! passage). Visitors walk between the exhibits, gather around them and
+//! linger, and step aside when the robot asks.
 
 mod report;
 
@@ -33,12 +54,18 @@ use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
 use anyhow::{Context, Result, bail};
-use nav::guide::{Policy, SupervisorPlan};
+use nav::guide::{CreditPlan, GuideParams, Policy, SupervisorPlan};
+use nav::localization::StatusParams;
+use nav::supervisor::credit::CreditSupervisor;
+use nav::supervisor::credit_learning::CreditModel;
 use nav::supervisor::log::Entry;
 use nav::supervisor::{Behaviour, Supervisor, learning};
-use robot::{Pose, Vec2};
+use robot::{Event, Pose, Vec2};
 use sim::shapes::WorldSpec;
-use sim::{CrowdParams, TraceParams, World};
+use sim::{
+    CrowdParams, DisturbanceKind, DisturbanceParams, PushParams, SlipParams, SlipPatch, SurroundParams,
+    TraceParams, World,
+};
 
 use crate::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan};
 use crate::pictures::{EventMarker, MarkerPlace, Replay};
@@ -49,7 +76,7 @@ use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, Sui
 /// The suite in the registry.
 pub const REGISTRATION: Registration = Registration {
     name: "tourguide",
-    about: "the tour-guide robot in a crowded museum: 5 strategies (GSPN supervisor learning its rates, the rule, each behaviour alone) × 3 densities × 20 campaigns of 24 missions",
+    about: "the tour-guide robot in a crowded museum: 6 strategies (the crediting GSPN supervisor, the source's, the rule, each behaviour alone) × 4 conditions (empty, moderate, packed, a museum day) × 10 campaigns of 24 missions, with pushes, slips and groups causing true losses",
     build,
 };
 
@@ -82,17 +109,64 @@ pub const EXHIBITS: [Vec2; 12] = [
     Vec2 { x: 12.0, y: 30.3 },
 ];
 
-/// Crowd densities: name and visitors.
-pub const DENSITIES: [(&str, usize); 3] = [("empty", 0), ("moderate", 25), ("packed", 60)];
+/// A condition: its name and the visitors of each quarter of a campaign's
+/// missions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Condition {
+    /// Name (`empty`, `moderate`, `packed`, `day`).
+    pub name: &'static str,
+    /// Visitors during each quarter of the missions (the calibration runs
+    /// meet the first quarter's).
+    pub visitors: [usize; 4],
+}
+
+impl Condition {
+    /// Visitors during mission `m` (from 0).
+    pub fn visitors_at(&self, m: u32) -> usize {
+        self.visitors[((m * 4) / MISSIONS).min(3) as usize]
+    }
+
+    /// Whether the density changes during a campaign.
+    pub fn changes(&self) -> bool {
+        self.visitors.iter().any(|&v| v != self.visitors[0])
+    }
+}
+
+/// The conditions compared, in the report's order.
+pub const CONDITIONS: [Condition; 4] = [
+    Condition {
+        name: "empty",
+        visitors: [0; 4],
+    },
+    Condition {
+        name: "moderate",
+        visitors: [25; 4],
+    },
+    Condition {
+        name: "packed",
+        visitors: [60; 4],
+    },
+    Condition {
+        name: "day",
+        visitors: [0, 25, 60, 25],
+    },
+];
+
+/// The source's experiment's scenario prefix (moderate, no disturbances).
+pub const SOURCE: &str = "source";
 
 /// The strategies compared, in the report's order.
-pub const STRATEGIES: [&str; 5] = [
+pub const STRATEGIES: [&str; 6] = [
     "automove",
     "automove_then_contour",
     "contour",
     "rule",
     "supervisor",
+    "supervisor_source",
 ];
+
+/// The strategies that learn nothing (fixed policies).
+pub const FIXED: [&str; 4] = ["automove", "automove_then_contour", "contour", "rule"];
 
 /// Calibration runs per behaviour.
 pub const CALIBRATION_RUNS: u32 = 5;
@@ -100,12 +174,30 @@ pub const CALIBRATION_RUNS: u32 = 5;
 /// Missions per campaign.
 pub const MISSIONS: u32 = 24;
 
-/// Campaigns per density and strategy by default.
-pub const DEFAULT_CAMPAIGNS: u32 = 20;
+/// Campaigns per condition and strategy by default.
+pub const DEFAULT_CAMPAIGNS: u32 = 10;
 
 /// How often a visitor in sight and within 8 m comes to see the robot, per
 /// second (the crowd model's `robot_interest_rate_per_s`).
 pub const ROBOT_INTEREST_RATE_PER_S: f64 = 0.003;
+
+/// How often a visitor within reach pushes or turns the robot while it
+/// stands braked, per second ([`disturbances`]).
+pub const PUSH_RATE_PER_PERSON_S: f64 = 0.005;
+
+/// How often a group closes round the robot, per visitor in the hall and
+/// second ([`disturbances`]).
+pub const SURROUND_RATE_PER_VISITOR_S: f64 = 1.0 / 15_000.0;
+
+/// Largest share of its turn a wheel loses on the museum's polished
+/// threshold ([`disturbances`]).
+pub const SLIP_MAX: f64 = 0.1;
+
+/// A mission ends lost when the estimate stays more than 2 m off for this
+/// long, seconds: long enough for the localizer to find itself again after
+/// a push (it starts global localization 20 s into a recovery that has not
+/// converged).
+pub const LOST_AFTER_S: f64 = 30.0;
 
 /// Base seed.
 pub const SEED: u64 = 7;
@@ -133,24 +225,52 @@ pub mod metric {
     pub const DECISIONS: &str = "decisions";
     /// Switches between behaviours.
     pub const SWITCHES: &str = "switches";
+    /// Time truly lost (error over 0.5 m or 20°), seconds.
+    pub const LOST_S: &str = "time_lost_s";
+    /// Time in Warning while truly lost, seconds.
+    pub const WARNING_LOST_S: &str = "time_warning_lost_s";
+    /// Time with the true error under 0.2 m, seconds.
+    pub const FINE_S: &str = "time_fine_s";
+    /// Time in Warning with the true error under 0.2 m, seconds.
+    pub const WARNING_FINE_S: &str = "time_warning_fine_s";
+    /// Visitors in the hall.
+    pub const VISITORS: &str = "visitors";
+    /// Pushes.
+    pub const PUSHES: &str = "pushes";
+    /// Slip-patch crossings.
+    pub const SLIPS: &str = "slips";
+    /// Groups closing round the robot.
+    pub const SURROUNDS: &str = "surrounds";
 }
 
 /// What a job is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
-    /// Calibration run `k` (AutoMove for `k < 5`, contour tracking after).
-    Calibration(u32),
+    /// Calibration run `k` (AutoMove for `k < 5`, contour tracking after),
+    /// for the source's supervisor or the crediting one.
+    Calibration { k: u32, source: bool },
     /// Mission `m` (from 0) of a strategy.
     Mission(usize, u32),
+}
+
+/// A scenario name taken apart: the condition (`None` for the source's
+/// experiment) and the job's kind.
+#[derive(Debug, Clone, Copy)]
+struct Parsed {
+    condition: Option<usize>,
+    kind: Kind,
 }
 
 /// The tour-guide suite (module docs).
 pub struct TourGuideSuite {
     info: SuiteInfo,
-    world: OnceLock<Result<World, String>>,
-    /// The museum prepared for the guide controller, shared by all missions.
+    world: OnceLock<Result<(World, Vec<SlipPatch>), String>>,
+    /// The museum prepared for the guide controller, shared by all
+    /// missions: with the contradiction rule, and with the source's.
     setup: OnceLock<Result<MissionSetup, String>>,
+    setup_source: OnceLock<Result<MissionSetup, String>>,
     supervisor: OnceLock<Result<Supervisor, String>>,
+    credit: OnceLock<Result<CreditSupervisor, String>>,
 }
 
 fn build(args: &SuiteArgs) -> Result<Box<dyn Suite>> {
@@ -160,15 +280,17 @@ fn build(args: &SuiteArgs) -> Result<Box<dyn Suite>> {
 }
 
 /// The museum world with its visitors' parameters (positions are drawn per
-/// mission).
-pub fn museum() -> Result<World> {
+/// mission) and its slip patches.
+pub fn museum_with_patches() -> Result<(World, Vec<SlipPatch>)> {
     #[derive(serde::Deserialize)]
     struct File {
         world: WorldSpec,
+        #[serde(default)]
+        slip: Vec<SlipPatch>,
     }
     let file: File = toml::from_str(MUSEUM).context("museum.toml")?;
     let grid = file.world.rasterise()?;
-    Ok(World::new(grid).with_crowd(CrowdParams {
+    let world = World::new(grid).with_crowd(CrowdParams {
         waypoints: EXHIBITS.to_vec(),
         gather_radius_m: 1.2,
         linger_probability: 0.7,
@@ -179,20 +301,72 @@ pub fn museum() -> Result<World> {
         // aside); a few per mission at moderate density.
         robot_interest_rate_per_s: ROBOT_INTEREST_RATE_PER_S,
         ..CrowdParams::default()
-    })?)
+    })?;
+    Ok((world, file.slip))
+}
+
+/// The museum world with its visitors' parameters.
+pub fn museum() -> Result<World> {
+    Ok(museum_with_patches()?.0)
+}
+
+/// The physical causes of true loss in the museum with `visitors` visitors
+/// and these slip patches. Each rate comes from what causes it, so only
+/// the number of visitors changes between densities:
+///
+/// - **pushes**: a visitor within 0.4 m of the robot while it stands braked
+///   (asking people to step aside, waiting at a hit point) pushes or turns
+///   it with [`PUSH_RATE_PER_PERSON_S`] (one push per 200 s of a visitor
+///   beside the standing robot — children, mostly), 0.3–2 m and up to 90°;
+///   the odometry sees nothing (the wheels are braked);
+/// - **slips**: the polished stone threshold between the two galleries
+///   (`[[slip]]` in `museum.toml`) lets each wheel slip by up to
+///   [`SLIP_MAX`] (10 %) of its turn, drawn per crossing (rubber on a
+///   freshly polished or damp stone floor): every mission crosses it;
+/// - **groups**: with [`SURROUND_RATE_PER_VISITOR_S`] per visitor (one group
+///   every 10 min with 25 visitors, every 4 min with 60) 6–10 of the nearest
+///   visitors close round the robot for 20–60 s and do not step aside,
+///   hiding every wall from the laser.
+pub fn disturbances(visitors: usize, patches: &[SlipPatch]) -> DisturbanceParams {
+    DisturbanceParams {
+        push: PushParams {
+            rate_per_person_s: if visitors > 0 { PUSH_RATE_PER_PERSON_S } else { 0.0 },
+            ..PushParams::default()
+        },
+        slip: SlipParams {
+            patches: patches.to_vec(),
+            slip_max: SLIP_MAX,
+        },
+        surround: SurroundParams {
+            rate_per_s: visitors as f64 * SURROUND_RATE_PER_VISITOR_S,
+            ..SurroundParams::default()
+        },
+    }
+}
+
+/// The guide's parameters of the source's robot: its localizer warns by
+/// the explained fraction ([`StatusParams::explained`]).
+pub fn source_guide() -> GuideParams {
+    let mut g = GuideParams::default();
+    g.mcl.status = StatusParams::explained();
+    g
 }
 
 impl TourGuideSuite {
-    /// The suite with `campaigns` campaigns per density and strategy.
+    /// The suite with `campaigns` campaigns per condition and strategy.
     pub fn new(campaigns: u32) -> Result<TourGuideSuite> {
         if campaigns == 0 {
             bail!("the tour-guide suite needs at least one campaign");
         }
-        let mut scenarios = Vec::new();
-        for (d, _) in DENSITIES {
-            scenarios.push(format!("{d}/calibration"));
+        let mut scenarios = vec![
+            format!("{SOURCE}/calibration_source"),
+            format!("{SOURCE}/supervisor_source"),
+        ];
+        for c in CONDITIONS {
+            scenarios.push(format!("{}/calibration", c.name));
+            scenarios.push(format!("{}/calibration_source", c.name));
             for s in STRATEGIES {
-                scenarios.push(format!("{d}/{s}"));
+                scenarios.push(format!("{}/{s}", c.name));
             }
         }
         Ok(TourGuideSuite {
@@ -206,66 +380,96 @@ impl TourGuideSuite {
             },
             world: OnceLock::new(),
             setup: OnceLock::new(),
+            setup_source: OnceLock::new(),
             supervisor: OnceLock::new(),
+            credit: OnceLock::new(),
         })
     }
 
-    fn world(&self) -> Result<&World> {
+    fn world(&self) -> Result<&(World, Vec<SlipPatch>)> {
         self.world
-            .get_or_init(|| museum().map_err(|e| format!("{e:#}")))
+            .get_or_init(|| museum_with_patches().map_err(|e| format!("{e:#}")))
             .as_ref()
             .map_err(|e| anyhow::anyhow!("{e}"))
     }
 
     /// A mission's setup without its visitors: the museum, prepared once
-    /// for the guide controller ([`MissionSetup::prepare`]).
-    fn setup(&self) -> Result<&MissionSetup> {
-        self.setup
-            .get_or_init(|| {
-                let world = self.world().map_err(|e| format!("{e:#}"))?.clone();
-                let mut setup = MissionSetup::new(world, MISSION_TIME_LIMIT_S);
-                setup.prepare().map_err(|e| format!("{e:#}"))?;
-                Ok(setup)
-            })
-            .as_ref()
-            .map_err(|e| anyhow::anyhow!("{e}"))
+    /// for the guide controller ([`MissionSetup::prepare`]), with the
+    /// contradiction rule or the source's localizer.
+    fn setup(&self, source: bool) -> Result<&MissionSetup> {
+        let cell = if source { &self.setup_source } else { &self.setup };
+        cell.get_or_init(|| {
+            let world = self.world().map_err(|e| format!("{e:#}"))?.0.clone();
+            let mut setup = MissionSetup::new(world, MISSION_TIME_LIMIT_S);
+            setup.lost_after_s = LOST_AFTER_S;
+            if source {
+                setup.guide = source_guide();
+            }
+            setup.prepare().map_err(|e| format!("{e:#}"))?;
+            Ok(setup)
+        })
+        .as_ref()
+        .map_err(|e| anyhow::anyhow!("{e}"))
     }
 
-    fn supervisor(&self) -> Result<&Supervisor> {
+    pub(crate) fn supervisor(&self) -> Result<&Supervisor> {
         self.supervisor
             .get_or_init(|| Supervisor::new().map_err(|e| e.to_string()))
             .as_ref()
             .map_err(|e| anyhow::anyhow!("{e}"))
     }
 
-    /// The density index, and the job's kind, of a scenario name and run.
-    fn parse(&self, job: &Job) -> Result<(usize, Kind)> {
-        let (density, what) = job
+    pub(crate) fn credit(&self) -> Result<&CreditSupervisor> {
+        self.credit
+            .get_or_init(|| CreditSupervisor::new().map_err(|e| e.to_string()))
+            .as_ref()
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    }
+
+    /// The condition and the job's kind of a scenario name and run.
+    fn parse(&self, job: &Job) -> Result<Parsed> {
+        let (prefix, what) = job
             .scenario
             .split_once('/')
             .with_context(|| format!("`{}` is not a tour-guide scenario", job.scenario))?;
-        let d = DENSITIES
-            .iter()
-            .position(|(n, _)| *n == density)
-            .with_context(|| format!("no density `{density}`"))?;
-        let kind = if what == "calibration" {
-            Kind::Calibration(job.run % (2 * CALIBRATION_RUNS))
+        let condition = if prefix == SOURCE {
+            None
         } else {
-            let s = STRATEGIES
-                .iter()
-                .position(|n| *n == what)
-                .with_context(|| format!("no strategy `{what}`"))?;
-            Kind::Mission(s, job.run % MISSIONS)
+            Some(
+                CONDITIONS
+                    .iter()
+                    .position(|c| c.name == prefix)
+                    .with_context(|| format!("no condition `{prefix}`"))?,
+            )
         };
-        Ok((d, kind))
+        let kind = match what {
+            "calibration" | "calibration_source" => Kind::Calibration {
+                k: job.run % (2 * CALIBRATION_RUNS),
+                source: what == "calibration_source",
+            },
+            _ => {
+                let s = STRATEGIES
+                    .iter()
+                    .position(|n| *n == what)
+                    .with_context(|| format!("no strategy `{what}`"))?;
+                Kind::Mission(s, job.run % MISSIONS)
+            }
+        };
+        if condition.is_none()
+            && !matches!(kind, Kind::Calibration { source: true, .. })
+            && what != "supervisor_source"
+        {
+            bail!("the source's experiment runs only `supervisor_source` and its calibration");
+        }
+        Ok(Parsed { condition, kind })
     }
 
-    /// The seed of mission or calibration run `k` of campaign `c` at
-    /// density `d`: the same for every strategy.
-    fn seed(&self, d: usize, c: u32, calibration: bool, k: u32) -> u64 {
+    /// The seed of mission or calibration run `k` of campaign `c` in a
+    /// condition: the same for every strategy. The source's experiment has
+    /// the moderate campaign 0's seeds.
+    fn seed(&self, condition: &str, c: u32, calibration: bool, k: u32) -> u64 {
         let stream = format!(
-            "{} campaign {c}{}",
-            DENSITIES[d].0,
+            "{condition} campaign {c}{}",
             if calibration { " calibration" } else { "" }
         );
         derive_seed(self.info.seed, &stream, k)
@@ -289,9 +493,13 @@ impl TourGuideSuite {
             "contour" => Policy::Fixed(Behaviour::Contour),
             "automove_then_contour" => Policy::AutoMoveThenContour,
             "rule" => Policy::Rule,
+            "supervisor" => Policy::Supervisor(Box::new(CreditPlan {
+                supervisor: self.credit()?.clone(),
+                model: CreditModel::learn_or_prior(log)?,
+            })),
             _ => {
                 let learned = learning::learn_or_prior(log)?;
-                Policy::Supervisor(Box::new(SupervisorPlan {
+                Policy::SupervisorSource(Box::new(SupervisorPlan {
                     supervisor: self.supervisor()?.clone(),
                     rates: learned.rates,
                     automove: learned.automove,
@@ -301,26 +509,45 @@ impl TourGuideSuite {
         })
     }
 
+    /// Visitors and disturbances of a job.
+    fn conditions_of(&self, parsed: &Parsed) -> Result<(usize, DisturbanceParams)> {
+        let Some(c) = parsed.condition else {
+            // The source's experiment: 25 visitors, no disturbances.
+            return Ok((25, DisturbanceParams::default()));
+        };
+        let cond = CONDITIONS[c];
+        let visitors = match parsed.kind {
+            Kind::Calibration { .. } => cond.visitors[0],
+            Kind::Mission(_, m) => cond.visitors_at(m),
+        };
+        Ok((visitors, disturbances(visitors, &self.world()?.1)))
+    }
+
     /// Runs a job.
-    fn leg(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<(LegRun, Entry)> {
-        let (d, kind) = self.parse(job)?;
+    fn leg(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<(LegRun, Entry, usize)> {
+        let parsed = self.parse(job)?;
         let log = Self::log(earlier)?;
-        let (policy, name) = match kind {
-            Kind::Calibration(k) => {
+        let (policy, name, source) = match parsed.kind {
+            Kind::Calibration { k, source } => {
                 let b = if k < CALIBRATION_RUNS {
                     Behaviour::AutoMove
                 } else {
                     Behaviour::Contour
                 };
-                (Policy::Fixed(b), format!("calibration {}", k + 1))
+                (Policy::Fixed(b), format!("calibration {}", k + 1), source)
             }
-            Kind::Mission(s, m) => (self.policy(s, &log)?, format!("mission {}", m + 1)),
+            Kind::Mission(s, m) => (
+                self.policy(s, &log)?,
+                format!("mission {}", m + 1),
+                STRATEGIES[s] == "supervisor_source",
+            ),
         };
-        let mut setup = self.setup()?.clone();
-        let people = DENSITIES[d].1;
-        if people > 0 {
+        let mut setup = self.setup(source)?.clone();
+        let (visitors, disturbances) = self.conditions_of(&parsed)?;
+        setup.disturbances = disturbances;
+        if visitors > 0 {
             setup.people = Some(PeoplePlan {
-                count: people,
+                count: visitors,
                 anchors: EXHIBITS.to_vec(),
                 spread_m: 2.5,
                 keep_clear_m: 1.0,
@@ -339,41 +566,84 @@ impl TourGuideSuite {
                 trace,
             },
         )?;
-        let entry = match (kind, &policy) {
-            (Kind::Calibration(_), Policy::Fixed(b)) => mission::calibration_entry(&leg, *b),
+        let entry = match (parsed.kind, &policy) {
+            (Kind::Calibration { source: true, .. }, Policy::Fixed(b)) => {
+                mission::calibration_entry(&leg, *b)
+            }
+            (Kind::Calibration { source: false, .. }, Policy::Fixed(b)) => {
+                mission::credit_calibration_entry(&leg, *b)
+            }
             (Kind::Mission(_, m), _) => mission::mission_entry(&leg, m + 1),
-            (Kind::Calibration(_), _) => bail!("a calibration run drives one behaviour"),
+            (Kind::Calibration { .. }, _) => bail!("a calibration run drives one behaviour"),
         };
-        Ok((leg, entry))
+        Ok((leg, entry, visitors))
     }
 
-    fn record(&self, leg: &LegRun, entry: &Entry) -> Result<RunRecord> {
+    fn record(&self, leg: &LegRun, entry: &Entry, visitors: usize) -> Result<RunRecord> {
         let r = &leg.result;
         let kept = ["decision", "switch", "warning", "success"];
+        let mut events: Vec<Event> = leg
+            .trace
+            .events
+            .iter()
+            .filter(|e| kept.contains(&e.kind.as_str()))
+            .cloned()
+            .collect();
+        events.extend(leg.disturbances.iter().filter_map(disturbance_event));
+        events.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
         let mut record = RunRecord {
-            events: leg
-                .trace
-                .events
-                .iter()
-                .filter(|e| kept.contains(&e.kind.as_str()))
-                .cloned()
-                .collect(),
+            events,
             start: [START.x_m, START.y_m, START.theta_rad],
             state: Some(serde_json::to_value(entry)?),
             ..mission::leg_base_record(leg)
         };
         let s = &leg.summary;
-        record.set_metric(metric::WARNING_S, r.localization.time_in_warning_s)?;
-        record.set_metric(metric::WARNINGS, f64::from(r.localization.warnings))?;
+        let l = &r.localization;
+        record.set_metric(metric::WARNING_S, l.time_in_warning_s)?;
+        record.set_metric(metric::WARNINGS, f64::from(l.warnings))?;
         record.set_metric(metric::ABNORMAL_S, r.planner.time_abnormal_s)?;
         record.set_metric(metric::AUTOMOVE_S, s.time_automove_s)?;
         record.set_metric(metric::CONTOUR_S, s.time_contour_s)?;
-        record.set_metric(metric::LOC_MEAN, r.localization.mean_error_m)?;
-        record.set_metric(metric::LOC_MAX, r.localization.max_error_m)?;
+        record.set_metric(metric::LOC_MEAN, l.mean_error_m)?;
+        record.set_metric(metric::LOC_MAX, l.max_error_m)?;
         record.set_metric(metric::DECISIONS, s.decisions.len() as f64)?;
         let switches = leg.trace.events.iter().filter(|e| e.kind == "switch").count();
         record.set_metric(metric::SWITCHES, switches as f64)?;
+        record.set_metric(metric::LOST_S, l.lost_s)?;
+        record.set_metric(metric::WARNING_LOST_S, l.warning_lost_s)?;
+        record.set_metric(metric::FINE_S, l.fine_s)?;
+        record.set_metric(metric::WARNING_FINE_S, l.warning_fine_s)?;
+        record.set_metric(metric::VISITORS, visitors as f64)?;
+        let count = |kind: &str| leg.disturbances.iter().filter(|d| d.kind.name() == kind).count() as f64;
+        record.set_metric(metric::PUSHES, count("push"))?;
+        record.set_metric(metric::SLIPS, count("slip"))?;
+        record.set_metric(metric::SURROUNDS, count("surround"))?;
         Ok(record)
+    }
+}
+
+/// A disturbance as a record's event (`push`, `surround`; slips are
+/// counted, not kept: every mission has one).
+fn disturbance_event(d: &sim::DisturbanceEvent) -> Option<Event> {
+    let e = Event::new(d.kind.name(), d.start_s);
+    match &d.kind {
+        DisturbanceKind::Push {
+            applied_translation_m,
+            applied_rotation_rad,
+            ..
+        } => Some(
+            e.with("translation_m", *applied_translation_m)
+                .with("rotation_rad", *applied_rotation_rad),
+        ),
+        DisturbanceKind::Surround {
+            group_size,
+            duration_s,
+            ..
+        } => Some(
+            e.with("group_size", *group_size as f64)
+                .with("duration_s", *duration_s),
+        ),
+        DisturbanceKind::Slip { .. } => None,
     }
 }
 
@@ -384,21 +654,41 @@ impl Suite for TourGuideSuite {
 
     fn campaigns(&self) -> Vec<Campaign> {
         let mut out = Vec::new();
-        for (d, (density, _)) in DENSITIES.iter().enumerate() {
-            for (s, strategy) in STRATEGIES.iter().enumerate() {
+        // The source's experiment: one campaign, the moderate campaign 0's
+        // seeds.
+        let mut jobs: Vec<Job> = (0..2 * CALIBRATION_RUNS)
+            .map(|k| Job {
+                scenario: format!("{SOURCE}/calibration_source"),
+                run: k,
+                seed: self.seed("moderate", 0, true, k),
+            })
+            .collect();
+        jobs.extend((0..MISSIONS).map(|m| Job {
+            scenario: format!("{SOURCE}/supervisor_source"),
+            run: m,
+            seed: self.seed("moderate", 0, false, m),
+        }));
+        out.push(Campaign { jobs });
+        for cond in CONDITIONS {
+            for strategy in STRATEGIES {
                 for c in 0..self.info.runs {
                     let mut jobs = Vec::new();
-                    if STRATEGIES[s] == "supervisor" {
+                    let calibration = match strategy {
+                        "supervisor" => Some("calibration"),
+                        "supervisor_source" => Some("calibration_source"),
+                        _ => None,
+                    };
+                    if let Some(cal) = calibration {
                         jobs.extend((0..2 * CALIBRATION_RUNS).map(|k| Job {
-                            scenario: format!("{density}/calibration"),
+                            scenario: format!("{}/{cal}", cond.name),
                             run: c * 2 * CALIBRATION_RUNS + k,
-                            seed: self.seed(d, c, true, k),
+                            seed: self.seed(cond.name, c, true, k),
                         }));
                     }
                     jobs.extend((0..MISSIONS).map(|m| Job {
-                        scenario: format!("{density}/{strategy}"),
+                        scenario: format!("{}/{strategy}", cond.name),
                         run: c * MISSIONS + m,
-                        seed: self.seed(d, c, false, m),
+                        seed: self.seed(cond.name, c, false, m),
                     }));
                     out.push(Campaign { jobs });
                 }
@@ -408,8 +698,8 @@ impl Suite for TourGuideSuite {
     }
 
     fn run(&self, job: &Job, earlier: &[RunRecord]) -> Result<RunRecord> {
-        let (leg, entry) = self.leg(job, earlier, TraceParams::default())?;
-        self.record(&leg, &entry)
+        let (leg, entry, visitors) = self.leg(job, earlier, TraceParams::default())?;
+        self.record(&leg, &entry, visitors)
     }
 
     fn replay(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<Replay> {
@@ -417,15 +707,15 @@ impl Suite for TourGuideSuite {
             enabled: true,
             ..trace
         };
-        let (leg, entry) = self.leg(job, earlier, trace)?;
-        let record = self.record(&leg, &entry)?;
+        let (leg, entry, visitors) = self.leg(job, earlier, trace)?;
+        let record = self.record(&leg, &entry, visitors)?;
         Ok(Replay {
             record,
             trace: leg
                 .sim
                 .and_then(|s| s.trace)
                 .context("the mission could not run")?,
-            grid: self.world()?.grid().clone(),
+            grid: self.world()?.0.grid().clone(),
             goal: Some(GOAL),
             robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
             control_period_s: 0.1,
@@ -441,8 +731,8 @@ impl Suite for TourGuideSuite {
     }
 }
 
-/// Decisions and warnings on pictures of a mission.
-pub const MARKERS: [EventMarker; 2] = [
+/// Decisions, warnings and pushes on pictures of a mission.
+pub const MARKERS: [EventMarker; 3] = [
     EventMarker {
         kind: "warning",
         marker: sim::render::MarkerKind::Square([230, 120, 0]),
@@ -452,6 +742,12 @@ pub const MARKERS: [EventMarker; 2] = [
     EventMarker {
         kind: "decision",
         marker: sim::render::MarkerKind::Ring([120, 0, 160]),
+        place: MarkerPlace::Robot,
+        single_run_only: false,
+    },
+    EventMarker {
+        kind: "push",
+        marker: sim::render::MarkerKind::Square([200, 0, 0]),
         place: MarkerPlace::Robot,
         single_run_only: false,
     },

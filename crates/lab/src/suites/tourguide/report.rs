@@ -1,7 +1,10 @@
 //! The tour-guide suite's report: the source's experiment (one campaign of
-//! 24 missions at moderate density), the learnt rates and decisions, one
-//! mission's trajectory, the comparison of the strategies, and an
-//! explanation — every figure from the batch's records.
+//! 24 missions at moderate density, its Table IV), the learnt rates and
+//! decisions, one mission's trajectory, the disturbances, the comparison of
+//! the six strategies in the four conditions with the supervisor's
+//! targets checked, the museum day mission by mission, the Warning against
+//! the true losses, and an explanation — every figure from the batch's
+//! records.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -11,13 +14,13 @@ use nav::supervisor::log::{Entry, Line};
 use robot::Event;
 use sim::TraceParams;
 
-use super::{CALIBRATION_RUNS, DENSITIES, MISSIONS, STRATEGIES, TourGuideSuite, metric};
+use super::{CALIBRATION_RUNS, CONDITIONS, FIXED, MISSIONS, SOURCE, STRATEGIES, TourGuideSuite, metric};
 use crate::charts::{self, Bar, Series};
 use crate::page::{Block, Figure};
 use crate::pictures;
 use crate::record::{RunRecord, Runs};
 use crate::runner::Job;
-use crate::stats::{Mean, Proportion, median};
+use crate::stats::{Mean, Proportion};
 use crate::suite::{ReportContext, Suite, SuiteReport};
 use crate::summary::CONFIDENCE;
 use crate::tables::{self, MetricColumn};
@@ -48,10 +51,10 @@ fn fmt_rate(x: f64) -> String {
     }
 }
 
-/// The source's experiment: campaign 0 of the supervisor at moderate
-/// density, mission by mission.
+/// The source's experiment: its campaign of `supervisor_source` among 25
+/// visitors, mission by mission (the source's Table IV).
 fn source_table(runs: &Runs) -> (String, Vec<&RunRecord>) {
-    let rs = by_run(runs, "moderate/supervisor");
+    let rs = by_run(runs, &format!("{SOURCE}/supervisor_source"));
     let missions: Vec<&RunRecord> = (0..MISSIONS).filter_map(|m| rs.get(&m).copied()).collect();
     let mut md = String::from(
         "| mission | outcome | time (s) | λ3 | λ4 | λ5 | λ6 | f_auto | f_cont | choice | warnings | switches |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|\n",
@@ -174,7 +177,12 @@ struct Versus {
 }
 
 fn versus(runs: &Runs, density: &str, other: &str) -> Versus {
-    let sup = by_run(runs, &format!("{density}/supervisor"));
+    versus_of(runs, density, "supervisor", other)
+}
+
+/// [`versus`] for any two strategies, `a` against `b`.
+fn versus_of(runs: &Runs, density: &str, a: &str, other: &str) -> Versus {
+    let sup = by_run(runs, &format!("{density}/{a}"));
     let oth = by_run(runs, &format!("{density}/{other}"));
     let mut v = Versus {
         both: 0,
@@ -195,6 +203,40 @@ fn versus(runs: &Runs, density: &str, other: &str) -> Versus {
     }
     v.time_diff = Mean::new(&diffs, CONFIDENCE);
     v
+}
+
+/// The paired difference in success (`supervisor` − `other`, per mission:
+/// +1, 0, −1) with its Student-t interval.
+fn success_diff(runs: &Runs, condition: &str, other: &str) -> Mean {
+    let sup = by_run(runs, &format!("{condition}/supervisor"));
+    let oth = by_run(runs, &format!("{condition}/{other}"));
+    let d: Vec<f64> = sup
+        .iter()
+        .filter_map(|(k, a)| {
+            oth.get(k)
+                .map(|b| f64::from(u8::from(a.success)) - f64::from(u8::from(b.success)))
+        })
+        .collect();
+    Mean::new(&d, CONFIDENCE)
+}
+
+/// The records of a scenario.
+fn records<'a>(runs: &'a Runs, scenario: &str) -> Vec<&'a RunRecord> {
+    runs.get(scenario)
+        .map(|v| v.iter().map(|(_, r)| r).collect())
+        .unwrap_or_default()
+}
+
+fn sum_metric(rs: &[&RunRecord], m: &str) -> f64 {
+    rs.iter().filter_map(|r| r.metric(m)).sum()
+}
+
+fn ratio_text(num: f64, den: f64) -> String {
+    if den > 0.0 {
+        format!("{:.2}", num / den)
+    } else {
+        "-".into()
+    }
 }
 
 /// The report (module docs).
@@ -253,7 +295,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     let (fc_lo, fc_hi) = spread(&f_cont);
     let (fa_lo, fa_hi) = spread(&f_auto);
     blocks.push(Block::Text(format!(
-        "Campaign 0 of the GSPN supervisor at moderate density: {} calibration runs (each behaviour alone, {} times), then {} missions from (8.1, 6.4) to (8.5, 27.5), each deciding with the rates learnt from the log of all runs before it (the source ran 24 missions; 20 reached the goal). Here {reached} of {} reached the goal; at the start of the missions the supervisor chose AutoMove {auto_choices} times. Over the missions `f_cont` stayed within {fc_lo:.5}–{fc_hi:.5} while `f_auto` moved within {fa_lo:.5}–{fa_hi:.5}: {}.\n\n",
+        "The source's supervisor and localizer (`supervisor_source`) among 25 visitors, without the disturbances (the source reports none), on the seeds the moderate campaign 0 has always had: {} calibration runs (each behaviour alone, {} times), then {} missions from (8.1, 6.4) to (8.5, 27.5), each deciding with the rates learnt from the log of all runs before it (the source ran 24 missions; 20 reached the goal). Here {reached} of {} reached the goal; at the start of the missions the supervisor chose AutoMove {auto_choices} times. Over the missions `f_cont` stayed within {fc_lo:.5}–{fc_hi:.5} while `f_auto` moved within {fa_lo:.5}–{fa_hi:.5}: {}.\n\n",
         2 * CALIBRATION_RUNS,
         CALIBRATION_RUNS,
         MISSIONS,
@@ -280,15 +322,15 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         "mission",
         "throughput (1/s)",
         &[
-            series("f_auto (campaign 0)", per("f_auto")),
-            series("f_cont (campaign 0)", per("f_cont")),
+            series("f_auto (the source's experiment)", per("f_auto")),
+            series("f_cont (the source's experiment)", per("f_cont")),
             series(
-                "f_auto (mean of the campaigns)",
-                per_mission_mean(runs, "moderate/supervisor", "f_auto"),
+                "f_auto (moderate, with disturbances: mean of the campaigns)",
+                per_mission_mean(runs, "moderate/supervisor_source", "f_auto"),
             ),
             series(
-                "f_cont (mean of the campaigns)",
-                per_mission_mean(runs, "moderate/supervisor", "f_cont"),
+                "f_cont (moderate, with disturbances: mean of the campaigns)",
+                per_mission_mean(runs, "moderate/supervisor_source", "f_cont"),
             ),
         ],
         false,
@@ -302,7 +344,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         &mut files,
     )?);
     let svg = charts::lines(
-        "Learnt rates at the start of each mission (campaign 0)",
+        "Learnt rates at the start of each mission (the source's experiment)",
         "mission",
         "rate (1/s)",
         &[
@@ -351,27 +393,57 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     {
         blocks.push(Block::Charts {
             heading: "One mission".into(),
-            caption: "The first mission of campaign 0 in which the behaviour switched, re-simulated from its seed: the true trajectory coloured by the behaviour driving, the robot every 2 s, the localizer's warnings (orange squares) and the supervisor's decisions (purple rings). `petrinav lab replay out/tourguide 'moderate/supervisor#K' --trace t.jsonl` gives every event.".into(),
+            caption: "The first mission of the source's experiment in which the behaviour switched, re-simulated from its seed: the true trajectory coloured by the behaviour driving, the robot every 2 s, the localizer's warnings (orange squares) and the supervisor's decisions (purple rings). `petrinav lab replay out/tourguide 'source/supervisor_source#K' --trace t.jsonl` gives every event.".into(),
             figures: vec![figure],
         });
     }
 
-    // 2. The comparison.
+    // 2. The disturbances.
+    blocks.push(Block::Heading("True losses and what caused them".into()));
+    let mut md = String::from(
+        "| condition | visitors | pushes / mission | slip crossings / mission | groups / mission | time truly lost / mission (s) | missions ending lost |\n|---|---|---:|---:|---:|---:|---:|\n",
+    );
+    for cond in CONDITIONS {
+        let rs: Vec<&RunRecord> = STRATEGIES
+            .iter()
+            .flat_map(|s| records(runs, &format!("{}/{s}", cond.name)))
+            .collect();
+        let n = rs.len().max(1) as f64;
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {} of {} |",
+            cond.name,
+            cond.visitors.map(|v| v.to_string()).join(" → "),
+            sum_metric(&rs, metric::PUSHES) / n,
+            sum_metric(&rs, metric::SLIPS) / n,
+            sum_metric(&rs, metric::SURROUNDS) / n,
+            sum_metric(&rs, metric::LOST_S) / n,
+            rs.iter().filter(|r| r.outcome == "lost").count(),
+            rs.len(),
+        );
+    }
+    blocks.push(Block::Text(format!(
+        "Visitors push or turn the robot while it stands braked (0.3–2 m, up to 90°, unseen by the odometry; {} per visitor-second within reach), the wheels slip on the polished threshold between the galleries (up to {} % per wheel, every crossing), and groups of 6–10 visitors close round the robot for 20–60 s ({} per visitor-second), hiding every wall. A robot is *truly lost* while its estimate is more than 0.5 m or 20° off. All strategies meet the same draws, mission by mission; how often a push strikes depends on where and how long the robot stands.\n\n",
+        super::PUSH_RATE_PER_PERSON_S,
+        100.0 * super::SLIP_MAX,
+        super::SURROUND_RATE_PER_VISITOR_S,
+    )));
+    blocks.push(Block::Table(md));
+
+    // 3. The comparison.
     blocks.push(Block::Heading("The comparison the source never made".into()));
     let mut md = String::from(
-        "| density | strategy | missions | success (95 % CI) | time to goal (s) | in Warning (s) | contour share | true losses | collisions | time limits |\n|---|---|---:|---|---:|---:|---:|---:|---:|---:|\n",
+        "| condition | strategy | missions | success (95 % CI) | time to goal (s) | in Warning (s) | contour share | truly lost (s) | ended lost | collisions | time limits |\n|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let mut cells: BTreeMap<(usize, usize), Cell> = BTreeMap::new();
-    for (d, (density, _)) in DENSITIES.iter().enumerate() {
+    for (d, cond) in CONDITIONS.iter().enumerate() {
         for (s, strategy) in STRATEGIES.iter().enumerate() {
-            let rs: Vec<&RunRecord> = runs
-                .get(&format!("{density}/{strategy}"))
-                .map(|v| v.iter().map(|(_, r)| r).collect())
-                .unwrap_or_default();
+            let rs = records(runs, &format!("{}/{strategy}", cond.name));
             let c = cell(&rs);
             let _ = writeln!(
                 md,
-                "| {density} | {strategy} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {strategy} | {} | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
+                cond.name,
                 c.missions,
                 percent(&c.success),
                 one_decimal(&c.time),
@@ -381,6 +453,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
                 } else {
                     "-".into()
                 },
+                sum_metric(&rs, metric::LOST_S) / rs.len().max(1) as f64,
                 c.lost,
                 c.collisions,
                 c.timeouts
@@ -389,65 +462,52 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         }
     }
     blocks.push(Block::Text(format!(
-        "{} campaigns of {MISSIONS} missions per density and strategy; mission m of campaign c meets the same visitors and noise under every strategy. Success with its Wilson interval, time to goal over the missions that reached it with its Student-t interval, time the localizer spent in Warning per mission, the share of driving time in contour tracking, true losses (the robot declared arrival where the goal was not, or its estimate stayed over 2 m off for 5 s).\n\n",
+        "{} campaigns of {MISSIONS} missions per condition and strategy; mission m of campaign c meets the same visitors, noise and disturbance draws under every strategy. Success with its Wilson interval, time to goal over the missions that reached it with its Student-t interval, time the localizer spent in Warning per mission, the share of driving time in contour tracking, time truly lost per mission, missions that ended lost (arrival declared where the goal was not, or the estimate over 2 m off for 5 s).\n\n",
         suite.info().runs
     )));
     blocks.push(Block::Table(md));
-    let groups: Vec<String> = DENSITIES.iter().map(|(d, _)| d.to_string()).collect();
+    let groups: Vec<String> = CONDITIONS.iter().map(|c| c.name.to_string()).collect();
     let names: Vec<String> = STRATEGIES.iter().map(|s| s.to_string()).collect();
-    let success_bars: Vec<Vec<Bar>> = (0..DENSITIES.len())
-        .map(|d| {
-            (0..STRATEGIES.len())
-                .map(|s| {
-                    let p = &cells[&(d, s)].success;
-                    Bar {
-                        value: p.value,
-                        low: p.low,
-                        high: p.high,
-                    }
-                })
-                .collect()
-        })
-        .collect();
-    let time_bars: Vec<Vec<Bar>> = (0..DENSITIES.len())
-        .map(|d| {
-            (0..STRATEGIES.len())
-                .map(|s| {
-                    let m = &cells[&(d, s)].time;
-                    Bar {
-                        value: if m.n > 0 { m.mean } else { f64::NAN },
-                        low: m.mean - m.half_width,
-                        high: m.mean + m.half_width,
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let bars = |f: &dyn Fn(&Cell) -> Bar| -> Vec<Vec<Bar>> {
+        (0..CONDITIONS.len())
+            .map(|d| (0..STRATEGIES.len()).map(|s| f(&cells[&(d, s)])).collect())
+            .collect()
+    };
+    let success_bars = bars(&|c| Bar {
+        value: c.success.value,
+        low: c.success.low,
+        high: c.success.high,
+    });
+    let time_bars = bars(&|c| Bar {
+        value: if c.time.n > 0 { c.time.mean } else { f64::NAN },
+        low: c.time.mean - c.time.half_width,
+        high: c.time.mean + c.time.half_width,
+    });
     let mut figures = vec![save_svg(
         ctx,
         "comparison_success.svg",
-        "success by density and strategy",
+        "success by condition and strategy",
         &charts::bars(
             "Missions that reached the goal",
             "share",
             &groups,
             &names,
             &success_bars,
-            (760, 400),
+            (860, 400),
         )?,
         &mut files,
     )?];
     figures.push(save_svg(
         ctx,
         "comparison_time.svg",
-        "time to goal by density and strategy",
+        "time to goal by condition and strategy",
         &charts::bars(
             "Time to goal (missions that reached it)",
             "seconds",
             &groups,
             &names,
             &time_bars,
-            (760, 400),
+            (860, 400),
         )?,
         &mut files,
     )?);
@@ -457,69 +517,34 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         figures,
     });
 
-    // 3. The explanation.
-    blocks.push(Block::Heading(
-        "What the supervisor gains or loses, and why".into(),
-    ));
+    // 4. The supervisor's targets.
+    blocks.push(Block::Heading("Is the supervisor worth using?".into()));
+    let (targets_md, targets_text) = targets(&cells);
+    blocks.push(Block::Text(targets_text));
+    blocks.push(Block::Table(targets_md));
+
+    // 5. The museum day, mission by mission.
+    blocks.push(Block::Heading("The museum day, mission by mission".into()));
+    blocks.push(Block::Text(day_text(runs)));
+    blocks.push(Block::Table(day_table(runs)));
+
+    // 6. The Warning against true losses.
+    blocks.push(Block::Heading("What a Warning means".into()));
+    let (warn_md, warn_text) = warning_table(runs);
+    blocks.push(Block::Text(warn_text));
+    blocks.push(Block::Table(warn_md));
+
+    // 7. Why.
+    blocks.push(Block::Heading("What the supervisor decided, and why".into()));
     let mut text = String::new();
-    for (d, (density, _)) in DENSITIES.iter().enumerate() {
-        // The first of the best (ties go to the earlier strategy, not to the
-        // supervisor, which comes last).
-        let best_success = (0..STRATEGIES.len())
-            .rev()
-            .max_by(|&a, &b| {
-                cells[&(d, a)]
-                    .success
-                    .value
-                    .total_cmp(&cells[&(d, b)].success.value)
-            })
-            .unwrap_or(0);
-        let best_time = (0..STRATEGIES.len())
-            .filter(|s| cells[&(d, *s)].time.n > 0)
-            .min_by(|&a, &b| cells[&(d, a)].time.mean.total_cmp(&cells[&(d, b)].time.mean))
-            .unwrap_or(0);
-        let sup = &cells[&(d, 4)];
-        let bs = &cells[&(d, best_success)];
-        let bt = &cells[&(d, best_time)];
-        let overlap = |a: &Proportion, b: &Proportion| a.low <= b.high && b.low <= a.high;
-        let close_in_time =
-            |a: &Mean, b: &Mean| a.n > 0 && b.n > 0 && (a.mean - b.mean).abs() <= a.half_width + b.half_width;
-        let tied = |best: usize, same: &dyn Fn(&Cell) -> bool| -> String {
-            let names: Vec<&str> = (0..STRATEGIES.len())
-                .filter(|&s| s != best && same(&cells[&(d, s)]))
-                .map(|s| STRATEGIES[s])
-                .collect();
-            if names.is_empty() {
-                String::new()
-            } else {
-                format!("; within its interval: {}", names.join(", "))
-            }
-        };
-        let _ = write!(
-            text,
-            "**{density}.** Most successful: {} ({}{}). Fastest: {} ({} s{}). The supervisor: {} success, {} s, {} of its driving in contour tracking, {:.1} s in Warning per mission. Mission by mission against the supervisor: ",
-            STRATEGIES[best_success],
-            percent(&bs.success),
-            tied(best_success, &|c: &Cell| overlap(&c.success, &bs.success)),
-            STRATEGIES[best_time],
-            one_decimal(&bt.time),
-            tied(best_time, &|c: &Cell| close_in_time(&c.time, &bt.time)),
-            percent(&sup.success),
-            one_decimal(&sup.time),
-            if sup.contour_share.is_finite() {
-                format!("{:.0} %", 100.0 * sup.contour_share)
-            } else {
-                "-".into()
-            },
-            sup.warning.mean,
-        );
-        let parts: Vec<String> = STRATEGIES
+    for (d, cond) in CONDITIONS.iter().enumerate() {
+        let v: Vec<String> = STRATEGIES
             .iter()
-            .take(4)
+            .filter(|s| **s != "supervisor")
             .map(|other| {
-                let v = versus(runs, density, other);
+                let v = versus(runs, cond.name, other);
                 format!(
-                    "{other}: +{} −{} missions{}",
+                    "{other}: +{} −{}{}",
                     v.supervisor_only,
                     v.other_only,
                     if v.time_diff.n > 0 {
@@ -539,16 +564,16 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
                 )
             })
             .collect();
-        let _ = writeln!(text, "{}.\n", parts.join("; "));
+        let _ = writeln!(
+            text,
+            "**{}.** Mission by mission against the supervisor: {}.\n\n{}\n",
+            cond.name,
+            v.join("; "),
+            why(runs, cond.name, d, &cells)
+        );
     }
     text.push_str(
-        "“+a −b” counts the missions (same campaign, same visitors) that only the supervisor reached (a) and that only the other strategy reached (b); the time difference is the supervisor's minus the other's on the missions both reached.\n\n",
-    );
-    for (d, (density, _)) in DENSITIES.iter().enumerate() {
-        let _ = writeln!(text, "{}\n", why(runs, density, d, &cells));
-    }
-    text.push_str(
-        "Any mission can be replayed with its decisions and switches and the rates it used: `petrinav lab replay out/tourguide 'DENSITY/supervisor#K' --trace t.jsonl`.\n",
+        "“+a −b” counts the missions (same campaign, same visitors and draws) that only the supervisor reached (a) and that only the other strategy reached (b); the time difference is the supervisor's minus the other's on the missions both reached. Any mission can be replayed with its decisions, switches, pushes and the rates it used: `petrinav lab replay out/tourguide 'CONDITION/supervisor#K' --trace t.jsonl`.\n",
     );
     blocks.push(Block::Text(text));
     blocks.push(Block::Heading("All scenarios".into()));
@@ -559,7 +584,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     Ok(SuiteReport {
         text: table_text,
         intro: Some(format!(
-            "{} campaigns per density and strategy, {MISSIONS} missions each (the supervisor's after {} calibration runs), base seed {}. The rows count missions (and calibration runs). The supervisor's mission logs are in `logs/` (`petrinav guide log show logs/moderate-campaign0.jsonl`).",
+            "{} campaigns per condition and strategy, {MISSIONS} missions each (each supervisor's after {} calibration runs), base seed {}; and the source's experiment (`source/…`). The rows count missions (and calibration runs). The supervisors' mission logs are in `logs/` (`petrinav guide log show logs/moderate-supervisor-campaign0.jsonl`).",
             suite.info().runs,
             2 * CALIBRATION_RUNS,
             suite.info().seed
@@ -579,125 +604,294 @@ fn final_behaviour(r: &RunRecord) -> Option<&str> {
     })
 }
 
-/// Why the supervisor did as it did at a density, from its records: what
-/// it decided and on which values, how its failed missions ended, whether
-/// the net's premise (a warning localizer hurts AutoMove) held for AutoMove
-/// alone, and what the contour hypothesis was learnt from.
-fn why(runs: &Runs, density: &str, d: usize, cells: &BTreeMap<(usize, usize), Cell>) -> String {
-    let records = |strategy: &str| -> Vec<&RunRecord> {
-        runs.get(&format!("{density}/{strategy}"))
-            .map(|v| v.iter().map(|(_, r)| r).collect())
-            .unwrap_or_default()
-    };
+/// Target 1 (the outcome 1), per condition: the supervisor's
+/// success against the lower bound of the best fixed strategy's interval,
+/// and its time against the fastest strategy whose success lies in that
+/// interval (within 15 %). Returns the table and its explanation.
+fn targets(cells: &BTreeMap<(usize, usize), Cell>) -> (String, String) {
     let index = |name: &str| STRATEGIES.iter().position(|s| *s == name).unwrap_or(0);
-    let sup = records("supervisor");
+    let sup_i = index("supervisor");
+    let mut md = String::from(
+        "| condition | best fixed strategy | its success (95 % CI) | supervisor's success | ≥ its lower bound | fastest within the best's interval | its time (s) | supervisor's time (s) | ratio | within 15 % |\n|---|---|---|---|---|---|---:|---:|---:|---|\n",
+    );
+    let mut held = 0;
+    for (d, cond) in CONDITIONS.iter().enumerate() {
+        let best = FIXED
+            .iter()
+            .map(|f| index(f))
+            .max_by(|&a, &b| {
+                cells[&(d, a)]
+                    .success
+                    .value
+                    .total_cmp(&cells[&(d, b)].success.value)
+                    .then(b.cmp(&a))
+            })
+            .unwrap_or(0);
+        let b = &cells[&(d, best)].success;
+        let sup = &cells[&(d, sup_i)];
+        let success_ok = sup.success.value >= b.low;
+        let fastest = (0..STRATEGIES.len())
+            .filter(|&s| s != sup_i)
+            .filter(|&s| {
+                let c = &cells[&(d, s)];
+                c.time.n > 0 && c.success.value >= b.low && c.success.value <= b.high
+            })
+            .min_by(|&a, &b| cells[&(d, a)].time.mean.total_cmp(&cells[&(d, b)].time.mean));
+        let (fast_name, fast_time, ratio) = match fastest {
+            Some(f) => {
+                let t = cells[&(d, f)].time.mean;
+                (STRATEGIES[f], t, sup.time.mean / t)
+            }
+            None => ("-", f64::NAN, f64::NAN),
+        };
+        let time_ok = ratio.is_finite() && ratio <= 1.15;
+        held += usize::from(success_ok && time_ok);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
+            cond.name,
+            STRATEGIES[best],
+            percent(b),
+            percent(&sup.success),
+            if success_ok { "yes" } else { "**no**" },
+            fast_name,
+            fast_time,
+            one_decimal(&sup.time),
+            if ratio.is_finite() {
+                format!("{ratio:.2}")
+            } else {
+                "-".into()
+            },
+            if time_ok { "yes" } else { "**no**" },
+        );
+    }
+    let text = format!(
+        "The target: in every condition the supervisor reaches the goal at least as often as the lower bound of the best fixed strategy's 95 % interval (the fixed strategies: {}), and takes at most 15 % longer than the fastest strategy whose success lies in that interval. It holds in {held} of {} conditions.\n\n",
+        FIXED.join(", "),
+        CONDITIONS.len()
+    );
+    (md, text)
+}
+
+/// The museum day against every fixed strategy, mission by mission.
+fn day_table(runs: &Runs) -> String {
+    let mut md = String::from(
+        "| against | missions | only the supervisor reached | only the other reached | success difference (95 % CI) | time difference on both reached (s, 95 % CI) | verdict |\n|---|---:|---:|---:|---|---|---|\n",
+    );
+    for other in FIXED {
+        let v = versus(runs, "day", other);
+        let ds = success_diff(runs, "day", other);
+        let verdict = if ds.n == 0 {
+            "-"
+        } else if ds.mean - ds.half_width > 0.0 {
+            "more often"
+        } else if ds.mean + ds.half_width < 0.0 {
+            "**less often**"
+        } else if v.time_diff.n > 0 && v.time_diff.mean + v.time_diff.half_width < 0.0 {
+            "as often, faster"
+        } else if v.time_diff.n > 0 && v.time_diff.mean - v.time_diff.half_width > 0.0 {
+            "**as often, slower**"
+        } else {
+            "**no difference shown**"
+        };
+        let _ = writeln!(
+            md,
+            "| {other} | {} | {} | {} | {:+.3} ± {:.3} | {} | {verdict} |",
+            v.both,
+            v.supervisor_only,
+            v.other_only,
+            ds.mean,
+            if ds.half_width.is_finite() {
+                ds.half_width
+            } else {
+                0.0
+            },
+            if v.time_diff.n > 0 {
+                format!(
+                    "{:+.1} ± {:.1}",
+                    v.time_diff.mean,
+                    if v.time_diff.half_width.is_finite() {
+                        v.time_diff.half_width
+                    } else {
+                        0.0
+                    }
+                )
+            } else {
+                "-".into()
+            },
+        );
+    }
+    md
+}
+
+/// What the day measures, and per quarter how the supervisor chose.
+fn day_text(runs: &Runs) -> String {
+    let day = CONDITIONS.iter().find(|c| c.name == "day").copied();
+    let Some(day) = day else {
+        return String::new();
+    };
+    let sup = by_run(runs, "day/supervisor");
+    let mut quarters = Vec::new();
+    for q in 0..4u32 {
+        let rs: Vec<&&RunRecord> = sup
+            .iter()
+            .filter(|(k, _)| (*k % MISSIONS) * 4 / MISSIONS == q)
+            .map(|(_, r)| r)
+            .collect();
+        let decisions: Vec<&Event> = rs
+            .iter()
+            .flat_map(|r| r.events.iter().filter(|e| e.kind == "decision"))
+            .collect();
+        let contour = decisions
+            .iter()
+            .filter(|e| e.text("choice") == Some("contour"))
+            .count();
+        let ok = rs.iter().filter(|r| r.success).count();
+        quarters.push(format!(
+            "missions {}–{} ({} visitors): {ok} of {} reached, contour tracking chosen in {contour} of {} decisions",
+            q * MISSIONS / 4 + 1,
+            (q + 1) * MISSIONS / 4,
+            day.visitors[q as usize],
+            rs.len(),
+            decisions.len()
+        ));
+    }
+    format!(
+        "On the museum day the density changes within each campaign ({}), the disturbances with it, and the supervisor learns online from the campaign's own log. Target 2: the supervisor reaches the goal more often than every fixed strategy, or as often and faster, judged mission by mission on the common random numbers (the success difference is the mean of +1/0/−1 per mission with its Student-t interval). Per quarter: {}.\n\n",
+        day.visitors.map(|v| v.to_string()).join(" → "),
+        quarters.join("; ")
+    )
+}
+
+/// The Warning against true losses, per condition (the strategies with the
+/// contradiction rule together; the source's localizer apart).
+fn warning_table(runs: &Runs) -> (String, String) {
+    let mut md = String::from(
+        "| condition | localizer | time in Warning / mission (s) | truly lost / mission (s) | precision | recall | Warning while the error < 0.2 m |\n|---|---|---:|---:|---:|---:|---:|\n",
+    );
+    let mut all_new: Vec<&RunRecord> = Vec::new();
+    for cond in CONDITIONS {
+        for (label, strategies) in [
+            ("contradiction rule", &STRATEGIES[..5]),
+            ("the source's (explained fraction)", &STRATEGIES[5..]),
+        ] {
+            let rs: Vec<&RunRecord> = strategies
+                .iter()
+                .flat_map(|s| records(runs, &format!("{}/{s}", cond.name)))
+                .collect();
+            if label == "contradiction rule" {
+                all_new.extend(rs.iter().copied());
+            }
+            let n = rs.len().max(1) as f64;
+            let warn = sum_metric(&rs, metric::WARNING_S);
+            let lost = sum_metric(&rs, metric::LOST_S);
+            let hit = sum_metric(&rs, metric::WARNING_LOST_S);
+            let _ = writeln!(
+                md,
+                "| {} | {label} | {:.1} | {:.1} | {} | {} | {} |",
+                cond.name,
+                warn / n,
+                lost / n,
+                ratio_text(hit, warn),
+                ratio_text(hit, lost),
+                ratio_text(
+                    sum_metric(&rs, metric::WARNING_FINE_S),
+                    sum_metric(&rs, metric::FINE_S)
+                ),
+            );
+        }
+    }
+    let warn = sum_metric(&all_new, metric::WARNING_S);
+    let lost = sum_metric(&all_new, metric::LOST_S);
+    let hit = sum_metric(&all_new, metric::WARNING_LOST_S);
+    let text = format!(
+        "Time by time, tick by tick: *precision* is the share of the time in Warning during which the robot was truly lost (error over 0.5 m or 20°), *recall* the share of the time truly lost spent in Warning, and the last column the share of the time with a good estimate (under 0.2 m) spent in Warning — false alarms. Over the museum, the localizer that warns on contradictions (every strategy but `supervisor_source`): precision {}, recall {} (targets 0.8 and 0.9; the maps suite's figures are in its own report). The source's localizer warns whenever visitors hide the walls.\n\n",
+        ratio_text(hit, warn),
+        ratio_text(hit, lost)
+    );
+    (md, text)
+}
+
+/// Why the supervisor did as it did in a condition, from its records:
+/// its decisions by moment and crowd context, how its failed missions
+/// ended and in which behaviour, the rates it had learnt by the last
+/// mission.
+fn why(runs: &Runs, condition: &str, d: usize, cells: &BTreeMap<(usize, usize), Cell>) -> String {
+    let sup = records(runs, &format!("{condition}/supervisor"));
     if sup.is_empty() {
-        return format!("**{density}, why.** No supervisor missions in the results.");
+        return format!("No supervisor missions in the results for {condition}.");
     }
     let decisions: Vec<&Event> = sup
         .iter()
         .flat_map(|r| r.events.iter().filter(|e| e.kind == "decision"))
         .collect();
-    let starts: Vec<&Event> = decisions
-        .iter()
-        .copied()
-        .filter(|e| e.text("reason") == Some("start"))
-        .collect();
-    let contour_choices = decisions
-        .iter()
-        .filter(|e| e.text("choice") == Some("contour"))
-        .count();
-    let contour_starts = starts
-        .iter()
-        .filter(|e| e.text("choice") == Some("contour"))
-        .count();
-    let at_start = |key: &str| median(starts.iter().map(|e| num(Some(e), key)));
+    let count = |reason: &str, ctx: Option<&str>, choice: &str| {
+        decisions
+            .iter()
+            .filter(|e| e.text("reason") == Some(reason))
+            .filter(|e| ctx.is_none_or(|c| e.text("context") == Some(c)))
+            .filter(|e| e.text("choice") == Some(choice))
+            .count()
+    };
+    let mut parts = Vec::new();
+    for reason in ["start", "warning", "recovered"] {
+        let a = count(reason, None, "automove");
+        let c = count(reason, None, "contour");
+        if a + c > 0 {
+            parts.push(format!("{reason}: AutoMove {a}, contour {c}"));
+        }
+    }
+    let mut ctx_parts = Vec::new();
+    for name in nav::supervisor::credit_learning::CONTEXT_NAMES {
+        let n = decisions
+            .iter()
+            .filter(|e| e.text("context") == Some(name))
+            .count();
+        if n == 0 {
+            continue;
+        }
+        let c = decisions
+            .iter()
+            .filter(|e| e.text("context") == Some(name) && e.text("choice") == Some("contour"))
+            .count();
+        ctx_parts.push(format!("{name} {c} of {n}"));
+    }
     let failed: Vec<&RunRecord> = sup.iter().copied().filter(|r| !r.success).collect();
-    let failed_in_contour = failed
+    let in_contour = failed
         .iter()
         .filter(|r| final_behaviour(r) == Some("contour"))
         .count();
-    let timeouts = failed.iter().filter(|r| r.outcome == "time_limit").count();
-    let collisions = failed.iter().filter(|r| r.outcome == "collision").count();
-    let mut out = format!(
-        "**{density}, why.** The supervisor took {} decisions ({} at mission starts, {} on returns to Success) and chose contour tracking in {} of them ({} of the starts). At the starts the median `f_auto` was {:.5} against `f_cont` {:.5}, with the learnt `P_loc,warn` at {:.2}. ",
-        decisions.len(),
-        starts.len(),
-        decisions.len() - starts.len(),
-        contour_choices,
-        contour_starts,
-        at_start("f_auto"),
-        at_start("f_cont"),
-        at_start("p_loc_warn"),
-    );
-    if failed.is_empty() {
-        out.push_str("It failed no mission. ");
-    } else {
-        let _ = write!(
-            out,
-            "Of its {} failed missions {} ran out of time and {} ended in a collision; {} of them were in contour tracking when they ended. ",
-            failed.len(),
-            timeouts,
-            collisions,
-            failed_in_contour,
-        );
-    }
-    // The net's premise, tested on AutoMove alone.
-    let auto = records("automove");
-    let auto_cell = &cells[&(d, index("automove"))];
-    let contour_cell = &cells[&(d, index("contour"))];
-    let rule_cell = &cells[&(d, index("rule"))];
+    let by = |o: &str| failed.iter().filter(|r| r.outcome == o).count();
+    let index = |name: &str| STRATEGIES.iter().position(|s| *s == name).unwrap_or(0);
     let sup_cell = &cells[&(d, index("supervisor"))];
-    let loc_mean = mean_of(&auto, |r| r.metric(metric::LOC_MEAN));
-    let loc_max = auto
+    let last = sup
         .iter()
-        .filter_map(|r| r.metric(metric::LOC_MAX))
-        .fold(f64::NEG_INFINITY, f64::max);
-    if auto_cell.warning.n > 0 && auto_cell.warning.mean > 1.0 {
-        let _ = write!(
-            out,
-            "AutoMove alone spent {:.1} s per mission with the localizer in Warning, yet its true error stayed at {:.3} m on average ({:.2} m at most) and it reached {}. ",
-            auto_cell.warning.mean,
-            loc_mean.mean,
-            loc_max,
-            percent(&auto_cell.success),
-        );
-        if loc_max < 0.5 && auto_cell.success.low > rule_cell.success.high.min(sup_cell.success.high) {
-            out.push_str(
-                "Here a Warning means that visitors hide the walls from the laser, not that the estimate is wrong: the net's AutoMove hypothesis hands the robot to contour tracking at every Warning (t3), so the more the localizer warns, the lower `f_auto` — a premise this localizer does not bear out, and the supervisor pays for trusting it. ",
-            );
-        }
-    }
-    // What the contour hypothesis was learnt from.
-    let contour_calibration: Vec<&RunRecord> = runs
-        .get(&format!("{density}/calibration"))
-        .map(|v| {
-            v.iter()
-                .filter(|(k, _)| k % (2 * CALIBRATION_RUNS) >= CALIBRATION_RUNS)
-                .map(|(_, r)| r)
-                .collect()
-        })
-        .unwrap_or_default();
-    if !contour_calibration.is_empty() {
-        let ok = contour_calibration.iter().filter(|r| r.success).count();
-        let _ = write!(
-            out,
-            "The contour hypothesis rests on the calibration runs that reached the goal ({} of {} contour runs here: λ8 is one over their mean time) and fails only while the localizer warns (t12, λ10 from the share of failed missions). Contour tracking alone reached {} of its missions at this density ({} time limits, {} collisions): ",
-            ok,
-            contour_calibration.len(),
-            percent(&contour_cell.success),
-            contour_cell.timeouts,
-            contour_cell.collisions,
-        );
-        out.push_str(
-            if contour_cell.success.value < 0.9 && contour_cell.success.high < auto_cell.success.low {
-                "it fails by being blocked (by visitors, circling them until the time runs out), a way of failing the net has no transition for, so the net overrates it."
-            } else {
-                "about as reliable as the net assumes."
-            },
-        );
-    }
-    out
+        .rev()
+        .find_map(|r| r.events.iter().rev().find(|e| e.kind == "decision"));
+    format!(
+        "The supervisor took {} decisions ({}); it chose contour tracking by crowd context: {}. It reached {} of its missions; of the {} it failed, {} ran out of time, {} collided and {} ended lost, {} of them in contour tracking. Its last decision used λ12 (AutoMove fails while lost) = {}, λ13 (AutoMove fails localized) = {}, λ10 (contour fails while lost) = {}, λ14 (contour fails localized) = {}.",
+        decisions.len(),
+        if parts.is_empty() {
+            "none".to_string()
+        } else {
+            parts.join("; ")
+        },
+        if ctx_parts.is_empty() {
+            "-".to_string()
+        } else {
+            ctx_parts.join(", ")
+        },
+        percent(&sup_cell.success),
+        failed.len(),
+        by("time_limit"),
+        by("collision"),
+        by("lost"),
+        in_contour,
+        fmt_rate(num(last, "lambda12")),
+        fmt_rate(num(last, "lambda13")),
+        fmt_rate(num(last, "lambda10")),
+        fmt_rate(num(last, "lambda14")),
+    )
 }
 
 /// The picture of the first mission of `source` with a switch.
@@ -713,7 +907,7 @@ fn mission_picture(
     else {
         return Ok(None);
     };
-    let key = format!("moderate/supervisor#{m}");
+    let key = format!("{SOURCE}/supervisor_source#{m}");
     let (job, earlier_keys): (Job, Vec<String>) = crate::suite::find_job(suite, &key)?;
     let all: BTreeMap<String, &RunRecord> = ctx
         .runs
@@ -735,13 +929,15 @@ fn mission_picture(
     let (page, link) = ctx.viewer_page(&replay, suite.markers(), &key, "the mission")?;
     files.push(page);
     Ok(Some(Figure {
-        title: format!("mission {} of campaign 0 (moderate)", m + 1),
+        title: format!("mission {} of the source's experiment", m + 1),
         src,
         runs: vec![link],
     }))
 }
 
-/// Writes the supervisor campaigns' logs (`logs/DENSITY-campaignC.jsonl`).
+/// Writes the supervisor campaigns' logs
+/// (`logs/CONDITION-STRATEGY-campaignC.jsonl`, and the source's
+/// experiment's `logs/source-supervisor_source-campaign0.jsonl`).
 fn write_logs(
     suite: &TourGuideSuite,
     ctx: &ReportContext<'_>,
@@ -749,11 +945,35 @@ fn write_logs(
 ) -> Result<()> {
     let dir = ctx.dir.join("logs");
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let net = suite.supervisor()?.net_id().to_string();
-    for (density, _) in DENSITIES {
-        let cal = by_run(ctx.runs, &format!("{density}/calibration"));
-        let sup = by_run(ctx.runs, &format!("{density}/supervisor"));
-        for c in 0..suite.info().runs {
+    let source_net = suite.supervisor()?.net_id().to_string();
+    let credit_net = suite.credit()?.net_id().to_string();
+    let mut sets: Vec<(String, &str, &str, u32, String)> = vec![(
+        SOURCE.to_string(),
+        "calibration_source",
+        "supervisor_source",
+        1,
+        source_net.clone(),
+    )];
+    for cond in CONDITIONS {
+        sets.push((
+            cond.name.to_string(),
+            "calibration",
+            "supervisor",
+            suite.info().runs,
+            credit_net.clone(),
+        ));
+        sets.push((
+            cond.name.to_string(),
+            "calibration_source",
+            "supervisor_source",
+            suite.info().runs,
+            source_net.clone(),
+        ));
+    }
+    for (prefix, calibration, strategy, campaigns, net) in sets {
+        let cal = by_run(ctx.runs, &format!("{prefix}/{calibration}"));
+        let sup = by_run(ctx.runs, &format!("{prefix}/{strategy}"));
+        for c in 0..campaigns {
             let mut text = String::new();
             let runs = (0..2 * CALIBRATION_RUNS)
                 .map(|k| cal.get(&(c * 2 * CALIBRATION_RUNS + k)))
@@ -770,7 +990,7 @@ fn write_logs(
             if text.is_empty() {
                 continue;
             }
-            let path = dir.join(format!("{density}-campaign{c}.jsonl"));
+            let path = dir.join(format!("{prefix}-{strategy}-campaign{c}.jsonl"));
             std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
             files.push(path);
         }
