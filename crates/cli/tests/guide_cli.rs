@@ -221,3 +221,38 @@ fn bad_logs_are_clear_errors() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("no such mission log"));
 }
+
+#[test]
+fn guide_check_accepts_the_shipped_nets_and_refuses_a_broken_one_naming_the_property() {
+    let o = petrinav(&["guide", "check"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(out.matches("verdict: accepted").count(), 2, "{out}");
+    for variant in [
+        "AutoMove hypothesis",
+        "contour hypothesis",
+        "AutoMove, lost",
+        "contour, localized",
+    ] {
+        assert!(out.contains(variant), "{variant}: {out}");
+    }
+    // The crediting net without its way back after a failure: failed
+    // missions are dead ends.
+    let dir = fresh("check");
+    let net = dir.join("broken.toml");
+    let text = nav::supervisor::credit::CREDIT_MODEL;
+    let start = text.find("[[transition]]\nname = \"t14\"").unwrap();
+    let end = start + text[start..].find("\n\n").unwrap();
+    std::fs::write(&net, format!("{}{}", &text[..start], &text[end..])).unwrap();
+    let o = petrinav(&["guide", "check", net.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("verdict: REFUSED"), "{out}");
+    assert!(stderr(&o).contains("dead marking"), "{}", stderr(&o));
+    // JSON for machines.
+    let o = petrinav(&["guide", "check", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v.as_array().unwrap().len(), 2);
+    assert_eq!(v[1]["supervisor"], "credit");
+    assert_eq!(v[1]["accepted"], true);
+}

@@ -544,6 +544,50 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
     })
 }
 
+/// How often a visitor within reach pushes or turns the robot while it
+/// stands, per second ([`visitor_disturbances`]).
+pub const PUSH_RATE_PER_PERSON_S: f64 = 0.005;
+
+/// How often a group closes round the robot, per visitor in the building
+/// and second ([`visitor_disturbances`]).
+pub const SURROUND_RATE_PER_VISITOR_S: f64 = 1.0 / 15_000.0;
+
+/// The physical causes of true loss among `visitors` visitors, with these
+/// slip patches (each wheel losing up to `slip_max` of its turn on them).
+/// Each rate comes from its cause, so only the number of visitors changes
+/// between densities, and every suite of guide legs has the same physics:
+///
+/// - **pushes**: a visitor within 0.4 m of the robot while it stands
+///   (braked, or turning on the spot) pushes or turns it with
+///   [`PUSH_RATE_PER_PERSON_S`] (one push per 200 s of a visitor beside the
+///   standing robot — children, mostly), 0.3–2 m and up to 90°; the
+///   odometry sees nothing;
+/// - **groups**: with [`SURROUND_RATE_PER_VISITOR_S`] per visitor (one
+///   group every 10 min among 25 visitors, every 4 min among 60) 6–10 of
+///   the nearest visitors close round the robot for 20–60 s and do not
+///   step aside, hiding every wall from the laser;
+/// - **slips**: on the patches, drawn per crossing.
+pub fn visitor_disturbances(
+    visitors: usize,
+    patches: &[sim::SlipPatch],
+    slip_max: f64,
+) -> sim::DisturbanceParams {
+    sim::DisturbanceParams {
+        push: sim::PushParams {
+            rate_per_person_s: if visitors > 0 { PUSH_RATE_PER_PERSON_S } else { 0.0 },
+            ..sim::PushParams::default()
+        },
+        slip: sim::SlipParams {
+            patches: patches.to_vec(),
+            slip_max,
+        },
+        surround: sim::SurroundParams {
+            rate_per_s: visitors as f64 * SURROUND_RATE_PER_VISITOR_S,
+            ..sim::SurroundParams::default()
+        },
+    }
+}
+
 /// Time in Warning against the truth, tick by tick (the Warning of the
 /// state after the tick's control step, the error of the estimate then).
 #[derive(Debug, Clone, Copy, Default)]

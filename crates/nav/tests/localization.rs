@@ -146,3 +146,46 @@ fn global_localization_converges_in_building_31() {
     assert!(harness::max(tail) < 0.15);
     assert_eq!(s.infos.last().unwrap().particles_after, setup.params.particles);
 }
+
+#[test]
+fn a_kidnapped_robot_warns_and_finds_itself_again() {
+    // 20 m into building_31's route the localizer's belief jumps 1 m and
+    // 40° away from the truth (a push the odometry did not see).
+    for (dx, dy, dth) in [
+        (1.0, 0.0, 40f64.to_radians()),
+        (0.0, -1.5, 0.0),
+        (0.0, 0.0, -70f64.to_radians()),
+    ] {
+        let s = drive(&DriveSetup {
+            max_distance_m: 60.0,
+            kidnap: Some((20.0, (dx, dy, dth))),
+            timed: true,
+            ..DriveSetup::tracking("building_31")
+        });
+        let k = s.kidnapped_at_tick.expect("the kidnap happened");
+        let warned = s.statuses[k..]
+            .iter()
+            .position(|&w| w == LocalizationStatus::Warning)
+            .expect("the contradiction rule raises a Warning");
+        let found = s.errors_m[k + warned..]
+            .iter()
+            .position(|&e| e < 0.2)
+            .expect("the recovery finds the robot again");
+        let back = s.statuses[k + warned..]
+            .iter()
+            .position(|&w| w == LocalizationStatus::Success)
+            .expect("and the Warning clears");
+        eprintln!(
+            "kidnap ({dx}, {dy}, {:.0}°): Warning after {:.1} s, error < 0.2 m after {:.1} s more, Success after {:.1} s; final error {:.3} m",
+            dth.to_degrees(),
+            warned as f64 * 0.1,
+            found as f64 * 0.1,
+            back as f64 * 0.1,
+            s.errors_m.last().unwrap()
+        );
+        assert!(warned as f64 * 0.1 < 3.0, "Warning after {} ticks", warned);
+        assert!(found as f64 * 0.1 < 30.0);
+        assert!(harness::max(&s.errors_m[s.errors_m.len() - 50..]) < 0.2);
+        assert_eq!(*s.statuses.last().unwrap(), LocalizationStatus::Success);
+    }
+}

@@ -277,6 +277,10 @@ impl Default for MclParams {
 /// sensor resetting).
 pub const SENSOR_RESET_SHARE: f64 = 0.2;
 
+/// A recovery cloud has settled when its estimate's cluster holds this
+/// share of the weight ([`relocalization`]).
+pub const SETTLED_SHARE: f64 = 0.8;
+
 /// Clusters of a recovery cloud whose means are scored against the scan
 /// ([`relocalization`]).
 pub const RECOVERY_CANDIDATES: usize = 8;
@@ -503,8 +507,10 @@ pub struct Localizer {
     /// The recovery after a contradiction Warning, and when its stage began.
     stage: RecoveryStage,
     stage_since_s: Option<f64>,
-    /// The cluster the recovery's estimate came from.
+    /// The cluster the recovery's estimate came from, and its share of
+    /// the weight.
     recovery_bin: Option<(i64, i64, i64)>,
+    cluster_share: f64,
 }
 
 impl Localizer {
@@ -596,6 +602,7 @@ impl Localizer {
             stage: RecoveryStage::Idle,
             stage_since_s: None,
             recovery_bin: None,
+            cluster_share: 0.0,
             params,
         }
     }
@@ -624,6 +631,8 @@ impl Localizer {
         self.stage_since_s = None;
         self.last_filter_s = None;
         self.last_judged_s = None;
+        self.recovery_bin = None;
+        self.cluster_share = 0.0;
     }
 
     /// Places `particles` particles around `pose`: Gaussian with standard
@@ -803,6 +812,16 @@ impl Localizer {
         match best {
             Some((_, mean, bin)) => {
                 self.recovery_bin = Some(bin);
+                let members = self.cluster_members(bin);
+                let total: f64 = self.weight.iter().sum();
+                let inside: f64 = self
+                    .weight
+                    .iter()
+                    .zip(&members)
+                    .filter(|(_, m)| **m)
+                    .map(|(w, _)| w)
+                    .sum();
+                self.cluster_share = if total > 0.0 { inside / total } else { 0.0 };
                 mean
             }
             None => self.weighted_mean(),
@@ -964,6 +983,7 @@ impl Localizer {
             .params
             .status
             .judge_scan(&self.field, &estimate, scan, warning);
+        let outcome = self.settled(outcome);
         let status = self.machine.observe(outcome);
         self.last_judged_s = self.now_s;
         self.after_judgement(status);
@@ -1072,6 +1092,7 @@ impl Localizer {
         self.weight.resize(n, 1.0 / n as f64);
         self.stage = RecoveryStage::Scattered;
         self.stage_since_s = self.now_s;
+        self.cluster_share = 0.0;
     }
 
     /// Replaces the particles by a global cloud, keeping the status (a
@@ -1091,6 +1112,24 @@ impl Localizer {
         self.weight.resize(n, 1.0 / n as f64);
         self.stage = RecoveryStage::Global;
         self.stage_since_s = self.now_s;
+        self.cluster_share = 0.0;
+    }
+
+    /// A match while recovering counts only once the cloud has settled on
+    /// one place — [`SETTLED_SHARE`] of its weight in the estimate's
+    /// cluster, or shrunk by KLD-sampling to the tracking size: until then
+    /// it is no data (module [`relocalization`]: two poses may explain a
+    /// crowded scan, and the Warning must last until the filter has chosen).
+    fn settled(&self, outcome: MatchOutcome) -> MatchOutcome {
+        if outcome == MatchOutcome::Matched
+            && self.stage != RecoveryStage::Idle
+            && self.x.len() > self.params.particles
+            && self.cluster_share < SETTLED_SHARE
+        {
+            MatchOutcome::NoData
+        } else {
+            outcome
+        }
     }
 
     /// Where a recovery stands.
@@ -1152,6 +1191,7 @@ impl Localizer {
                     self.params
                         .status
                         .judge_scan(&self.field, &estimate, scan, warning);
+                let outcome = self.settled(outcome);
                 correction = found;
                 let at_odometry = self.field.consistency(&odometry_pose, scan, tol);
                 (

@@ -14,7 +14,13 @@
 //! while it is bigger than the tracking size, and every resampling shrinks
 //! it to the KLD bound of the bins it occupies.
 //!
-//! While the Warning lasts, the filter runs every `period_s` (0.5 s) even
+//! The Warning lasts until the scan matches at the estimate twice *and*
+//! the cloud has settled on one place (the estimate's cluster holds 80 %
+//! of the weight, or KLD-sampling has shrunk the cloud to the tracking
+//! size): among visitors two poses can explain the few walls in
+//! view, and a recovery that ended on the first match ran off with the
+//! wrong one (a 70° kidnap in building_31: Success after 0.5 s, 13.8 m off
+//! at the end of the drive). While the Warning lasts, the filter runs every `period_s` (0.5 s) even
 //! when the robot stands still — a robot that was pushed is usually
 //! standing. If the scan still contradicts the estimate `global_after_s`
 //! (20 s) after a scatter, the localizer starts **global localization**

@@ -278,6 +278,10 @@ const PERSON_RADIUS_M: f64 = 0.25;
 /// What a drive measured.
 #[derive(Debug, Clone, Default)]
 pub struct DriveStats {
+    /// The tick of the kidnap, if one happened ([`DriveSetup::kidnap`]).
+    pub kidnapped_at_tick: Option<usize>,
+    /// The localizer's state at every tick.
+    pub statuses: Vec<LocalizationStatus>,
     /// Length of the true path, metres.
     pub distance_m: f64,
     /// Control ticks.
@@ -361,6 +365,13 @@ pub struct DriveSetup {
     pub speed_mps: f64,
     /// The drive ends after this long, seconds.
     pub time_limit_s: f64,
+    /// A kidnap the odometry does not see: after this many metres, the
+    /// localizer is re-initialised at its estimate moved by `(dx, dy, dθ)`
+    /// (metres, radians) — as if the robot had been pushed by the opposite.
+    pub kidnap: Option<(f64, (f64, f64, f64))>,
+    /// Feed the localizer with the clock ([`Localizer::update_at`]: status
+    /// checks while standing, timed recovery iterations).
+    pub timed: bool,
 }
 
 impl DriveSetup {
@@ -377,6 +388,8 @@ impl DriveSetup {
             converged_m: 0.3,
             speed_mps: sim::kinematics::JINNY_CRUISE_SPEED_MPS,
             time_limit_s: 1500.0,
+            kidnap: None,
+            timed: false,
         }
     }
 }
@@ -439,8 +452,21 @@ pub fn drive_path(setup: &DriveSetup, world: World, map: &GridMap, path: Vec<Vec
         if sim.tick(&mut follower).is_some() {
             break;
         }
+        if let Some((at_m, (dx, dy, dth))) = setup.kidnap
+            && stats.kidnapped_at_tick.is_none()
+            && sim.result().path_length_m >= at_m
+        {
+            let e = mcl.estimate();
+            mcl.init_pose(Pose::new(e.x_m + dx, e.y_m + dy, e.theta_rad + dth), 0.05, 0.02)
+                .expect("kidnap");
+            stats.kidnapped_at_tick = Some(stats.errors_m.len());
+        }
         let p = sim.perception();
-        let info = mcl.update(p.odometry, &p.lasers[0]).expect("update");
+        let info = if setup.timed {
+            mcl.update_at(p.time_s, p.odometry, &p.lasers[0]).expect("update")
+        } else {
+            mcl.update(p.odometry, &p.lasers[0]).expect("update")
+        };
         if let Some(info) = info {
             stats.iterations += 1;
             if info.status == LocalizationStatus::Warning {
@@ -455,6 +481,7 @@ pub fn drive_path(setup: &DriveSetup, world: World, map: &GridMap, path: Vec<Vec
         if mcl.status() == LocalizationStatus::Warning {
             stats.warning_ticks += 1;
         }
+        stats.statuses.push(mcl.status());
         let e = mcl.estimate();
         let err = e.position().dist(truth.position());
         stats.errors_m.push(err);

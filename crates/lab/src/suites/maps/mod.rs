@@ -112,6 +112,18 @@ pub mod metric {
     pub const ABNORMAL: &str = "abnormal_episodes";
     /// Time Abnormal in a leg, seconds.
     pub const ABNORMAL_S: &str = "time_abnormal_s";
+    /// Time truly lost (error over 0.5 m or 20°), seconds.
+    pub const LOST_S: &str = "time_lost_s";
+    /// Time in Warning while truly lost, seconds.
+    pub const WARNING_LOST_S: &str = "time_warning_lost_s";
+    /// Time with the true error under 0.2 m, seconds.
+    pub const FINE_S: &str = "time_fine_s";
+    /// Time in Warning with the true error under 0.2 m, seconds.
+    pub const WARNING_FINE_S: &str = "time_warning_fine_s";
+    /// Pushes.
+    pub const PUSHES: &str = "pushes";
+    /// Groups closing round the robot.
+    pub const SURROUNDS: &str = "surrounds";
 }
 
 /// One map: its world (with the crowd's waypoints), places, and a leg's
@@ -242,6 +254,9 @@ impl MapsSuite {
                 .context("the state of an earlier leg")?,
         };
         let mut setup = data.setup.clone();
+        // Visitors push the standing robot and close round it as in the
+        // museum (no slip patches on these maps).
+        setup.disturbances = mission::visitor_disturbances(CROWDS[s.people], &[], 0.0);
         if CROWDS[s.people] > 0 {
             setup.people = Some(PeoplePlan {
                 count: CROWDS[s.people],
@@ -292,6 +307,13 @@ pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
     record.set_metric(metric::WARNING_S, l.time_in_warning_s)?;
     record.set_metric(metric::ABNORMAL, f64::from(r.planner.abnormal_episodes))?;
     record.set_metric(metric::ABNORMAL_S, r.planner.time_abnormal_s)?;
+    record.set_metric(metric::LOST_S, l.lost_s)?;
+    record.set_metric(metric::WARNING_LOST_S, l.warning_lost_s)?;
+    record.set_metric(metric::FINE_S, l.fine_s)?;
+    record.set_metric(metric::WARNING_FINE_S, l.warning_fine_s)?;
+    let count = |kind: &str| leg.disturbances.iter().filter(|d| d.kind.name() == kind).count() as f64;
+    record.set_metric(metric::PUSHES, count("push"))?;
+    record.set_metric(metric::SURROUNDS, count("surround"))?;
     Ok(record)
 }
 
@@ -390,6 +412,7 @@ impl Suite for MapsSuite {
         let (text, table) = tables::generic_table(ctx.summaries, &columns);
         let mut blocks = vec![Block::Table(table)];
         blocks.extend(explanation::explanation(ctx.summaries, ctx.runs));
+        blocks.extend(explanation::warning_against_loss(ctx.runs));
         let mut files = Vec::new();
         if ctx.pictures {
             let mut figures = Vec::new();

@@ -62,10 +62,7 @@ use nav::supervisor::log::Entry;
 use nav::supervisor::{Behaviour, Supervisor, learning};
 use robot::{Event, Pose, Vec2};
 use sim::shapes::WorldSpec;
-use sim::{
-    CrowdParams, DisturbanceKind, DisturbanceParams, PushParams, SlipParams, SlipPatch, SurroundParams,
-    TraceParams, World,
-};
+use sim::{CrowdParams, DisturbanceKind, DisturbanceParams, SlipPatch, TraceParams, World};
 
 use crate::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan};
 use crate::pictures::{EventMarker, MarkerPlace, Replay};
@@ -76,7 +73,7 @@ use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, Sui
 /// The suite in the registry.
 pub const REGISTRATION: Registration = Registration {
     name: "tourguide",
-    about: "the tour-guide robot in a crowded museum: 6 strategies (the crediting GSPN supervisor, the source's, the rule, each behaviour alone) × 4 conditions (empty, moderate, packed, a museum day) × 10 campaigns of 24 missions, with pushes, slips and groups causing true losses",
+    about: "the tour-guide robot in a crowded museum: 6 strategies (the crediting GSPN supervisor, the source's, the rule, each behaviour alone) × 4 conditions (empty, moderate, packed, a museum day) × 6 campaigns of 24 missions, with pushes, slips and groups causing true losses",
     build,
 };
 
@@ -175,19 +172,11 @@ pub const CALIBRATION_RUNS: u32 = 5;
 pub const MISSIONS: u32 = 24;
 
 /// Campaigns per condition and strategy by default.
-pub const DEFAULT_CAMPAIGNS: u32 = 10;
+pub const DEFAULT_CAMPAIGNS: u32 = 6;
 
 /// How often a visitor in sight and within 8 m comes to see the robot, per
 /// second (the crowd model's `robot_interest_rate_per_s`).
 pub const ROBOT_INTEREST_RATE_PER_S: f64 = 0.003;
-
-/// How often a visitor within reach pushes or turns the robot while it
-/// stands braked, per second ([`disturbances`]).
-pub const PUSH_RATE_PER_PERSON_S: f64 = 0.005;
-
-/// How often a group closes round the robot, per visitor in the hall and
-/// second ([`disturbances`]).
-pub const SURROUND_RATE_PER_VISITOR_S: f64 = 1.0 / 15_000.0;
 
 /// Largest share of its turn a wheel loses on the museum's polished
 /// threshold ([`disturbances`]).
@@ -310,38 +299,15 @@ pub fn museum() -> Result<World> {
     Ok(museum_with_patches()?.0)
 }
 
-/// The physical causes of true loss in the museum with `visitors` visitors
-/// and these slip patches. Each rate comes from what causes it, so only
-/// the number of visitors changes between densities:
-///
-/// - **pushes**: a visitor within 0.4 m of the robot while it stands braked
-///   (asking people to step aside, waiting at a hit point) pushes or turns
-///   it with [`PUSH_RATE_PER_PERSON_S`] (one push per 200 s of a visitor
-///   beside the standing robot — children, mostly), 0.3–2 m and up to 90°;
-///   the odometry sees nothing (the wheels are braked);
-/// - **slips**: the polished stone threshold between the two galleries
-///   (`[[slip]]` in `museum.toml`) lets each wheel slip by up to
-///   [`SLIP_MAX`] (10 %) of its turn, drawn per crossing (rubber on a
-///   freshly polished or damp stone floor): every mission crosses it;
-/// - **groups**: with [`SURROUND_RATE_PER_VISITOR_S`] per visitor (one group
-///   every 10 min with 25 visitors, every 4 min with 60) 6–10 of the nearest
-///   visitors close round the robot for 20–60 s and do not step aside,
-///   hiding every wall from the laser.
+/// The physical causes of true loss in the museum with `visitors`
+/// visitors ([`mission::visitor_disturbances`]: pushes and groups at
+/// rates from their causes), and its slip patch: the polished stone
+/// threshold between the two galleries (`[[slip]]` in `museum.toml`) lets
+/// each wheel slip by up to [`SLIP_MAX`] (10 %) of its turn, drawn per
+/// crossing (rubber on a freshly polished or damp stone floor): every
+/// mission crosses it.
 pub fn disturbances(visitors: usize, patches: &[SlipPatch]) -> DisturbanceParams {
-    DisturbanceParams {
-        push: PushParams {
-            rate_per_person_s: if visitors > 0 { PUSH_RATE_PER_PERSON_S } else { 0.0 },
-            ..PushParams::default()
-        },
-        slip: SlipParams {
-            patches: patches.to_vec(),
-            slip_max: SLIP_MAX,
-        },
-        surround: SurroundParams {
-            rate_per_s: visitors as f64 * SURROUND_RATE_PER_VISITOR_S,
-            ..SurroundParams::default()
-        },
-    }
+    mission::visitor_disturbances(visitors, patches, SLIP_MAX)
 }
 
 /// The guide's parameters of the source's robot: its localizer warns by
@@ -573,6 +539,14 @@ impl TourGuideSuite {
             (Kind::Calibration { source: false, .. }, Policy::Fixed(b)) => {
                 mission::credit_calibration_entry(&leg, *b)
             }
+            // The source's log as the source keeps it: no segments.
+            (Kind::Mission(_, m), _) if source => match mission::mission_entry(&leg, m + 1) {
+                Entry::Mission(r) => Entry::Mission(nav::supervisor::log::MissionRecord {
+                    segments: Vec::new(),
+                    ..r
+                }),
+                other => other,
+            },
             (Kind::Mission(_, m), _) => mission::mission_entry(&leg, m + 1),
             (Kind::Calibration { .. }, _) => bail!("a calibration run drives one behaviour"),
         };
