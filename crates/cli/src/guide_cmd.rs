@@ -5,9 +5,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Subcommand;
-use nav::supervisor::Supervisor;
 use nav::supervisor::learning::{self, Learned};
-use nav::supervisor::log::{Entry, MissionLog, StateName};
+use nav::supervisor::log::{Entry, StateName};
 
 use crate::outln;
 use crate::output::{Table, num};
@@ -57,20 +56,7 @@ pub fn run(cmd: GuideCommand) -> Result<()> {
 
 /// Reads a log of the shipped supervisor net, reporting a torn last line.
 pub fn read(path: &Path) -> Result<Vec<Entry>> {
-    if !path.exists() {
-        anyhow::bail!("{}: no such mission log", path.display());
-    }
-    let net = Supervisor::new()?.net_id().to_string();
-    let log = MissionLog::read(path, &net)?;
-    if let Some(t) = log.torn() {
-        eprintln!(
-            "warning: {}:{}: the last line was cut mid-write ({} bytes); it is not an entry and is left out",
-            path.display(),
-            t.line,
-            t.bytes
-        );
-    }
-    Ok(log.entries().to_vec())
+    lab::tours::read_log(path)
 }
 
 fn sojourn_total(s: &[nav::supervisor::log::Sojourn], state: StateName) -> (usize, f64) {
