@@ -9,13 +9,17 @@ import time
 
 import petrinav as pn
 
+# The child installs Python's own SIGINT handler (KeyboardInterrupt): a
+# process started in the background by a non-interactive shell (as CI may
+# start the tests) inherits SIGINT ignored, and Python then keeps it so.
 SCRIPT = """
-import sys, time, petrinav as pn
+import signal, sys, time, petrinav as pn
+signal.signal(signal.SIGINT, signal.default_int_handler)
 what = sys.argv[1]
 net = pn.family("kanban", 5) if what == "solve" else pn.load(sys.argv[2])
-print("ready", flush=True)
 start = time.time()
 try:
+    print("ready", flush=True)
     if what == "solve":
         net.solve()
     else:
@@ -32,7 +36,8 @@ def interrupt(args, after_s=1.5):
     p = subprocess.Popen(
         [sys.executable, "-c", SCRIPT, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
-    assert p.stdout.readline().strip() == "ready"
+    first = p.stdout.readline().strip()
+    assert first == "ready", (first, p.stderr.read())
     time.sleep(after_s)
     p.send_signal(signal.SIGINT)
     sent = time.time()
@@ -44,16 +49,18 @@ def test_ctrl_c_stops_a_long_solve():
     # Kanban N = 5: 2.5 million states, some 10 s or more to generate and solve.
     lines, waited, code, err = interrupt(["solve"])
     assert code == 0, err
-    assert lines[0].startswith("interrupted"), lines
-    assert waited < 5, f"{waited:.1f} s between Ctrl-C and the end"
+    assert lines[0].startswith("interrupted"), (lines, err)
+    # Soon: at the next checkpoint (an expansion round, a compilation
+    # stage, a BiCGSTAB sweep), not at the end (some 10 s or more).
+    assert waited < 8, f"{waited:.1f} s between Ctrl-C and the end"
     assert lines[1] == "direct-gth"  # a later solve works
 
 
 def test_ctrl_c_stops_a_long_simulation(root):
     lines, waited, code, err = interrupt(["simulate", str(root / "models/supervisor.toml")])
     assert code == 0, err
-    assert lines[0].startswith("interrupted"), lines
-    assert waited < 5
+    assert lines[0].startswith("interrupted"), (lines, err)
+    assert waited < 8, f"{waited:.1f} s between Ctrl-C and the end"
 
 
 def test_a_solve_releases_the_gil():

@@ -43,8 +43,10 @@ def test_shards_and_scenario_files(cli, root, tmp_path):
     assert len(records) == 3
 
 
+# With Python's own SIGINT handler, as in test_interrupt.py.
 INTERRUPTED_RUN = """
-import sys, petrinav as pn
+import signal, sys, petrinav as pn
+signal.signal(signal.SIGINT, signal.default_int_handler)
 try:
     pn.lab.run("voting", runs=20, jobs=1, out=sys.argv[1], report=False)
     print("finished")
@@ -56,7 +58,10 @@ except KeyboardInterrupt:
 def test_ctrl_c_stops_a_run_cleanly_and_it_resumes(tmp_path):
     out = tmp_path / "v"
     p = subprocess.Popen(
-        [sys.executable, "-c", INTERRUPTED_RUN, str(out)], stdout=subprocess.PIPE, text=True
+        [sys.executable, "-c", INTERRUPTED_RUN, str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     results = out / "results.jsonl"
     deadline = time.time() + 120
@@ -64,9 +69,9 @@ def test_ctrl_c_stops_a_run_cleanly_and_it_resumes(tmp_path):
         time.sleep(0.05)
     p.send_signal(signal.SIGINT)
     sent = time.time()
-    stdout, _ = p.communicate(timeout=60)
+    stdout, stderr = p.communicate(timeout=60)
     assert time.time() - sent < 10, "the batch did not stop soon after Ctrl-C"
-    assert stdout.strip() == "interrupted" and p.returncode == 0
+    assert stdout.strip() == "interrupted" and p.returncode == 0, (stdout, stderr)
     text = results.read_text()
     assert text.endswith("\n")  # complete lines only
     done = len(text.splitlines())
