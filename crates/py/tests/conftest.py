@@ -1,10 +1,13 @@
 """Shared fixtures: the repository, and the `petrinav` command line that the
 Python results are compared with.
 
-The command line is `$PETRINAV_BIN` when set; otherwise it is built with
-`cargo build --release -p petrinav` once per session (a no-op when it is up
-to date; on a fresh clone it reuses what `pip install ./crates/py` compiled)
-and taken from the workspace's target folder.
+The command line is `$PETRINAV_BIN` when set — `scripts/test` sets it to
+the binary `cargo test --workspace` has just built, `target/debug/petrinav`
+(the numbers are the same bits in every profile: no fast-math) —;
+otherwise it is built with `cargo build --release -p petrinav` once per
+session (a no-op when it is up to date; on a fresh clone a few minutes:
+its dependencies' features unify differently from the Python package's, so
+little of what `pip install ./crates/py` compiled is reused).
 """
 
 import json
