@@ -374,7 +374,10 @@ impl Net {
     /// Stops with :class:`SimulationError` after ``max_events`` firings or
     /// ``max_wall`` seconds (``None``: no limit). Releases the GIL; Ctrl-C
     /// stops it (``KeyboardInterrupt``).
-    #[pyo3(signature = (*, time, seed, warmup=0.0, batches=20, confidence=0.95, measures=Vec::new(), default_rate=None, max_events=1_000_000_000, max_wall=Some(600.0)))]
+    #[pyo3(
+        signature = (*, time, seed, warmup=0.0, batches=20, confidence=0.95, measures=Vec::new(), default_rate=None, max_events=1_000_000_000, max_wall=Some(600.0)),
+        text_signature = "($self, *, time, seed, warmup=0.0, batches=20, confidence=0.95, measures=(), default_rate=None, max_events=1000000000, max_wall=600.0)"
+    )]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
         &self,
@@ -681,7 +684,7 @@ impl Solution {
 
     /// The dict ``petrinav gspn solve --json`` prints, with these measures
     /// (each as ``--measure``).
-    #[pyo3(signature = (measures=Vec::new()))]
+    #[pyo3(signature = (measures=Vec::new()), text_signature = "($self, measures=())")]
     fn to_dict<'py>(&self, py: Python<'py>, measures: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
         let json = guarded(py, Kind::Measure, || {
             let exprs = work::parse_measures(&measures)?;

@@ -1,7 +1,7 @@
 """Type stubs of petrinav (the compiled core's classes and functions)."""
 
 from os import PathLike
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -31,6 +31,7 @@ __version__: str
 _Path = Union[str, "PathLike[str]"]
 _Value = Union[int, float, str]
 
+@final
 class Place:
     """A place: its name, initial token count and capacity."""
 
@@ -41,6 +42,7 @@ class Place:
     @property
     def capacity(self) -> Optional[int]: ...
 
+@final
 class Transition:
     """A transition: timed (rate, servers) or immediate (weight, priority)."""
 
@@ -59,6 +61,7 @@ class Transition:
     def servers(self) -> Optional[int]:
         """1, k, or ``None`` for infinite servers (and for immediate transitions)."""
 
+@final
 class Arc:
     """An arc: ``"input"``, ``"output"`` or ``"inhibitor"``."""
 
@@ -71,6 +74,7 @@ class Arc:
     @property
     def multiplicity(self) -> int: ...
 
+@final
 class StateSpace:
     """The tangible markings of a net (the states of its CTMC)."""
 
@@ -89,6 +93,7 @@ class StateSpace:
     @property
     def ergodic(self) -> bool: ...
 
+@final
 class Solution:
     """The steady state of a net."""
 
@@ -124,9 +129,10 @@ class Solution:
     def ergodic(self) -> bool: ...
     @property
     def bottom_probabilities(self) -> List[float]: ...
-    def to_dict(self, measures: Sequence[str] = ...) -> Dict[str, Any]:
+    def to_dict(self, measures: Sequence[str] = ()) -> Dict[str, Any]:
         """The dict ``petrinav gspn solve --json`` prints."""
 
+@final
 class Net:
     """A GSPN with its parameters bound."""
 
@@ -167,7 +173,7 @@ class Net:
         warmup: float = 0.0,
         batches: int = 20,
         confidence: float = 0.95,
-        measures: Sequence[str] = ...,
+        measures: Sequence[str] = (),
         default_rate: Optional[float] = None,
         max_events: int = 1_000_000_000,
         max_wall: Optional[float] = 600.0,
