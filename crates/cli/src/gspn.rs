@@ -1,18 +1,17 @@
 //! `petrinav gspn …`: the GSPN engine on the command line.
 
-use std::collections::BTreeMap;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use nav::supervisor::{Behaviour, Rates, Supervisor};
+use lab::gspn::{SimOptions, SolveOptions};
+use nav::supervisor::Behaviour;
 use petri::io::Format;
 use petri::{
-    CompiledGspn, ExploreParams, Expr, FarkasParams, Gspn, Method, Net, Params, Properties,
-    ReachabilityGraph, SimParams, SolveParams,
+    CompiledGspn, ExploreParams, Gspn, Interrupt, Method, Net, Params, ReachabilityGraph, SolveParams,
 };
-use serde_json::{Value, json};
+use serde_json::Value;
 
 use crate::output::{Table, fields, num};
 use crate::{out, outln};
@@ -251,14 +250,11 @@ pub fn run(cmd: GspnCommand) -> Result<()> {
 }
 
 fn load(args: &NetArgs) -> Result<(Net, Gspn)> {
-    let net = petri::io::read_file(&args.file).with_context(|| format!("loading {}", args.file.display()))?;
-    let params = Params::parse_assignments(&args.params)?;
-    let gspn = net.instantiate(&params)?;
-    Ok((net, gspn))
+    lab::gspn::load(&args.file, &args.params)
 }
 
 fn explore(args: &NetArgs, gspn: &Gspn) -> Result<ReachabilityGraph> {
-    Ok(ReachabilityGraph::explore(gspn, &explore_params(args))?)
+    lab::gspn::explore(gspn, &explore_params(args), Interrupt::NEVER)
 }
 
 fn explore_params(args: &NetArgs) -> ExploreParams {
@@ -276,68 +272,21 @@ fn print_json(v: &Value) -> Result<()> {
 
 fn info(a: &InfoArgs) -> Result<()> {
     let (net, gspn) = load(&a.net)?;
-    let phase = Phase::start("generating the reachability graph");
-    let rg = explore(&a.net, &gspn)?;
-    phase.next("behavioural properties");
-    let props = Properties::of(&gspn, &rg);
-    phase.next("invariants");
-    let pinv = petri::p_invariants(&gspn, &FarkasParams::default());
-    let tinv = petri::t_invariants(&gspn, &FarkasParams::default());
+    let phase = Phase::new();
+    let analysis = lab::gspn::analyse(&gspn, &explore_params(&a.net), Interrupt::NEVER, &mut |m| {
+        phase.show(m)
+    })?;
     drop(phase);
+    if a.json {
+        return print_json(&analysis.to_json(&net, &gspn));
+    }
+    let (rg, props) = (&analysis.graph, &analysis.properties);
+    let (pinv, tinv) = (&analysis.p_invariants, &analysis.t_invariants);
     let places = gspn.place_names();
     let trans = gspn.transition_names();
     let tnames = |ts: &[petri::TransitionId]| ts.iter().map(|t| trans[t.index()].clone()).collect::<Vec<_>>();
     let st = rg.stats();
-    let inv_json = |inv: &petri::Result<petri::Invariants>| match inv {
-        Ok(i) => json!(
-            (0..i.len())
-                .filter_map(|k| i.display_vector(k, &gspn).map(|d| d.to_string()))
-                .collect::<Vec<_>>()
-        ),
-        Err(e) => json!({ "error": e.to_string() }),
-    };
-    let structural = pinv.as_ref().ok().map(|i| petri::structural_bounds(&gspn, i));
-    if a.json {
-        let bounds: BTreeMap<&str, u32> = places
-            .iter()
-            .map(String::as_str)
-            .zip(props.bounds.iter().copied())
-            .collect();
-        let mutex = props.mutually_exclusive.as_ref().map(|pairs| {
-            pairs
-                .iter()
-                .map(|(p, q)| json!([places[p.index()], places[q.index()]]))
-                .collect::<Vec<_>>()
-        });
-        return print_json(&json!({
-            "name": gspn.name(),
-            "places": gspn.num_places(),
-            "transitions": gspn.num_transitions(),
-            "immediate_transitions": gspn.num_immediate(),
-            "arcs": net.arcs.len(),
-            "reachable_markings": rg.num_markings(),
-            "tangible_markings": rg.num_tangible(),
-            "vanishing_markings": rg.num_vanishing(),
-            "edges": rg.num_edges(),
-            "dead_markings": props.dead_markings.len(),
-            "bounded": true,
-            "safe": props.safe,
-            "live": props.live,
-            "reversible": props.reversible,
-            "terminal_components": props.terminal_components,
-            "bounds": bounds,
-            "dead_transitions": tnames(&props.dead_transitions),
-            "live_transitions": tnames(&props.live_transitions),
-            "mutually_exclusive": mutex,
-            "p_invariants": inv_json(&pinv),
-            "t_invariants": inv_json(&tinv),
-            "covered_by_p_invariants": pinv.as_ref().ok().map(|i| i.covers_all()),
-            "covered_by_t_invariants": tinv.as_ref().ok().map(|i| i.covers_all()),
-            "structurally_bounded": pinv.as_ref().ok().map(|i| i.covers_all()),
-            "structural_bounds": structural.as_ref().map(|b| places.iter().zip(b).map(|(p, v)| (p.clone(), json!(v))).collect::<BTreeMap<_, _>>()),
-            "generation": { "seconds": st.seconds, "bytes_per_marking": st.bytes_per_marking, "words_per_marking": st.words_per_marking },
-        }));
-    }
+    let structural = analysis.structural_bounds(&gspn);
     out!(
         "{}",
         fields(&[
@@ -403,7 +352,7 @@ fn info(a: &InfoArgs) -> Result<()> {
             tnames(&props.dead_transitions).join(", ")
         )?;
     }
-    for (label, inv) in [("P-invariants", &pinv), ("T-invariants", &tinv)] {
+    for (label, inv) in [("P-invariants", pinv), ("T-invariants", tinv)] {
         match inv {
             Ok(i) if i.is_empty() => outln!("{label}: none\n")?,
             Ok(i) => outln!("{label} ({}):\n{}", i.len(), i.display(&gspn))?,
@@ -450,34 +399,30 @@ fn solve_params(method: MethodArg, tolerance: f64) -> SolveParams {
     }
 }
 
-fn parse_measures(texts: &[String]) -> Result<Vec<Expr>> {
-    texts
-        .iter()
-        .map(|t| Expr::parse(t).with_context(|| format!("measure `{t}`")))
-        .collect()
-}
-
 /// What a long command is doing, on a terminal (a spinner with the phase
 /// and the time spent); nothing when standard error is not a terminal.
 /// Ctrl-C ends these commands at once (no handler is installed for them).
-struct Phase(Option<indicatif::ProgressBar>);
+struct Phase(std::cell::OnceCell<Option<indicatif::ProgressBar>>);
 
 impl Phase {
-    fn start(message: &'static str) -> Phase {
-        Phase(std::io::stderr().is_terminal().then(|| {
-            let b = indicatif::ProgressBar::new_spinner();
-            b.set_style(
-                indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
-                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-            );
-            b.set_message(message);
-            b.enable_steady_tick(std::time::Duration::from_millis(120));
-            b
-        }))
+    fn new() -> Phase {
+        Phase(std::cell::OnceCell::new())
     }
 
-    fn next(&self, message: &'static str) {
-        if let Some(b) = &self.0 {
+    /// Shows `message`, starting the spinner on the first one.
+    fn show(&self, message: &'static str) {
+        let bar = self.0.get_or_init(|| {
+            std::io::stderr().is_terminal().then(|| {
+                let b = indicatif::ProgressBar::new_spinner();
+                b.set_style(
+                    indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+                        .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+                );
+                b.enable_steady_tick(std::time::Duration::from_millis(120));
+                b
+            })
+        });
+        if let Some(b) = bar {
             b.set_message(message);
         }
     }
@@ -485,7 +430,7 @@ impl Phase {
 
 impl Drop for Phase {
     fn drop(&mut self) {
-        if let Some(b) = &self.0 {
+        if let Some(Some(b)) = self.0.get() {
             b.finish_and_clear();
         }
     }
@@ -493,64 +438,23 @@ impl Drop for Phase {
 
 fn solve(a: &SolveArgs) -> Result<()> {
     let (_, gspn) = load(&a.net)?;
-    let measures = parse_measures(&a.measures)?;
-    // Check the rates before the (possibly long) state-space generation.
-    let rates = gspn.rates(&Params::new(), a.default_rate)?;
-    let phase = Phase::start("generating the reachability graph");
-    let rg = explore(&a.net, &gspn)?;
-    let (markings, vanishing) = (rg.num_markings(), rg.num_vanishing());
-    phase.next("eliminating vanishing markings");
-    let compiled = CompiledGspn::from_graph(gspn.clone(), rg)?;
-    phase.next("solving the steady state");
-    let sol = compiled.solve_rates(&rates, &solve_params(a.method, a.tolerance))?;
+    let measures = lab::gspn::parse_measures(&a.measures)?;
+    let options = SolveOptions {
+        explore: explore_params(&a.net),
+        solve: solve_params(a.method, a.tolerance),
+        default_rate: a.default_rate,
+    };
+    let phase = Phase::new();
+    let steady = lab::gspn::solve(&gspn, &options, Interrupt::NEVER, &mut |m| phase.show(m))?;
     drop(phase);
-    let values: Vec<f64> = measures
-        .iter()
-        .map(|m| {
-            compiled
-                .measure(&sol, m)
-                .with_context(|| format!("measure `{m}`"))
-        })
-        .collect::<Result<_>>()?;
+    let values = steady.measures(&measures)?;
+    let (compiled, sol) = (&steady.space.compiled, &steady.solution);
+    let vanishing = steady.space.vanishing_markings;
     let places = gspn.place_names();
     let trans = gspn.transition_names();
     if a.json {
-        let pl: BTreeMap<&str, Value> = places
-            .iter()
-            .enumerate()
-            .map(|(p, n)| {
-                (
-                    n.as_str(),
-                    json!({"prob_nonempty": sol.prob_nonempty[p], "mean_tokens": sol.mean_tokens[p]}),
-                )
-            })
-            .collect();
-        let tr: BTreeMap<&str, Value> = trans
-            .iter()
-            .enumerate()
-            .map(|(t, n)| (n.as_str(), json!({"throughput": sol.throughput[t], "immediate": gspn.is_immediate(petri::TransitionId(t as u32))})))
-            .collect();
-        let ms: BTreeMap<&str, f64> = a
-            .measures
-            .iter()
-            .map(String::as_str)
-            .zip(values.iter().copied())
-            .collect();
-        return print_json(&json!({
-            "name": gspn.name(),
-            "reachable_markings": markings,
-            "tangible_markings": compiled.num_tangible(),
-            "vanishing_markings": vanishing,
-            "ergodic": compiled.is_ergodic(),
-            "bottom_components": sol.bottom_probabilities.len(),
-            "solver": sol.info.method,
-            "iterations": sol.info.iterations,
-            "residual": sol.info.residual,
-            "seconds": sol.info.seconds,
-            "places": pl,
-            "transitions": tr,
-            "measures": ms,
-        }));
+        let ms: Vec<(String, f64)> = a.measures.iter().cloned().zip(values.iter().copied()).collect();
+        return print_json(&steady.to_json(&ms));
     }
     out!(
         "{}",
@@ -615,22 +519,7 @@ fn solve(a: &SolveArgs) -> Result<()> {
 }
 
 fn select(a: &SelectArgs) -> Result<()> {
-    let supervisor = match &a.model {
-        None => Supervisor::new()?,
-        Some(path) => {
-            let net = petri::io::read_file(path).with_context(|| format!("loading {}", path.display()))?;
-            Supervisor::from_net(&net)?
-        }
-    };
-    let mut rates = Rates::initial();
-    for (name, value) in Params::parse_assignments(&a.set)?.0 {
-        let index = name
-            .strip_prefix("lambda")
-            .and_then(|k| k.parse::<usize>().ok())
-            .with_context(|| format!("unknown rate `{name}`: use lambda1 … lambda11"))?;
-        rates.try_set(index, value)?;
-    }
-    let d = supervisor.decide(&rates)?;
+    let (d, rates) = lab::gspn::select(&a.set, a.model.as_deref())?;
     if a.json {
         return print_json(&serde_json::to_value(&d)?);
     }
@@ -669,27 +558,17 @@ fn select(a: &SelectArgs) -> Result<()> {
 
 fn simulate(a: &SimulateArgs) -> Result<()> {
     let (_, gspn) = load(&a.net)?;
-    let rates = gspn.rates(&Params::new(), a.default_rate)?;
-    let measures = parse_measures(&a.measures)?
-        .iter()
-        .zip(&a.measures)
-        .map(|(e, t)| Ok((t.clone(), gspn.compile_expr(e)?)))
-        .collect::<Result<Vec<_>>>()?;
-    let mut p = SimParams::new(a.time);
-    p.seed = a.seed;
-    p.warmup = a.warmup;
-    p.batches = a.batches;
-    p.confidence = a.confidence;
-    p.max_events = a.max_events;
-    p.max_wall_s = (a.max_wall != f64::INFINITY).then_some(a.max_wall);
-    let r = simulate_with_progress(&gspn, &rates, &measures, &p).map_err(|e| {
-        let hint = match e {
-            petri::Error::EventLimit { .. } => " (--max-events N raises the limit)",
-            petri::Error::WallTimeLimit { .. } => " (--max-wall S raises the limit)",
-            _ => "",
-        };
-        anyhow::anyhow!("{e}{hint}")
-    })?;
+    let options = SimOptions {
+        warmup: a.warmup,
+        batches: a.batches,
+        confidence: a.confidence,
+        default_rate: a.default_rate,
+        measures: a.measures.clone(),
+        max_events: a.max_events,
+        max_wall_s: (a.max_wall != f64::INFINITY).then_some(a.max_wall),
+        ..SimOptions::new(a.time, a.seed)
+    };
+    let r = simulate_with_progress(&gspn, &options)?;
     if a.json {
         return print_json(&serde_json::to_value(&r)?);
     }
@@ -738,12 +617,7 @@ fn simulate(a: &SimulateArgs) -> Result<()> {
 /// the firings the whole simulation needs at the rate seen so far), quiet
 /// otherwise; Ctrl-C stops the simulation at its next check (some
 /// milliseconds) with an error saying where it was.
-fn simulate_with_progress(
-    gspn: &Gspn,
-    rates: &[f64],
-    measures: &[(String, petri::CompiledExpr)],
-    params: &SimParams,
-) -> petri::Result<petri::SimResult> {
+fn simulate_with_progress(gspn: &Gspn, options: &SimOptions) -> Result<petri::SimResult> {
     let interrupted = crate::interrupt::flag();
     let bar = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new(1000);
@@ -755,7 +629,7 @@ fn simulate_with_progress(
         );
         b
     });
-    let result = petri::simulate_observed(gspn, rates, measures, params, &mut |p| {
+    let result = lab::gspn::simulate(gspn, options, &mut |p| {
         if let Some(b) = &bar {
             b.set_position((p.fraction() * 1000.0) as u64);
             b.set_message(format!("{} firings of ~{:.1e}", p.events, p.projected_events()));
@@ -773,8 +647,8 @@ fn simulate_with_progress(
 }
 
 fn convert(input: &Path, output: &Path) -> Result<()> {
-    let net = petri::io::read_file(input).with_context(|| format!("loading {}", input.display()))?;
-    petri::io::write_file(&net, output).with_context(|| format!("writing {}", output.display()))?;
+    let net = lab::gspn::read_net(input)?;
+    lab::gspn::write_net(&net, output)?;
     eprintln!(
         "{} -> {}: {} places, {} transitions, {} arcs, {} parameters",
         input.display(),
@@ -825,9 +699,7 @@ fn family_cmd(family: Family, n: u32, output: Option<&Path>) -> Result<()> {
     }
     .build(n)?;
     match output {
-        Some(path) => {
-            Ok(petri::io::write_file(&net, path).with_context(|| format!("writing {}", path.display()))?)
-        }
+        Some(path) => lab::gspn::write_net(&net, path),
         None => write_out(&petri::io::write_string(&net, Format::Toml)?, None),
     }
 }

@@ -195,12 +195,6 @@ fn yes_no(b: bool) -> String {
     if b { "yes" } else { "no" }.to_string()
 }
 
-/// Reads a log of the shipped source supervisor net, reporting a torn last
-/// line.
-pub fn read(path: &Path) -> Result<Vec<Entry>> {
-    Ok(read_any(path)?.0)
-}
-
 /// Reads a log of either shipped supervisor net (the one its lines name).
 fn read_any(path: &Path) -> Result<(Vec<Entry>, Kind)> {
     if !path.exists() {

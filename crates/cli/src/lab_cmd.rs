@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
-use lab::runner::{BatchParams, Shard};
-use lab::suite::{Suite, SuiteArgs, SuiteInfo};
+use lab::batch::RunOptions;
+use lab::runner::Shard;
+use lab::suite::{Suite, SuiteInfo};
 
 use crate::outln;
 
@@ -147,94 +148,43 @@ fn list() -> Result<()> {
     Ok(())
 }
 
-/// The suite `what` names: one registered suite, or scenario files.
-fn load_suite(what: &[String], runs: Option<u32>) -> Result<Box<dyn Suite>> {
-    if let [name] = what
-        && !name.ends_with(".toml")
-    {
-        return lab::suites::build(
-            name,
-            &SuiteArgs {
-                runs,
-                files: Vec::new(),
-            },
-        );
-    }
-    if let Some(bad) = what.iter().find(|w| !w.ends_with(".toml")) {
-        bail!(
-            "unknown suite `{bad}`: the suites are {}; or give scenario files (.toml)",
-            lab::suites::names()
-        );
-    }
-    lab::suites::build(
-        lab::suites::files::REGISTRATION.name,
-        &SuiteArgs {
-            runs,
-            files: what.iter().map(PathBuf::from).collect(),
-        },
-    )
-}
-
 fn read_info(dir: &Path) -> Result<SuiteInfo> {
-    let path = dir.join("suite.json");
-    if !path.exists() {
-        bail!(
-            "{} is not a results folder (it has no suite.json): `petrinav lab run` makes one",
-            dir.display()
-        );
-    }
-    serde_json::from_str(
-        &std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?,
-    )
-    .with_context(|| format!("{} is not a suite description", path.display()))
+    lab::batch::read_info(dir)
 }
 
 fn write_info(dir: &Path, info: &SuiteInfo) -> Result<()> {
-    let path = dir.join("suite.json");
-    std::fs::write(&path, serde_json::to_string_pretty(info)?)
-        .with_context(|| format!("writing {}", path.display()))
+    lab::batch::write_info(dir, info)
 }
 
 fn run_suite(a: &RunArgs) -> Result<()> {
-    let suite = load_suite(&a.what, a.runs)?;
-    let info = suite.info();
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(info.name.replace('/', "-")));
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    if out.join("suite.json").exists() && a.resume && !read_info(&out)?.same_batch(info) {
-        bail!(
-            "{} belongs to another batch (suite, scenarios, runs or seed differ): resume it with the same arguments, or choose another --out",
-            out.display()
-        );
-    }
-    // Written first, so that an interrupted batch can be checked on resume.
-    write_info(&out, info)?;
-    let params = BatchParams {
-        results: out.join("results.jsonl"),
-        resume: a.resume,
-        jobs: a.jobs,
-        progress: true,
-    };
-    let jobs: usize = suite.campaigns().iter().map(|c| c.jobs.len()).sum();
-    let summary = lab::suite::run(suite.as_ref(), &params, a.shard)?;
+    let suite = lab::suites::load(&a.what, a.runs)?;
+    let ran = lab::batch::run(
+        suite,
+        &RunOptions {
+            jobs: a.jobs,
+            out: a.out.clone(),
+            resume: a.resume,
+            shard: a.shard,
+            ..RunOptions::default()
+        },
+    )?;
+    let summary = &ran.summary;
     eprintln!(
         "{} runs ({} already done, {} now, {} failed) -> {}",
         summary.total,
         summary.skipped,
         summary.ran,
         summary.failures,
-        params.results.display()
+        ran.results.display()
     );
     if a.shard.is_some() {
         eprintln!(
-            "shard done ({} of {jobs} runs); put the shards together with `petrinav lab merge OUT PART…`",
-            summary.total
+            "shard done ({} of {} runs); put the shards together with `petrinav lab merge OUT PART…`",
+            summary.total, ran.jobs
         );
         return Ok(());
     }
-    print_report(&out, suite.as_ref(), !a.no_pictures)
+    print_report(&ran.out, ran.suite.as_ref(), !a.no_pictures)
 }
 
 fn print_report(dir: &Path, suite: &dyn Suite, pictures: bool) -> Result<()> {

@@ -6,13 +6,11 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow};
 use clap::Subcommand;
 use serde_json::json;
 use sim::OccupancyGrid;
-use sim::map_server;
 use sim::render::Picture;
-use sim::shapes::WorldSpec;
 
 use crate::output::{fields, num};
 use crate::{out, outln};
@@ -54,60 +52,13 @@ pub fn run(cmd: MapCommand) -> Result<()> {
     }
 }
 
-/// A loaded map and what its file said.
-struct Loaded {
-    grid: OccupancyGrid,
-    /// map_server details, for YAML maps.
-    yaml: Option<map_server::MapServerMap>,
-}
-
 /// The occupancy grid of a map_server `.yaml` map or a `.toml` world.
 pub(crate) fn load_grid(path: &Path) -> Result<OccupancyGrid> {
-    Ok(load(path)?.grid)
-}
-
-/// A scenario-like file: the world under `[world]`, other tables ignored.
-#[derive(serde::Deserialize)]
-struct WithWorld {
-    world: WorldSpec,
-}
-
-fn load(path: &Path) -> Result<Loaded> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("yaml" | "yml") => {
-            let m = map_server::load(path)?;
-            Ok(Loaded {
-                grid: m.grid.clone(),
-                yaml: Some(m),
-            })
-        }
-        Some("toml") => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-            let table: toml::Table = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
-            let spec = if table.contains_key("world") {
-                toml::from_str::<WithWorld>(&text)
-                    .with_context(|| format!("{}", path.display()))?
-                    .world
-            } else {
-                toml::from_str::<WorldSpec>(&text).with_context(|| format!("{}", path.display()))?
-            };
-            let grid = spec.rasterise().map_err(|e| anyhow!("{}: {e}", path.display()))?;
-            Ok(Loaded { grid, yaml: None })
-        }
-        _ => bail!(
-            "{}: unknown map format; expected a map_server .yaml or a .toml world",
-            path.display()
-        ),
-    }
+    lab::map_file::load_grid(path)
 }
 
 fn info(path: &Path, as_json: bool) -> Result<()> {
-    let m = load(path)?;
+    let m = lab::map_file::load(path)?;
     let g = &m.grid;
     let n = g.counts();
     let r = g.resolution_m();
@@ -127,7 +78,7 @@ fn info(path: &Path, as_json: bool) -> Result<()> {
             "unknown_cells": n.unknown,
             "free_area_m2": g.free_area_m2(),
         });
-        if let Some(y) = &m.yaml {
+        if let Some(y) = &m.map_server {
             v["map_server"] = json!({
                 "image": y.image_path.display().to_string(),
                 "mode": y.yaml.mode.name(),
@@ -140,7 +91,7 @@ fn info(path: &Path, as_json: bool) -> Result<()> {
         return Ok(());
     }
     let mut rows = vec![("map", path.display().to_string())];
-    if let Some(y) = &m.yaml {
+    if let Some(y) = &m.map_server {
         rows.push(("image", y.image_path.display().to_string()));
         rows.push((
             "mode",
@@ -175,7 +126,7 @@ fn info(path: &Path, as_json: bool) -> Result<()> {
 }
 
 fn render(path: &Path, output: &Path, scale: Option<f64>) -> Result<()> {
-    let m = load(path)?;
+    let m = lab::map_file::load(path)?;
     let mut picture = Picture::new(&m.grid);
     if let Some(s) = scale {
         picture.scale(s);

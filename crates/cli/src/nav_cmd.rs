@@ -1,19 +1,12 @@
 //! `petrinav nav …`: the tour-guide robot on a map, between named places.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use lab::mission::{self, LegOutcome, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop};
-use nav::guide::{CreditPlan, Policy, SupervisorPlan};
-use nav::supervisor::Behaviour;
-use nav::supervisor::Supervisor;
-use nav::supervisor::credit::CreditSupervisor;
-use nav::supervisor::credit_learning::CreditModel;
-use nav::supervisor::learning;
-use nav::supervisor::log::MissionLog;
-use robot::{Pose, Vec2};
-use sim::{CrowdParams, OccupancyGrid, Places, World};
+use lab::mission::{self, LegOutcome, LegRun, LegSpec};
+use lab::tours::{self, BehaviourChoice, GuideOptions, NetChoice};
+use robot::Vec2;
 
 use crate::outln;
 use crate::output::{Table, num};
@@ -54,7 +47,7 @@ enum BehaviourArg {
     Supervisor,
 }
 
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 enum NetArg {
     /// models/supervisor_credit.toml: failures credited to each behaviour, per crowd context.
     Credit,
@@ -62,7 +55,7 @@ enum NetArg {
     Source,
 }
 
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 enum WarningArg {
     /// Warning when the scan sees past the mapped walls: the robot is lost (default).
     Contradiction,
@@ -150,199 +143,30 @@ pub fn run(cmd: NavCommand) -> Result<()> {
     }
 }
 
-/// The map, checked to have free space.
-fn load_map(path: &Path) -> Result<OccupancyGrid> {
-    let grid = crate::map::load_grid(path)?;
-    if grid.counts().free == 0 {
-        bail!(
-            "{}: the map has no free cell: there is nowhere to drive",
-            path.display()
-        );
+/// The library's options for these arguments.
+fn options(c: &Common) -> GuideOptions {
+    GuideOptions {
+        map: c.map.clone(),
+        goals: c.goals.clone(),
+        behaviour: match c.behaviour {
+            BehaviourArg::Automove => BehaviourChoice::AutoMove,
+            BehaviourArg::Contour => BehaviourChoice::Contour,
+            BehaviourArg::AutomoveThenContour => BehaviourChoice::AutoMoveThenContour,
+            BehaviourArg::Rule => BehaviourChoice::Rule,
+            BehaviourArg::Supervisor => BehaviourChoice::Supervisor,
+        },
+        people: c.people,
+        seed: c.seed,
+        time_limit_s: c.time_limit,
+        log: c.log.clone(),
+        calibration: c.calibration,
+        net: match c.net {
+            NetArg::Credit => NetChoice::Credit,
+            NetArg::Source => NetChoice::Source,
+        },
+        explained_warning: c.warning == WarningArg::Explained,
+        stop: None,
     }
-    Ok(grid)
-}
-
-fn load_places(c: &Common) -> Result<Option<Places>> {
-    c.goals
-        .as_deref()
-        .map(Places::load)
-        .transpose()
-        .map_err(Into::into)
-}
-
-/// A place's name or a pose `x,y,theta`.
-fn resolve(spec: &str, places: Option<&Places>, what: &str) -> Result<Stop> {
-    let numbers: Vec<&str> = spec.split(',').map(str::trim).collect();
-    if numbers.len() == 3
-        && let Ok(v) = numbers
-            .iter()
-            .map(|s| s.parse::<f64>())
-            .collect::<Result<Vec<f64>, _>>()
-    {
-        if v.iter().any(|x| !x.is_finite()) {
-            bail!("{what} `{spec}`: x, y and theta must be finite numbers");
-        }
-        return Ok(Stop {
-            name: format!("{},{},{}", v[0], v[1], v[2]),
-            pose: Pose::new(v[0], v[1], v[2]),
-        });
-    }
-    let Some(places) = places else {
-        bail!("{what} `{spec}` is not x,y,theta, and no --goals file names places");
-    };
-    match places.get(spec) {
-        Some(p) => Ok(Stop {
-            name: p.name.clone(),
-            pose: p.pose,
-        }),
-        None => bail!(
-            "{what}: no place `{spec}` in the goals file; it has: {}",
-            places
-                .iter()
-                .map(|p| p.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    }
-}
-
-/// Checks that the robot can stand at every stop; names every one it cannot.
-fn check_stops(grid: &OccupancyGrid, stops: &[Stop], radius_m: f64) -> Result<()> {
-    let bad: Vec<String> = stops
-        .iter()
-        .filter_map(|s| {
-            Places::problem_at(grid, s.pose.position(), radius_m)
-                .map(|why| format!("`{}` ({}, {}) is {why}", s.name, num(s.pose.x_m), num(s.pose.y_m)))
-        })
-        .collect();
-    if !bad.is_empty() {
-        bail!(
-            "the robot (radius {radius_m} m) cannot stand there: {}",
-            bad.join("; ")
-        );
-    }
-    Ok(())
-}
-
-/// The mission's world: the map, and `people` gathered around `anchors`
-/// walking between them.
-fn setup(c: &Common, grid: OccupancyGrid, anchors: &[Vec2], start: Vec2) -> Result<MissionSetup> {
-    if !(c.time_limit.is_finite() && c.time_limit > 0.0) {
-        bail!(
-            "--time-limit must be a finite number of seconds > 0, got {}",
-            c.time_limit
-        );
-    }
-    let mut world = World::new(grid);
-    let mut people = None;
-    let r = CrowdParams::default().radius_m;
-    let most = world.free_area_m2() / (2.0 * 3f64.sqrt() * r * r);
-    if c.people as f64 > most {
-        bail!(
-            "--people {}: more than the {} that the map's free space could hold at the densest packing",
-            c.people,
-            most.floor()
-        );
-    }
-    if c.people > 0 {
-        world = world.with_crowd(CrowdParams {
-            waypoints: anchors.to_vec(),
-            gather_radius_m: 1.5,
-            ..CrowdParams::default()
-        })?;
-        let plan = PeoplePlan {
-            count: c.people,
-            anchors: anchors.to_vec(),
-            spread_m: 4.0,
-            keep_clear_m: 1.0,
-        };
-        let fit = mission::crowd_near(&world, anchors, c.people, plan.spread_m, start, 1.5, c.seed);
-        if fit.len() < c.people {
-            bail!(
-                "--people {}: only {} fit around the places without overlapping walls or each other",
-                c.people,
-                fit.len()
-            );
-        }
-        people = Some(plan);
-    }
-    let mut setup = MissionSetup::new(world, c.time_limit);
-    setup.people = people;
-    if c.warning == WarningArg::Explained {
-        setup.guide.mcl.status = nav::localization::StatusParams::explained();
-    }
-    Ok(setup)
-}
-
-/// The policy, learnt from the log for the supervisor.
-fn policy(c: &Common) -> Result<Policy> {
-    Ok(match c.behaviour {
-        BehaviourArg::Automove => Policy::Fixed(Behaviour::AutoMove),
-        BehaviourArg::Contour => Policy::Fixed(Behaviour::Contour),
-        BehaviourArg::AutomoveThenContour => Policy::AutoMoveThenContour,
-        BehaviourArg::Rule => Policy::Rule,
-        BehaviourArg::Supervisor => {
-            let Some(path) = &c.log else {
-                bail!(
-                    "--behaviour supervisor learns its rates from a mission log: give --log LOG (calibrate first with --calibration)"
-                );
-            };
-            let entries = crate::guide_cmd::read(path)?;
-            match c.net {
-                NetArg::Source => {
-                    let learned = learning::learn(&entries)
-                        .with_context(|| format!("learning from {}", path.display()))?;
-                    Policy::SupervisorSource(Box::new(SupervisorPlan {
-                        supervisor: Supervisor::new()?,
-                        rates: learned.rates,
-                        automove: learned.automove,
-                        contour: learned.contour,
-                    }))
-                }
-                NetArg::Credit => {
-                    let model = CreditModel::learn(&entries)
-                        .with_context(|| format!("learning from {}", path.display()))?;
-                    Policy::Supervisor(Box::new(CreditPlan {
-                        supervisor: CreditSupervisor::new()?,
-                        model,
-                    }))
-                }
-            }
-        }
-    })
-}
-
-/// Appends the legs to the mission log, if one is kept.
-fn log_legs(c: &Common, legs: &[LegRun], policy: &Policy) -> Result<()> {
-    let Some(path) = &c.log else {
-        return Ok(());
-    };
-    let net = match c.net {
-        NetArg::Source => Supervisor::new()?.net_id().to_string(),
-        NetArg::Credit => CreditSupervisor::new()?.net_id().to_string(),
-    };
-    let mut log = MissionLog::open(path, &net)?;
-    if let Some(t) = log.torn() {
-        eprintln!(
-            "warning: {}:{}: a last line cut mid-write ({} bytes) was dropped; the entries before it are kept",
-            path.display(),
-            t.line,
-            t.bytes
-        );
-    }
-    for leg in legs
-        .iter()
-        .filter(|l| l.result.outcome != LegOutcome::Unreachable)
-    {
-        let entry = match (c.calibration, policy) {
-            (true, Policy::Fixed(b)) if c.net == NetArg::Source => mission::calibration_entry(leg, *b),
-            (true, Policy::Fixed(b)) => mission::credit_calibration_entry(leg, *b),
-            (true, _) => bail!("--calibration runs one behaviour alone: --behaviour automove or contour"),
-            (false, _) => mission::mission_entry(leg, log.missions() + 1),
-        };
-        log.append(entry)?;
-    }
-    Ok(())
 }
 
 fn print_legs(legs: &[LegRun], json: bool) -> Result<()> {
@@ -393,21 +217,22 @@ fn print_legs(legs: &[LegRun], json: bool) -> Result<()> {
 
 fn go(a: &GoArgs) -> Result<()> {
     let c = &a.common;
+    let o = options(c);
     for path in [&a.trace, &a.html, &c.output].into_iter().flatten() {
         crate::lab_cmd::check_output(path)?;
     }
-    let grid = load_map(&c.map)?;
-    let places = load_places(c)?;
-    let from = resolve(&a.from, places.as_ref(), "--from")?;
-    let to = resolve(&a.to, places.as_ref(), "--to")?;
+    let grid = tours::load_map(&c.map)?;
+    let places = tours::load_places(&o)?;
+    let from = tours::resolve(&a.from, places.as_ref(), "--from")?;
+    let to = tours::resolve(&a.to, places.as_ref(), "--to")?;
     let radius = sim::RobotParams::jinny().drive.radius_m;
-    check_stops(&grid, &[from.clone(), to.clone()], radius)?;
+    tours::check_stops(&grid, &[from.clone(), to.clone()], radius)?;
     let anchors: Vec<Vec2> = match &places {
         Some(p) => p.iter().map(|q| q.pose.position()).collect(),
         None => vec![from.pose.position(), to.pose.position()],
     };
-    let setup = setup(c, grid, &anchors, from.pose.position())?;
-    let policy = policy(c)?;
+    let setup = tours::setup(&o, grid, &anchors, from.pose.position())?;
+    let policy = tours::policy(&o)?;
     let mut leg = mission::run_leg(
         &setup,
         &LegSpec {
@@ -442,7 +267,7 @@ fn go(a: &GoArgs) -> Result<()> {
             path,
         )?;
     }
-    log_legs(c, std::slice::from_ref(&leg), &policy)?;
+    tours::log_legs(&o, std::slice::from_ref(&leg), &policy)?;
     print_legs(std::slice::from_ref(&leg), c.json)?;
     if let Some(path) = &a.html {
         let record = lab::suites::maps::leg_record(&leg)?;
@@ -455,48 +280,19 @@ fn go(a: &GoArgs) -> Result<()> {
 
 fn tour(a: &TourArgs) -> Result<()> {
     let c = &a.common;
-    let grid = load_map(&c.map)?;
-    let Some(places) = load_places(c)? else {
-        bail!("a tour needs the places to visit: give --goals PLACES.yaml");
-    };
-    if places.len() < 2 {
-        bail!(
-            "a tour needs at least two places; the goals file has {}",
-            places.len()
-        );
-    }
-    let stops: Vec<Stop> = places
-        .iter()
-        .map(|p| Stop {
-            name: p.name.clone(),
-            pose: p.pose,
-        })
-        .collect();
-    let radius = sim::RobotParams::jinny().drive.radius_m;
-    check_stops(&grid, &stops, radius)?;
-    let anchors: Vec<Vec2> = stops.iter().map(|s| s.pose.position()).collect();
-    let setup = setup(c, grid, &anchors, stops[0].pose.position())?;
-    let policy = policy(c)?;
-    let legs = mission::run_tour(&setup, &stops, policy.clone(), c.seed)?;
-    log_legs(c, &legs, &policy)?;
+    let tour = tours::tour(&options(c))?;
     if let Some(path) = &c.output {
-        mission::picture(setup.world.grid(), &legs, &stops, path)?;
+        mission::picture(tour.setup.world.grid(), &tour.legs, &tour.stops, path)?;
     }
-    print_legs(&legs, c.json)?;
-    let reached = legs
-        .iter()
-        .filter(|l| l.result.outcome == LegOutcome::Reached)
-        .count();
-    let total: f64 = legs.iter().map(|l| l.result.time_s).sum();
+    print_legs(&tour.legs, c.json)?;
     if c.json {
-        outln!(
-            "{}",
-            serde_json::json!({"summary": {"legs": legs.len(), "reached": reached, "total_time_s": total}})
-        )?;
+        outln!("{}", tour.summary_json())?;
     } else {
+        let total: f64 = tour.legs.iter().map(|l| l.result.time_s).sum();
         outln!(
-            "{reached} of {} legs reached, {} s in all",
-            legs.len(),
+            "{} of {} legs reached, {} s in all",
+            tour.reached(),
+            tour.legs.len(),
             num(total)
         )?;
     }

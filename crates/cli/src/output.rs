@@ -89,27 +89,7 @@ impl Table {
     }
 }
 
-/// A number with about six significant digits, in plain or scientific form.
-pub fn num(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    if !v.is_finite() {
-        return format!("{v}");
-    }
-    let a = v.abs();
-    if (1e-4..1e7).contains(&a) {
-        let digits = (5 - a.log10().floor() as i32).clamp(0, 10) as usize;
-        let s = format!("{v:.digits$}");
-        if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        }
-    } else {
-        format!("{v:.5e}")
-    }
-}
+pub use lab::tables::num;
 
 /// `key: value` lines, keys aligned.
 pub fn fields(pairs: &[(&str, String)]) -> String {

@@ -12,12 +12,22 @@
 //!
 //! The suites themselves live in [`suites`], one folder each, listed in
 //! [`suites::REGISTRY`]; nothing outside that module names one.
+//!
+//! The work behind the command line's commands, shared with the Python
+//! package (`crates/py`) so that both say and print the same: [`gspn`]
+//! (loading, solving, analysing, simulating nets; the supervisor's
+//! decision), [`tours`] (the guide robot between named places),
+//! [`batch`] (a suite run into a results folder), [`map_file`] (map
+//! files).
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod charts;
 pub mod encode;
 pub mod experiment;
 pub mod foxglove;
+pub mod gspn;
+pub mod map_file;
 pub mod mission;
 pub mod page;
 pub mod pictures;
@@ -34,5 +44,6 @@ pub mod tables;
 #[cfg(test)]
 mod test_replays;
 pub mod topo;
+pub mod tours;
 pub mod traps;
 pub mod viewer;

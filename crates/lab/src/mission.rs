@@ -629,12 +629,33 @@ pub struct Stop {
 /// Runs a tour through `stops` in order: one leg between each consecutive
 /// pair (module docs). Leg `k` uses the seed derived from `seed` and `k`.
 pub fn run_tour(setup: &MissionSetup, stops: &[Stop], policy: Policy, seed: u64) -> Result<Vec<LegRun>> {
+    run_tour_interruptible(
+        setup,
+        stops,
+        policy,
+        seed,
+        &std::sync::atomic::AtomicBool::new(false),
+    )
+}
+
+/// [`run_tour`], stopped with an error before the next leg once `stop` is
+/// raised (from another thread, e.g. on Ctrl-C).
+pub fn run_tour_interruptible(
+    setup: &MissionSetup,
+    stops: &[Stop],
+    policy: Policy,
+    seed: u64,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Vec<LegRun>> {
     let mut legs = Vec::new();
     let Some(first) = stops.first() else {
         return Ok(legs);
     };
     let mut here = Whereabouts::at(first);
     for (k, next) in stops.iter().skip(1).enumerate() {
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            anyhow::bail!("the tour was stopped on request after {k} legs");
+        }
         let leg = run_leg(
             setup,
             &LegSpec {

@@ -32,8 +32,8 @@ use std::collections::{HashMap, HashSet};
 use std::fs::{File, OpenOptions};
 use std::io::{BufRead, BufReader, IsTerminal, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
@@ -176,6 +176,19 @@ pub struct BatchParams {
     pub jobs: Option<usize>,
     /// Show a progress bar (only drawn if standard error is a terminal).
     pub progress: bool,
+    /// Stops the batch when raised (from another thread, e.g. on Ctrl-C):
+    /// no run starts after it, the runs in flight finish and are written,
+    /// and the batch ends with [`Stopped`]; `resume` continues it.
+    pub stop: Option<Arc<AtomicBool>>,
+}
+
+/// A batch stopped through [`BatchParams::stop`]: the results file holds
+/// the runs finished so far, complete lines only.
+#[derive(Debug, thiserror::Error)]
+#[error("the batch was stopped on request; the runs finished so far are in {}: resume to continue", .results.display())]
+pub struct Stopped {
+    /// The results file.
+    pub results: PathBuf,
 }
 
 /// What a batch did.
@@ -339,11 +352,18 @@ where
         }
         Ok(record)
     };
+    let stopped = || params.stop.as_ref().is_some_and(|s| s.load(Ordering::Relaxed));
     let campaign = |c: &Campaign| -> Result<()> {
         let mut earlier: Vec<Value> = Vec::with_capacity(c.jobs.len());
         for job in &c.jobs {
             let record = match done.get(&job.key()) {
                 Some(r) => r.clone(),
+                None if stopped() => {
+                    return Err(Stopped {
+                        results: params.results.clone(),
+                    }
+                    .into());
+                }
                 None => one(job, &earlier)?,
             };
             earlier.push(record);
@@ -517,6 +537,7 @@ mod tests {
             resume: false,
             jobs: Some(n),
             progress: false,
+            stop: None,
         };
         run_batch(&Campaign::independent(js.clone()), &p(&a, 1), |j, _| fake_run(j)).unwrap();
         let s = run_batch(&Campaign::independent(js.clone()), &p(&b, 2), |j, _| fake_run(j)).unwrap();
@@ -534,6 +555,7 @@ mod tests {
             resume,
             jobs: Some(2),
             progress: false,
+            stop: None,
         };
         run_batch(&Campaign::independent(js.clone()), &p(&full, false), |j, _| {
             fake_run(j)
@@ -591,6 +613,7 @@ mod tests {
             resume: false,
             jobs: Some(1),
             progress: false,
+            stop: None,
         };
         let err = run_batch(&Campaign::independent(js), &p, |j, _| {
             if j.scenario == "field3" && j.run == 1 {
@@ -602,6 +625,48 @@ mod tests {
         assert!(format!("{err:#}").contains("field3#1"), "{err:#}");
         let (records, _) = read_results(&path).unwrap();
         assert!(!records.is_empty());
+    }
+
+    #[test]
+    fn a_stopped_batch_keeps_complete_lines_and_resumes_to_the_same_file() {
+        let js = jobs(&scenarios(), 10, |s, r| derive_seed(13, s, r));
+        let (full, cut) = (temp("stop-full"), temp("stop-cut"));
+        let p = |path: &Path, resume, stop| BatchParams {
+            results: path.to_path_buf(),
+            resume,
+            jobs: Some(1),
+            progress: false,
+            stop,
+        };
+        run_batch(
+            &Campaign::independent(js.clone()),
+            &p(&full, false, None),
+            |j, _| fake_run(j),
+        )
+        .unwrap();
+        // Raised by the seventh run, as another thread would: no run starts after it.
+        let flag = Arc::new(AtomicBool::new(false));
+        let err = run_batch(
+            &Campaign::independent(js.clone()),
+            &p(&cut, false, Some(flag.clone())),
+            |j, _| {
+                if j.scenario == "field2" && j.run == 1 {
+                    flag.store(true, Ordering::Relaxed);
+                }
+                fake_run(j)
+            },
+        )
+        .unwrap_err();
+        assert!(err.downcast_ref::<Stopped>().is_some(), "{err:#}");
+        let text = std::fs::read_to_string(&cut).unwrap();
+        assert!(text.ends_with('\n'));
+        assert_eq!(text.lines().count(), 12);
+        let s = run_batch(&Campaign::independent(js), &p(&cut, true, None), |j, _| {
+            fake_run(j)
+        })
+        .unwrap();
+        assert_eq!((s.skipped, s.ran), (12, 38));
+        assert_eq!(std::fs::read(&full).unwrap(), std::fs::read(&cut).unwrap());
     }
 
     /// Three campaigns of four runs; each run's value is the previous one's
@@ -634,6 +699,7 @@ mod tests {
             resume,
             jobs: Some(jobs),
             progress: false,
+            stop: None,
         };
         let full = temp("campaign-full");
         run_batch(&cs, &p(&full, false, 2), learning_run).unwrap();
@@ -688,6 +754,7 @@ mod tests {
             resume: false,
             jobs: Some(2),
             progress: false,
+            stop: None,
         };
         let whole = temp("merge-whole");
         run_batch(&cs, &p(&whole), learning_run).unwrap();

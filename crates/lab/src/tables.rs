@@ -20,6 +20,28 @@ pub struct MetricColumn {
     pub decimals: usize,
 }
 
+/// A number with about six significant digits, in plain or scientific form.
+pub fn num(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if (1e-4..1e7).contains(&a) {
+        let digits = (5 - a.log10().floor() as i32).clamp(0, 10) as usize;
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        format!("{v:.5e}")
+    }
+}
+
 /// `I_R` with two decimals, `-` without runs.
 pub fn fmt_ir(s: &Summary) -> String {
     if s.runs == 0 {

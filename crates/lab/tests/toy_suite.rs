@@ -209,6 +209,7 @@ fn params(dir: &Path, resume: bool, jobs: usize) -> BatchParams {
         resume,
         jobs: Some(jobs),
         progress: false,
+        stop: None,
     }
 }
 

@@ -55,6 +55,7 @@ fn charts_draw_the_summary_numbers() {
         resume: false,
         jobs: Some(2),
         progress: false,
+        stop: None,
     };
     lab::suite::run(&suite, &params, None).unwrap();
     lab::report::write(&dir, &suite, false).unwrap();

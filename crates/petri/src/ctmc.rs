@@ -34,6 +34,7 @@ use hashbrown::HashMap;
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::gspn::Gspn;
+use crate::interrupt::Interrupt;
 use crate::marking::MarkingStore;
 use crate::net::{Params, PlaceId, TransitionId};
 use crate::reachability::{ExploreParams, ExploreStats, ReachabilityGraph};
@@ -243,6 +244,19 @@ impl CompiledGspn {
 
     /// Compiles the CTMC of an already generated reachability graph.
     pub fn from_graph(gspn: Gspn, rg: ReachabilityGraph) -> Result<CompiledGspn> {
+        Self::from_graph_interruptible(gspn, rg, Interrupt::NEVER)
+    }
+
+    /// [`from_graph`](Self::from_graph), stopped with
+    /// [`Error::Cancelled`] when `stop` is raised (checked between its
+    /// stages: see [`crate::interrupt`]).
+    pub fn from_graph_interruptible(
+        gspn: Gspn,
+        rg: ReachabilityGraph,
+        stop: Interrupt<'_>,
+    ) -> Result<CompiledGspn> {
+        const COMPILING: &str = "compiling the CTMC";
+        stop.check(COMPILING)?;
         let start = Instant::now();
         let mut tangible_id = vec![NONE; rg.num_markings()];
         let mut tangible_rg = Vec::with_capacity(rg.num_tangible());
@@ -276,6 +290,7 @@ impl CompiledGspn {
             (offsets, targets, ids, vec![(0u32, 1.0)], store)
         } else {
             let el = vanishing::eliminate(&gspn, &rg, &tangible_id)?;
+            stop.check(COMPILING)?;
             let mut offsets = Vec::with_capacity(n + 1);
             offsets.push(0u64);
             let (mut dst, mut ids) = (Vec::new(), Vec::new());
@@ -380,6 +395,7 @@ impl CompiledGspn {
         };
         incoming.split_diagonal();
 
+        stop.check(COMPILING)?;
         let (components, bottoms, transient) = if irreducible(&outgoing, &incoming, initial == [(0, 1.0)]) {
             (None, Vec::new(), Vec::new())
         } else {
@@ -507,6 +523,19 @@ impl CompiledGspn {
     /// [`Error::Singular`]), and a result that is not finite
     /// ([`Error::NotFinite`]) — never a NaN in the solution.
     pub fn solve_rates(&self, rates: &[f64], params: &SolveParams) -> Result<Solution> {
+        self.solve_rates_interruptible(rates, params, Interrupt::NEVER)
+    }
+
+    /// [`solve_rates`](Self::solve_rates), stopped with
+    /// [`Error::Cancelled`] when `stop` is raised (checked before each linear
+    /// solve and at every sweep of an iterative one: see
+    /// [`crate::interrupt`]).
+    pub fn solve_rates_interruptible(
+        &self,
+        rates: &[f64],
+        params: &SolveParams,
+        stop: Interrupt<'_>,
+    ) -> Result<Solution> {
         let start = Instant::now();
         params.validate()?;
         if rates.len() != self.gspn.num_transitions() {
@@ -549,7 +578,7 @@ impl CompiledGspn {
         let mut bottom_probabilities = Vec::new();
         match &self.components {
             None => {
-                let (x, i) = steady_state::solve(&chain, None, params)?;
+                let (x, i) = steady_state::solve(&chain, None, params, stop)?;
                 pi = x;
                 info = i;
                 bottom_probabilities.push(1.0);
@@ -573,7 +602,7 @@ impl CompiledGspn {
                         exit: &sub_exit,
                     };
                     let b: Vec<f64> = self.transient.iter().map(|&s| init[s as usize]).collect();
-                    let (x, ai) = steady_state::solve(&sub_chain, Some(&b), params)?;
+                    let (x, ai) = steady_state::solve(&sub_chain, Some(&b), params, stop)?;
                     absorption_residual = ai.residual;
                     for (&s, &xs) in self.transient.iter().zip(&x) {
                         let (a, b) = self.outgoing.range(s as usize);
@@ -600,7 +629,7 @@ impl CompiledGspn {
                         values: &values,
                         exit: &sub_exit,
                     };
-                    let (x, i) = steady_state::solve(&sub_chain, None, params)?;
+                    let (x, i) = steady_state::solve(&sub_chain, None, params, stop)?;
                     if states.len() >= largest {
                         largest = states.len();
                         info.method = i.method;

@@ -327,6 +327,13 @@ pub enum Error {
         /// The end time of each run.
         end_time: f64,
     },
+    /// A computation was stopped by its caller through an
+    /// [`Interrupt`](crate::Interrupt) (for example on Ctrl-C).
+    #[error("stopped on request while {during}")]
+    Cancelled {
+        /// What was being done, e.g. "generating the reachability graph".
+        during: &'static str,
+    },
     /// A simulation reached its safety cap on transition firings
     /// (`SimParams::max_events`) before the end of its runs.
     #[error(

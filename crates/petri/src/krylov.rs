@@ -34,6 +34,7 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::rows::Chain;
 use crate::steady_state::{SolveParams, residual};
 
@@ -227,7 +228,11 @@ fn normalised(x: &[f64]) -> Vec<f64> {
 
 /// Solves the stationary equations of an irreducible chain (`n ≥ 2`, every
 /// exit rate > 0). Returns the distribution and the iterations done.
-pub(crate) fn bicgstab(chain: &Chain<'_>, params: &SolveParams) -> Result<(Vec<f64>, usize)> {
+pub(crate) fn bicgstab(
+    chain: &Chain<'_>,
+    params: &SolveParams,
+    stop: Interrupt<'_>,
+) -> Result<(Vec<f64>, usize)> {
     let n = chain.n();
     // A few Gauss–Seidel sweeps give the starting point and the pinned state.
     let mut x = vec![1.0 / n as f64; n];
@@ -285,6 +290,7 @@ pub(crate) fn bicgstab(chain: &Chain<'_>, params: &SolveParams) -> Result<(Vec<f
         // `(r̂, r)` of the next iteration, computed with `r`.
         let mut rho_next = dot(&rhat, &r);
         while it < params.max_iterations {
+            stop.check(crate::steady_state::SOLVING)?;
             it += 1;
             let rho_new = rho_next;
             if rho_new == 0.0 || !rho_new.is_finite() {

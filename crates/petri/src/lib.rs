@@ -34,6 +34,7 @@
 //! | structural analysis | [`incidence`], [`invariants`] |
 //! | behavioural properties | [`properties`] |
 //! | discrete-event simulation | [`simulation`] |
+//! | stopping a long computation from another thread | [`interrupt`] |
 //! | scalable benchmark nets | [`families`] |
 #![warn(missing_docs)]
 
@@ -43,6 +44,7 @@ pub mod expr;
 pub mod families;
 pub mod gspn;
 pub mod incidence;
+pub mod interrupt;
 pub mod invariants;
 pub mod io;
 pub mod krylov;
@@ -62,6 +64,7 @@ pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
 pub use gspn::{Gspn, MarkingKind, Timing};
 pub use incidence::{DisplayIncidence, Incidence};
+pub use interrupt::Interrupt;
 pub use invariants::{
     DisplayInvariant, DisplayInvariants, FarkasInfo, FarkasParams, InvariantKind, Invariants, NamedInvariant,
     NamedTerm, p_invariants, structural_bounds, t_invariants,

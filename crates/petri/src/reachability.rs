@@ -25,6 +25,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::gspn::{Gspn, MarkingKind};
+use crate::interrupt::Interrupt;
 use crate::marking::{Layout, MarkingStore, bits_for};
 use crate::net::TransitionId;
 use crate::scc::Successors;
@@ -149,6 +150,17 @@ impl ReachabilityGraph {
     /// [`ExploreParams::max_memory`]), [`Error::StateLimit`],
     /// [`Error::TokenOverflow`].
     pub fn explore(gspn: &Gspn, params: &ExploreParams) -> Result<ReachabilityGraph> {
+        Self::explore_interruptible(gspn, params, Interrupt::NEVER)
+    }
+
+    /// [`explore`](Self::explore), stopped with [`Error::Cancelled`] when
+    /// `stop` is raised (checked before each round of expansions: see
+    /// [`crate::interrupt`]).
+    pub fn explore_interruptible(
+        gspn: &Gspn,
+        params: &ExploreParams,
+        stop: Interrupt<'_>,
+    ) -> Result<ReachabilityGraph> {
         let start = Instant::now();
         let m0 = gspn.initial_marking().to_vec();
         let mut store = MarkingStore::new(Layout::for_marking(&m0, 1));
@@ -177,6 +189,7 @@ impl ReachabilityGraph {
         let threads = rayon::current_num_threads();
         let mut i = 0usize;
         while i < store.len() {
+            stop.check("generating the reachability graph")?;
             // The round's size changes the speed, never the result.
             let parallel = threads > 1 && store.len() >= PARALLEL_FROM;
             let end = (i + if parallel {

@@ -33,10 +33,14 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::linear;
 use crate::rows::Chain;
 #[cfg(test)]
 use crate::rows::Rows;
+
+/// What [`Error::Cancelled`] says a stopped solve was doing.
+pub(crate) const SOLVING: &str = "solving the steady state";
 
 /// How to solve the balance equations.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -164,8 +168,10 @@ pub(crate) fn solve(
     rows: &Chain<'_>,
     rhs: Option<&[f64]>,
     params: &SolveParams,
+    stop: Interrupt<'_>,
 ) -> Result<(Vec<f64>, SolveInfo)> {
     params.validate()?;
+    stop.check(SOLVING)?;
     let start = Instant::now();
     let n = rows.n();
     if n == 0 {
@@ -213,13 +219,13 @@ pub(crate) fn solve(
     };
     let (x, name, iterations) = match method {
         Method::Bicgstab => {
-            let (x, it) = crate::krylov::bicgstab(rows, params)?;
+            let (x, it) = crate::krylov::bicgstab(rows, params, stop)?;
             (x, "bicgstab", it)
         }
         Method::Direct if rhs.is_none() && n <= linear::DENSE_LIMIT => (gth(rows)?, "direct-gth", 0),
         Method::Direct => (solve_direct(rows, rhs)?, "direct-lu", 0),
         _ => {
-            let (x, it) = gauss_seidel(rows, rhs, params)?;
+            let (x, it) = gauss_seidel(rows, rhs, params, stop)?;
             (
                 x,
                 if params.omega == 1.0 {
@@ -236,7 +242,7 @@ pub(crate) fn solve(
     // badly conditioned chains, and a wrong answer must not pass silently.
     if name == "direct-lu" && residual_now > DIRECT_ACCEPT.max(params.tolerance) {
         if params.method == Method::Auto && rhs.is_none() {
-            let (x, it) = crate::krylov::bicgstab(rows, params)?;
+            let (x, it) = crate::krylov::bicgstab(rows, params, stop)?;
             let r = residual(rows, &x, rhs);
             return Ok((
                 x,
@@ -402,7 +408,12 @@ fn solve_direct(rows: &Chain<'_>, rhs: Option<&[f64]>) -> Result<Vec<f64>> {
     }
 }
 
-fn gauss_seidel(rows: &Chain<'_>, rhs: Option<&[f64]>, params: &SolveParams) -> Result<(Vec<f64>, usize)> {
+fn gauss_seidel(
+    rows: &Chain<'_>,
+    rhs: Option<&[f64]>,
+    params: &SolveParams,
+    stop: Interrupt<'_>,
+) -> Result<(Vec<f64>, usize)> {
     let n = rows.n();
     let omega = params.omega;
     let mut x = match rhs {
@@ -411,6 +422,7 @@ fn gauss_seidel(rows: &Chain<'_>, rhs: Option<&[f64]>, params: &SolveParams) -> 
     };
     let mut last = f64::INFINITY;
     for it in 1..=params.max_iterations {
+        stop.check(SOLVING)?;
         let (mut imbalance, mut flow) = (0.0f64, 0.0f64);
         for j in 0..n {
             let d = rows.exit(j);
@@ -513,7 +525,7 @@ mod tests {
                     method,
                     ..SolveParams::default()
                 };
-                let (x, info) = solve(&rows, None, &p).unwrap();
+                let (x, info) = solve(&rows, None, &p, Interrupt::NEVER).unwrap();
                 assert!(info.residual <= 1e-12, "{method:?} {n}: {}", info.residual);
                 for i in 0..n {
                     // LU is normwise accurate (absolute error ~ ε); iterative to its residual.
@@ -537,7 +549,7 @@ mod tests {
         // Rates 1e-3 next to 1e3, as in the supervisor net.
         let owned = birth_death(4, 1e-3, 1e3);
         let rows = owned.chain();
-        let (x, info) = solve(&rows, None, &SolveParams::default()).unwrap();
+        let (x, info) = solve(&rows, None, &SolveParams::default(), Interrupt::NEVER).unwrap();
         let exact = closed_form(4, 1e-6);
         for i in 0..4 {
             assert!(
@@ -554,7 +566,7 @@ mod tests {
         // the rescaling, then ∞/∞ = NaN).
         let n = 150;
         let owned = birth_death(n, 1.0, 1e-6);
-        let (x, info) = solve(&owned.chain(), None, &SolveParams::default()).unwrap();
+        let (x, info) = solve(&owned.chain(), None, &SolveParams::default(), Interrupt::NEVER).unwrap();
         assert_eq!(info.method, "direct-gth");
         assert!(x.iter().all(|v| v.is_finite() && *v >= 0.0));
         for j in 0..5 {
@@ -578,7 +590,7 @@ mod tests {
             exit: vec![2.0],
         };
         let rows = owned.chain();
-        let (x, _) = solve(&rows, Some(&[1.0]), &SolveParams::default()).unwrap();
+        let (x, _) = solve(&rows, Some(&[1.0]), &SolveParams::default(), Interrupt::NEVER).unwrap();
         assert!((x[0] - 0.5).abs() < 1e-15);
     }
 
@@ -591,11 +603,14 @@ mod tests {
             max_iterations: 3,
             ..SolveParams::default()
         };
-        assert!(matches!(solve(&rows, None, &p), Err(Error::NoConvergence { .. })));
+        assert!(matches!(
+            solve(&rows, None, &p, Interrupt::NEVER),
+            Err(Error::NoConvergence { .. })
+        ));
         let bad = SolveParams {
             omega: 2.5,
             ..SolveParams::default()
         };
-        assert!(solve(&rows, None, &bad).is_err());
+        assert!(solve(&rows, None, &bad, Interrupt::NEVER).is_err());
     }
 }

@@ -543,6 +543,15 @@ fn pnml_written_for_other_tools_is_standard() {
         "{text}"
     );
     assert!(text.contains("<type value=\"inhibitor\"/>"));
+    // pm4py (and ProM) read inhibitor arcs from `<arctype>` only.
+    assert!(
+        text.contains("<arctype><text>inhibitor</text></arctype>"),
+        "{text}"
+    );
+    assert_eq!(
+        text.matches("<arctype>").count(),
+        net.arcs.iter().filter(|a| a.kind == ArcKind::Inhibitor).count()
+    );
     assert!(
         text.contains("<parameter name=\"N\" kind=\"int\" suggested=\"3\" doc=\"pallets\"/>"),
         "{text}"
@@ -826,5 +835,48 @@ fn nested_pages_references_and_inhibitor_spellings() {
             (ArcKind::Input, Expr::Num(1.0)),
             (ArcKind::Inhibitor, Expr::Num(1.0))
         ]
+    );
+}
+
+// ---------------------------------------------------------------------------
+// pm4py
+// ---------------------------------------------------------------------------
+
+/// A file written by pm4py (`pm4py.write_pnml`, see `tests/data/README.md`):
+/// arc weights, an inhibitor arc as `<arctype>`, an invisible transition
+/// (ProM's tool-specific content), two transitions with the same label, a
+/// final marking.
+#[test]
+fn pm4py_pnml_with_an_inhibitor_arc_and_shared_labels() {
+    let net = io::read_file("tests/data/pm4py/inhibitor_and_labels.pnml").unwrap();
+    let mut places: Vec<&str> = net.places.iter().map(|p| p.name.as_str()).collect();
+    places.sort_unstable();
+    assert_eq!(places, ["end", "guard", "mid", "start"]);
+    // Labels name transitions; the label two transitions share falls back to
+    // their ids; the invisible transition is known by its id.
+    let mut transitions: Vec<&str> = net.transitions.iter().map(|t| t.name.as_str()).collect();
+    transitions.sort_unstable();
+    assert_eq!(transitions, ["register", "t2", "t3", "tau"]);
+    assert_eq!(net.arcs.len(), 9);
+    assert_eq!(
+        arcs_between(&net, "guard", "register"),
+        [(ArcKind::Inhibitor, Expr::from(1u32))]
+    );
+    assert_eq!(
+        arcs_between(&net, "start", "register"),
+        [(ArcKind::Input, Expr::from(2u32))]
+    );
+    assert_eq!(
+        arcs_between(&net, "end", "t3"),
+        [(ArcKind::Output, Expr::from(3u32))]
+    );
+    let start = &net.places[net.place_id("start").unwrap().index()];
+    assert_eq!(start.initial, Expr::from(4u32));
+    // And through our writer and reader again, unchanged.
+    let text = io::write_string(&net, Format::Pnml).unwrap();
+    assert_same(
+        &io::read_str(&text, Format::Pnml, "again.pnml").unwrap(),
+        &net,
+        "pm4py file",
     );
 }

@@ -60,3 +60,35 @@ pub fn rebuild(info: &SuiteInfo) -> Result<Box<dyn Suite>> {
     }
     Ok(suite)
 }
+
+/// The suite `what` names on a command line: one registered suite, or
+/// scenario files (`.toml`) run as the `files` suite.
+pub fn load<S: AsRef<str>>(what: &[S], runs: Option<u32>) -> Result<Box<dyn Suite>> {
+    if let [name] = what
+        && !name.as_ref().ends_with(".toml")
+    {
+        return build(
+            name.as_ref(),
+            &SuiteArgs {
+                runs,
+                files: Vec::new(),
+            },
+        );
+    }
+    if let Some(bad) = what.iter().map(AsRef::as_ref).find(|w| !w.ends_with(".toml")) {
+        bail!(
+            "unknown suite `{bad}`: the suites are {}; or give scenario files (.toml)",
+            names()
+        );
+    }
+    build(
+        files::REGISTRATION.name,
+        &SuiteArgs {
+            runs,
+            files: what
+                .iter()
+                .map(|w| std::path::PathBuf::from(w.as_ref()))
+                .collect(),
+        },
+    )
+}

@@ -26,8 +26,9 @@
 //!   `<value>Default,1</value>` and TAPAAL's `weight` attribute are
 //!   accepted).
 //! - **Inhibitor arcs**, in every common encoding: an arc `type` attribute,
-//!   or a `<type>` child (its `value` attribute, or its `<text>`/`<value>`
-//!   child or own text), saying `inhibitor` or `inhibition` (any case), or
+//!   or a `<type>` child — or an `<arctype>` child, as pm4py and ProM write
+//!   it — (its `value` attribute, or its `<text>`/`<value>` child or own
+//!   text), saying `inhibitor` or `inhibition` (any case), or
 //!   TAPAAL's `tapnInhibitor`. `normal`, `regular`, `timed` and `default`
 //!   are ordinary arcs; other arc types (reset, transport, read…) are refused.
 //! - **Transitions** of a plain P/T net are timed, with no rate (`rate:
@@ -57,7 +58,8 @@
 //! ASCII letters, digits, `_`, `-` and `.` become `_`, a leading `_` is added
 //! before a digit, and `_2`, `_3`… keep them unique); every node also gets its
 //! exact name as `<name><text>`, so the naming rule above reads it back.
-//! Inhibitor arcs carry `<type value="inhibitor"/>`.
+//! Inhibitor arcs carry `<type value="inhibitor"/>` and, for pm4py and
+//! ProM, `<arctype><text>inhibitor</text></arctype>`.
 //!
 //! Everything a plain P/T net cannot say goes into `<toolspecific
 //! tool="petrinav" version="1">` elements, each attribute written as
@@ -104,7 +106,10 @@
 //!         <multiplicity><value>K</value></multiplicity> <!-- when not a plain number -->
 //!       </toolspecific>
 //!     </arc>
-//!     <arc id="a1" source="P3" target="t5"><type value="inhibitor"/></arc>
+//!     <arc id="a1" source="P3" target="t5">
+//!       <type value="inhibitor"/>
+//!       <arctype><text>inhibitor</text></arctype>
+//!     </arc>
 //!   </page>
 //! </net>
 //! ```
@@ -725,13 +730,13 @@ impl Reader<'_> {
     }
 
     /// Whether an arc is an inhibitor arc, from its `type` attribute or
-    /// `<type>` child.
+    /// `<type>` (or pm4py's `<arctype>`) child.
     fn is_inhibitor(&self, arc: Node<'_, '_>, describe: &dyn Fn() -> String) -> Result<bool> {
         let mut texts: Vec<(String, Node<'_, '_>)> = Vec::new();
         if let Some(t) = arc.attribute("type") {
             texts.push((t.to_string(), arc));
         }
-        for ty in elements(arc).filter(|n| n.tag_name().name() == "type") {
+        for ty in elements(arc).filter(|n| matches!(n.tag_name().name(), "type" | "arctype")) {
             let t = ty
                 .attribute("value")
                 .map_or_else(|| value_text(ty), str::to_string);
@@ -1057,6 +1062,8 @@ pub fn write_pnml(net: &Net) -> Result<String> {
         }
         if a.kind == ArcKind::Inhibitor {
             inner.push_str("        <type value=\"inhibitor\"/>\n");
+            // pm4py's form (and ProM's), which ignores `<type>`.
+            inner.push_str("        <arctype><text>inhibitor</text></arctype>\n");
         }
         if !is_plain(&a.multiplicity, 1.0) {
             inner.push_str("        ");

@@ -1,0 +1,84 @@
+"""petrinav from Python: the GSPN engine, the tour-guide robot and the lab.
+
+Load a net, solve its steady state, read measures as numbers and numpy
+arrays::
+
+    import petrinav as pn
+
+    net = pn.load("kanban.pnpro", params={"N": 3})  # .pnpro / .pnml / .toml
+    sol = net.solve()                                # as `petrinav gspn solve`
+    sol.probabilities                                # numpy float64, one per tangible marking
+    sol.probability("#Pm1 >= 1"), sol.mean_tokens("Pm1"), sol.throughput("tout4")
+    net.save("kanban.pnml")                          # opens in pm4py
+
+The same engine as the ``petrinav`` command line, called in-process: the
+numbers are the command line's to the last bit, and errors are
+:class:`petrinav.Error` exceptions carrying its messages. Long calls
+release the GIL and stop on Ctrl-C (``KeyboardInterrupt``).
+
+Modules: :mod:`petrinav.supervisor` (the tour-guide supervisor's
+decision), :mod:`petrinav.nav` (guided tours on building maps),
+:mod:`petrinav.lab` (experiment suites), :mod:`petrinav.errors`.
+"""
+
+from . import errors
+from ._petrinav import (
+    Arc,
+    Net,
+    Place,
+    Solution,
+    StateSpace,
+    Transition,
+    __version__,
+    family,
+    formats,
+    load,
+    loads,
+)
+from .errors import (
+    Error,
+    FileError,
+    FormatError,
+    LabError,
+    MapError,
+    MeasureError,
+    NavError,
+    PanicError,
+    ParameterError,
+    ParseError,
+    SimulationError,
+    SolveError,
+    StateLimitError,
+)
+from . import lab, nav, supervisor
+
+__all__ = [
+    "Arc",
+    "Error",
+    "FileError",
+    "FormatError",
+    "LabError",
+    "MapError",
+    "MeasureError",
+    "NavError",
+    "Net",
+    "PanicError",
+    "ParameterError",
+    "ParseError",
+    "Place",
+    "SimulationError",
+    "Solution",
+    "SolveError",
+    "StateLimitError",
+    "StateSpace",
+    "Transition",
+    "__version__",
+    "errors",
+    "family",
+    "formats",
+    "lab",
+    "load",
+    "loads",
+    "nav",
+    "supervisor",
+]
