@@ -34,6 +34,17 @@
 //! gets back to work after a failure at λ15 = 1/300 s: a failed mission
 //! costs what the longest mission does.
 //!
+//! **Decision — what contour tracking means at a Warning.** Decided while
+//! localized, the contour hypothesis is the source's: contour tracking to
+//! the end. Decided at a Warning, it is *contour tracking until localized,
+//! then AutoMove* (`p` = 0, λ1 slow, λ2 fast: t4 hands over the moment P5
+//! is marked), `f_cont` counting both completions — the real choice then,
+//! since the next decision comes at the return to Success anyway. With
+//! the source's hypothesis at a Warning, contour tracking's slow completion
+//! after the recovery counted against it, and the supervisor kept AutoMove
+//! driving lost where the rule's contour tracking reached more goals (the
+//! museum day: 86 % against the rule's 92 %, 144 missions each).
+//!
 //! The net is checked when compiled ([`super::check`]): as written and in
 //! each of the four variants it must be bounded, live, free of dead
 //! markings and have a home state, or [`CreditSupervisor::from_net`]
@@ -114,7 +125,9 @@ pub struct CreditDecision {
     /// Throughput of `t9` (AutoMove completes) under the AutoMove
     /// hypothesis, from the localizer's current state.
     pub f_auto: f64,
-    /// Throughput of `t10` under the contour hypothesis.
+    /// Throughput of `t10` under the contour hypothesis; at a Warning (lost),
+    /// of `t9` + `t10` under the hypothesis *contour tracking until
+    /// localized, then AutoMove*.
     pub f_cont: f64,
     /// AutoMove iff `f_auto > f_cont`.
     pub choice: Behaviour,
@@ -129,7 +142,7 @@ pub struct CreditDecision {
 struct Compiled {
     compiled: CompiledGspn,
     rate_of: Vec<Option<usize>>,
-    done: TransitionId,
+    done: Vec<TransitionId>,
     failures: Vec<TransitionId>,
     p6: PlaceId,
     switch: (f64, f64),
@@ -157,6 +170,22 @@ const FAILURES: [&str; 5] = ["t11", "t12", "t15", "t16", "t17"];
 
 impl Compiled {
     fn new(net: &Net, behaviour: Behaviour, without: &[&str]) -> Result<Compiled, SupervisorError> {
+        let (switch, done): ((f64, f64), &[&str]) = match behaviour {
+            Behaviour::AutoMove => ((SLOW_SWITCH, FAST_SWITCH), &["t9"]),
+            Behaviour::Contour => ((FAST_SWITCH, SLOW_SWITCH), &["t10"]),
+        };
+        Compiled::with(net, behaviour, without, switch, done)
+    }
+
+    /// A variant starting with `behaviour` (`p` = 1 or 0), switching with
+    /// `switch` = (λ1, λ2), whose completions are `done`.
+    fn with(
+        net: &Net,
+        behaviour: Behaviour,
+        without: &[&str],
+        switch: (f64, f64),
+        done: &[&str],
+    ) -> Result<Compiled, SupervisorError> {
         let mut n = net.clone();
         for t in without {
             n = n.without_transition(t)?;
@@ -191,21 +220,15 @@ impl Compiled {
         let compiled = CompiledGspn::build(&gspn, &ExploreParams::default())?;
         let g = compiled.gspn();
         let model = |e: petri::Error| SupervisorError::Model(e.to_string());
-        let done = g
-            .transition(match behaviour {
-                Behaviour::AutoMove => "t9",
-                Behaviour::Contour => "t10",
-            })
-            .map_err(model)?;
+        let done = done
+            .iter()
+            .map(|t| g.transition(t).map_err(model))
+            .collect::<Result<Vec<_>, _>>()?;
         let failures = FAILURES
             .iter()
             .map(|t| g.transition(t).map_err(model))
             .collect::<Result<Vec<_>, _>>()?;
         let p6 = g.place("P6").map_err(model)?;
-        let switch = match behaviour {
-            Behaviour::AutoMove => (SLOW_SWITCH, FAST_SWITCH),
-            Behaviour::Contour => (FAST_SWITCH, SLOW_SWITCH),
-        };
         Ok(Compiled {
             compiled,
             rate_of,
@@ -236,6 +259,8 @@ pub struct CreditSupervisor {
     net_id: String,
     check: NetCheck,
     variants: Vec<Compiled>,
+    /// Contour tracking while lost, AutoMove from the return to Success on.
+    until_localized: Compiled,
 }
 
 /// The variants [`CreditSupervisor`] solves, for [`check_net`].
@@ -276,10 +301,22 @@ impl CreditSupervisor {
             .iter()
             .map(|(_, b, _, without)| Compiled::new(net, *b, without))
             .collect::<Result<Vec<_>, _>>()?;
+        // The same structure as the contour hypothesis restarting lost
+        // (checked above), with AutoMove's switching rates: contour
+        // tracking hands over to AutoMove at once when localized (t4 reads
+        // P5) and never takes over again (λ1 slow).
+        let until_localized = Compiled::with(
+            net,
+            Behaviour::Contour,
+            &["t0", "t18", "t19"],
+            (SLOW_SWITCH, FAST_SWITCH),
+            &["t9", "t10"],
+        )?;
         Ok(CreditSupervisor {
             net_id: super::net_id(net)?,
             check,
             variants,
+            until_localized,
         })
     }
 
@@ -323,11 +360,15 @@ impl CreditSupervisor {
             }
         }
         let auto = self.variant(Behaviour::AutoMove, localized);
-        let cont = self.variant(Behaviour::Contour, localized);
+        let cont = if localized {
+            self.variant(Behaviour::Contour, true)
+        } else {
+            &self.until_localized
+        };
         let a = auto.solve(rates)?;
         let c = cont.solve(rates)?;
-        let f_auto = a.throughput(auto.done);
-        let f_cont = c.throughput(cont.done);
+        let f_auto: f64 = auto.done.iter().map(|&t| a.throughput(t)).sum();
+        let f_cont: f64 = cont.done.iter().map(|&t| c.throughput(t)).sum();
         let choice = if f_auto > f_cont {
             Behaviour::AutoMove
         } else {
