@@ -40,14 +40,27 @@
 //! | λ7, λ8 | progress speed of each behaviour while localized over the remaining length |
 //!
 //! **Decision — per context, where the data show it.** Each rate is
-//! estimated per context with one pseudo-event at the pooled rate (all
-//! contexts together), which itself has one pseudo-event at the model
-//! file's prior: `λ_c = (n_c + 1)/(T_c + 1/λ_pool)`,
-//! `λ_pool = (n + 1)/(T + 1/λ_prior)`. A context with little exposure
-//! takes the pooled rate; one with much takes its own. Progress speeds
-//! likewise, with 30 s of pseudo-exposure at the pooled speed, itself with
-//! 30 s at the calibration runs' speed (reference length over mean time).
-//! Nothing learnt is ever 0, infinite or NaN.
+//! estimated per context with one pseudo-event at a smoother rate:
+//! `λ_c = (n_c + 1)/(T_c + 1/μ_c)`. A context with little exposure takes
+//! the smoother's rate; one with much takes its own. For the localizer's
+//! and the planner's rates (λ3–λ6) and AutoMove's Abnormal failures (λ9)
+//! the smoother is the pooled rate (all contexts together, itself with one
+//! pseudo-event at the model file's prior). For the rates that come in a
+//! pair, one per behaviour — the failures while localized (λ13, λ14), the
+//! failures in Warning (λ12, λ10) and the progress speeds (λ7, λ8) — the
+//! smoother is a main-effects model, `μ_bc = a_b · g_c`: the crowd
+//! multiplies both behaviours' rates alike unless their own data say
+//! otherwise ([`main_effects`], fitted by iterative proportional fitting
+//! with the prior spread over the contexts as one pseudo-event per
+//! behaviour). Reason: a supervisor that has driven AutoMove through
+//! crowds but contour tracking only in empty halls would otherwise take
+//! contour tracking's empty-hall speed and safety for the crowd's — and
+//! the museum day showed it starting missions in contour tracking among 60
+//! visitors, where it fails (`crates/nav/EXPERIMENTS.md`).
+//! Progress speeds likewise, with 30 s of pseudo-exposure at the model's
+//! speed, the model having 30 s per behaviour at its calibration speed
+//! (reference length over mean time). Nothing learnt is ever 0, infinite
+//! or NaN.
 
 use robot::Vec2;
 
@@ -364,21 +377,86 @@ impl CreditModel {
         set(4, shrunk(&c.warning, &p.warning, prior.get(4)));
         set(5, shrunk(&c.normal, &p.normal, prior.get(5)));
         set(6, shrunk(&c.abnormal, &p.abnormal, prior.get(6)));
-        for (k, &i) in FAIL_RATE.iter().enumerate() {
-            set(i, shrunk(&c.failures[k], &p.failures[k], prior.get(i)));
+        let ctx = context.min(CONTEXTS - 1);
+        set(
+            9,
+            shrunk(
+                &c.failures[FAIL_AUTO_ABNORMAL],
+                &p.failures[FAIL_AUTO_ABNORMAL],
+                prior.get(9),
+            ),
+        );
+        // Failure pairs: (AutoMove's class, contour's class).
+        for (auto, cont) in [
+            (FAIL_AUTO_OK, FAIL_CONT_OK),
+            (FAIL_AUTO_WARNING, FAIL_CONT_WARNING),
+        ] {
+            let classes = [auto, cont];
+            let table = |f: fn(&Exposure) -> f64| {
+                classes.map(|k| std::array::from_fn(|j| f(&self.contexts[j].failures[k])))
+            };
+            let priors = classes.map(|k| prior.get(FAIL_RATE[k]));
+            let mu = main_effects(
+                table(|e| e.events),
+                table(|e| e.time_s),
+                priors.map(|r| (1.0, 1.0 / r)),
+            );
+            for (b, &k) in classes.iter().enumerate() {
+                set(FAIL_RATE[k], c.failures[k].rate(mu[b][ctx]));
+            }
         }
         let remaining = remaining_m.max(0.0);
+        let progress = |f: fn(&(f64, f64)) -> f64| -> [[f64; CONTEXTS]; 2] {
+            std::array::from_fn(|b| std::array::from_fn(|j| f(&self.contexts[j].progress[b])))
+        };
+        let v0 = self.calibration_speed_mps.map(|v| v.max(1e-3));
+        let mu = main_effects(
+            progress(|p| p.1.max(0.0)),
+            progress(|p| p.0),
+            v0.map(|v| (v * SPEED_PRIOR_S, SPEED_PRIOR_S)),
+        );
         for (k, i) in [(0usize, 7usize), (1, 8)] {
-            let v0 = self.calibration_speed_mps[k].max(1e-3);
-            let (pt, pm) = p.progress[k];
-            let v_pool = (pm + v0 * SPEED_PRIOR_S) / (pt + SPEED_PRIOR_S);
             let (ct, cm) = c.progress[k];
-            let v = ((cm + v_pool * SPEED_PRIOR_S) / (ct + SPEED_PRIOR_S)).max(1e-3);
+            let v = ((cm + mu[k][ctx] * SPEED_PRIOR_S) / (ct + SPEED_PRIOR_S)).max(1e-3);
             set(i, 1.0 / (remaining / v).max(MIN_REMAINING_S));
         }
         set(15, 1.0 / FAILURE_COST_S);
         r
     }
+}
+
+/// The main-effects (multiplicative) model of a rate measured per
+/// behaviour `b` (AutoMove, contour) and crowd context `c`:
+/// `μ_bc = a_b · g_c`, fitted to the counts `n` (events, or metres of
+/// progress) over the exposures `t` (seconds) by iterative proportional
+/// fitting — the maximum-likelihood log-linear Poisson model with a
+/// behaviour and a context effect and no interaction (Bishop, Fienberg
+/// and Holland, *Discrete Multivariate Analysis*, ch. 3). Each
+/// behaviour's `pseudo = (count, exposure)` is spread evenly over the
+/// contexts first, so that every margin is positive and a table without
+/// data gives `μ_bc = count / exposure`, the prior. 60 sweeps of a 2 × 3
+/// table: microseconds.
+pub fn main_effects(
+    n: [[f64; CONTEXTS]; 2],
+    t: [[f64; CONTEXTS]; 2],
+    pseudo: [(f64, f64); 2],
+) -> [[f64; CONTEXTS]; 2] {
+    let share = CONTEXTS as f64;
+    let n: [[f64; CONTEXTS]; 2] = std::array::from_fn(|b| n[b].map(|x| x + pseudo[b].0 / share));
+    let t: [[f64; CONTEXTS]; 2] = std::array::from_fn(|b| t[b].map(|x| x + pseudo[b].1 / share));
+    let mut a = [1.0; 2];
+    let mut g = [1.0; CONTEXTS];
+    for _ in 0..60 {
+        for b in 0..2 {
+            let exposure: f64 = (0..CONTEXTS).map(|c| t[b][c] * g[c]).sum();
+            a[b] = n[b].iter().sum::<f64>() / exposure;
+        }
+        for c in 0..CONTEXTS {
+            let exposure: f64 = (0..2).map(|b| t[b][c] * a[b]).sum();
+            g[c] = (n[0][c] + n[1][c]) / exposure;
+        }
+    }
+    std::array::from_fn(|b| std::array::from_fn(|c| a[b] * g[c]))
 }
 
 /// Adds a run's segments and its credited failure to `contexts`.
@@ -536,10 +614,17 @@ mod tests {
         assert!((busy.failures[FAIL_AUTO_OK].events - 0.75).abs() < 1e-12);
         assert!((busy.failures[FAIL_CONT_OK].events - 0.25).abs() < 1e-12);
         // Rates: λ12 in the crowd from 1 failure in 5 s, shrunk towards the
-        // pooled rate (1 failure in 5 s too, prior 0.001).
+        // main-effects model of the Warning failures (AutoMove's 1 in 5 s
+        // in the crowd, contour never in Warning; priors 0.001 and λ10's).
         let r = m.rates(2, 10.0);
-        let pool = 2.0 / (5.0 + 1000.0);
-        assert!((r.get(12) - 2.0 / (5.0 + 1.0 / pool)).abs() < 1e-12);
+        let prior = CreditRates::initial();
+        let mut n = [[0.0; CONTEXTS]; 2];
+        let mut t = [[0.0; CONTEXTS]; 2];
+        n[0][2] = 1.0;
+        t[0][2] = 5.0;
+        let mu = main_effects(n, t, [(1.0, 1.0 / prior.get(12)), (1.0, 1.0 / prior.get(10))]);
+        assert!((r.get(12) - 2.0 / (5.0 + 1.0 / mu[0][2])).abs() < 1e-12);
+        assert!(mu[0][2] > prior.get(12) && mu[0][2] < 2.0 / 5.0, "{}", mu[0][2]);
         // Progress speed in the quiet context: 20 m in 40 s, with 30 s at
         // the pooled speed.
         let v0 = 20.0 / 40.0;
@@ -550,6 +635,69 @@ mod tests {
         for i in 1..=15 {
             assert!(r.get(i).is_finite() && r.get(i) > 0.0, "λ{i}");
         }
+    }
+
+    #[test]
+    fn the_main_effects_model_fits_a_multiplicative_table_exactly() {
+        // Rates a_b · g_c with a = (0.01, 0.04), g = (1, 2, 5): the fit
+        // returns them whatever the exposures.
+        let rate = |b: usize, c: usize| [0.01, 0.04][b] * [1.0, 2.0, 5.0][c];
+        let t = [[100.0, 50.0, 10.0], [30.0, 300.0, 7.0]];
+        let n = std::array::from_fn(|b| std::array::from_fn(|c| rate(b, c) * t[b][c]));
+        let mu = main_effects(n, t, [(0.0, 0.0), (0.0, 0.0)]);
+        for b in 0..2 {
+            for c in 0..CONTEXTS {
+                assert!(
+                    (mu[b][c] / rate(b, c) - 1.0).abs() < 1e-9,
+                    "{b} {c}: {}",
+                    mu[b][c]
+                );
+            }
+        }
+        // No data: the prior.
+        let mu = main_effects(
+            [[0.0; CONTEXTS]; 2],
+            [[0.0; CONTEXTS]; 2],
+            [(1.0, 1000.0), (1.0, 250.0)],
+        );
+        for c in 0..CONTEXTS {
+            assert!((mu[0][c] - 0.001).abs() < 1e-15 && (mu[1][c] - 0.004).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn a_behaviour_never_seen_in_a_crowd_inherits_what_the_crowd_does_to_the_other() {
+        use SegmentEnd::Mission;
+        let (a, c) = (Behaviour::AutoMove, Behaviour::Contour);
+        let mut log = vec![calibration(a, 40.0), calibration(c, 80.0)];
+        // Both behaviours in the quiet hall: AutoMove 0.5 m/s, contour
+        // 0.25 m/s, neither fails. AutoMove in crowds: 0.2 m/s, one
+        // failure in 400 s localized.
+        for k in 0..10 {
+            log.push(mission(k, "goal", vec![seg(a, true, 0, 40.0, 20.0, Mission)]));
+            log.push(mission(
+                100 + k,
+                "goal",
+                vec![seg(c, true, 0, 80.0, 20.0, Mission)],
+            ));
+            let outcome = if k < 5 { "goal" } else { "collision" };
+            log.push(mission(
+                200 + k,
+                outcome,
+                vec![seg(a, true, 2, 80.0, 16.0, Mission)],
+            ));
+        }
+        let m = CreditModel::learn(&log).unwrap();
+        let (quiet, crowded) = (m.rates(0, 20.0), m.rates(2, 20.0));
+        // Contour tracking's speed in the crowd is taken down by about
+        // AutoMove's factor (0.2 / 0.5), its failure rate up with it.
+        let slow = crowded.get(8) / quiet.get(8);
+        assert!(slow > 0.3 && slow < 0.6, "{slow}");
+        let worse = crowded.get(14) / quiet.get(14);
+        assert!(worse > 3.0, "{worse}");
+        // AutoMove's own rates stay close to its data.
+        let v = 20.0 * crowded.get(7);
+        assert!((v - 0.2).abs() < 0.03, "{v}");
     }
 
     #[test]
