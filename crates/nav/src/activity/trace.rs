@@ -1,5 +1,5 @@
-//! The behaviour activity trace and the dead-lock detector (spec:
-//! activity-trace.md; Skrzypczyk).
+//! The behaviour activity trace and the dead-lock detector
+//! (docs/activity-trace.md; Skrzypczyk).
 //!
 //! The trace is the time-ordered list of characteristic points `CP_k` — the
 //! robot's position when event `k` happened:

@@ -1,6 +1,6 @@
 //! Contour tracking: following the contour of walls, exhibits (and people)
 //! at a set distance from the raw laser scan, every control cycle, and
-//! leaving it towards the goal when the way is clear (tour-guide.md).
+//! leaving it towards the goal when the way is clear (docs/tour-guide.md).
 //!
 //! **Following.** The contour is the set of scan points on the followed
 //! side (left or right; bearings from 45° across the front to 180° on that

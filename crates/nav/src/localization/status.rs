@@ -1,4 +1,4 @@
-//! The localizer's Success / Warning state machine (tour-guide.md,
+//! The localizer's Success / Warning state machine (docs/tour-guide.md,
 //! *Localizer*).
 //!
 //! At every filter iteration the scan is scored against the map at two

@@ -1,5 +1,5 @@
 //! Navigating with the map: from a known reference place to one of several
-//! goal places, transition by transition (topo-fpn.md, "Navigating with the
+//! goal places, transition by transition (docs/topo-fpn.md, "Navigating with the
 //! map").
 //!
 //! At the start the robot stands at the start place (its map pose is set to

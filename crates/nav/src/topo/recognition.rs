@@ -1,6 +1,6 @@
 //! Is a newly detected reference place one the robot already knows?
 //!
-//! The source does not say; **Decision** (topo-fpn.md): a detection matches
+//! The source does not say; **Decision** (docs/topo-fpn.md): a detection matches
 //! a known place when
 //!
 //! 1. it is of the **same type** (a, b or c),

@@ -1,4 +1,4 @@
-//! The topological-map suite (topo-fpn.md, "Experiments"): a robot with
+//! The topological-map suite (docs/topo-fpn.md, "Experiments"): a robot with
 //! only a ring of 16 sonars and odometry explores an office, builds its
 //! fuzzy Petri net from its own stops, and then drives routes between the
 //! places it knows — with the map, and, for comparison, by wall following

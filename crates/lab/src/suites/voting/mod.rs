@@ -1,4 +1,4 @@
-//! The voting suite (voting.md): the fourteen fields of
+//! The voting suite (docs/voting.md): the fourteen fields of
 //! `scenarios/` here × the four behaviour combinations of the source
 //! (`e1`…`e4`), and `e4` with the activity-trace layer (`e5`).
 //!
@@ -75,7 +75,7 @@ pub const FIELDS: [(&str, &str); 14] = [
 
 /// The experiments: `e1`…`e4` are the source's four behaviour
 /// combinations; `e5` is `e4` with the activity-trace layer (dead-lock
-/// detection and recovery, activity-trace.md).
+/// detection and recovery, docs/activity-trace.md).
 pub const EXPERIMENTS: u32 = 5;
 
 /// The label of an experiment (`e1` … `e5`), e.g. "IR+sonar / odo+plan".
