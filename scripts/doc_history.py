@@ -15,7 +15,8 @@ The rule, mechanical so that anyone counts the same:
   - a commit id (7 to 40 hex digits, with a letter and a digit);
   - a seed or a run of seeds (`seed 4`, `seeds 1-16`);
   - a branch (`branch`, "at `main`", "on `main`");
-  - one of the phrases "tried", "not kept", "measured", "used to",
+  - one of the phrases "we / was / were / been tried", "tried and / but",
+    "not kept", "measured", "used to",
     "before →", "→ after", "before:", "| before", "we ran", "traced",
     "what remains", "was changed".
   Every line of a history paragraph is a history line.
@@ -35,7 +36,7 @@ MARKERS = re.compile(
     r"|\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}\b"
     r"|\bseeds? \d"
     r"|\bbranch\b|\b(?:at|on) `main`"
-    r"|\btried\b|\bnot kept\b|\bmeasured\b|\bused to\b"
+    r"|\b(?:we|was|were|been) tried\b|\btried (?:and|but)\b|\bnot kept\b|\bmeasured\b|\bused to\b"
     r"|before →|→ after|\bbefore:|\| before\b|\bwe ran\b|\btraced\b"
     r"|\bwhat remains\b|\bwas changed\b",
     re.IGNORECASE,
