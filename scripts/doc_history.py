@@ -16,7 +16,9 @@ The rule, mechanical so that anyone counts the same:
   - a seed or a run of seeds (`seed 4`, `seeds 1-16`);
   - a branch (`branch`, "at `main`", "on `main`");
   - one of the phrases "we / was / were / been tried", "tried and / but",
-    "not kept", "measured", "used to",
+    "not kept", "measured" followed by on / with / in / and / again / a
+    comma / a parenthesis / a colon (a measurement reported, not a measured
+    quantity), "it / they / we / robot / tracker / which used to",
     "before →", "→ after", "before:", "| before", "we ran", "traced",
     "what remains", "was changed".
   Every line of a history paragraph is a history line.
@@ -36,7 +38,7 @@ MARKERS = re.compile(
     r"|\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}\b"
     r"|\bseeds? \d"
     r"|\bbranch\b|\b(?:at|on) `main`"
-    r"|\b(?:we|was|were|been) tried\b|\btried (?:and|but)\b|\bnot kept\b|\bmeasured\b|\bused to\b"
+    r"|\b(?:we|was|were|been) tried\b|\btried (?:and|but)\b|\bnot kept\b|\bmeasured(?: on| with| in| and| again|,| \(|:)|\b(?:it|they|we|robot|tracker|which) used to\b"
     r"|before →|→ after|\bbefore:|\| before\b|\bwe ran\b|\btraced\b"
     r"|\bwhat remains\b|\bwas changed\b",
     re.IGNORECASE,
