@@ -24,8 +24,8 @@
 //! middle line, inside the ±90° IR beams' reach (0.95 m), so from near
 //! that line the IR sees both arms and the IR-only robot drives out as
 //! down a corridor — its escapes come from this geometry, not from chance
-//! (the explanation, observation 6, gives the numbers and the wider U
-//! measured and not kept). Every goal is 1.4 m or more from the wall
+//! (the explanation, observation 6, gives the numbers, and why a wider U
+//! was rejected). Every goal is 1.4 m or more from the wall
 //! beyond it. Per run, the start pose spreads by 0.1 m and ±15°, obstacles
 //! of fields 2–5 and 14 move by up to 5 cm, and sensor and odometry noise
 //! are drawn from the run's seed.
