@@ -38,7 +38,7 @@ MARKERS = re.compile(
     r"|\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}\b"
     r"|\bseeds? \d"
     r"|\bbranch\b|\b(?:at|on) `main`"
-    r"|\b(?:we|was|were|been) tried\b|\btried (?:and|but)\b|\bnot kept\b|\bmeasured(?: on| with| in| and| again|,| \(|:)|\b(?:it|they|we|robot|tracker|which) used to\b"
+    r"|\b(?:we|was|were|been) tried\b|\btried (?:and|but)\b|\bnot kept\b|\bmeasured(?:(?: on| with| in| and| again)\b|,| \(|:)|\b(?:it|they|we|robot|tracker|which) used to\b"
     r"|before →|→ after|\bbefore:|\| before\b|\bwe ran\b|\btraced\b"
     r"|\bwhat remains\b|\bwas changed\b",
     re.IGNORECASE,

@@ -20,8 +20,7 @@ fn repo_root() -> PathBuf {
 /// Directories that are not part of the repository's sources: build
 /// output, virtual environments, VCS metadata, hidden folders.
 fn skipped_dir(name: &str) -> bool {
-    name.starts_with('.')
-        || matches!(name, "target" | "node_modules" | "__pycache__" | "venv")
+    name.starts_with('.') || matches!(name, "target" | "node_modules" | "__pycache__" | "venv")
 }
 
 /// Every file under `dir` whose extension is one of `exts`.
@@ -37,10 +36,7 @@ fn walk(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
             if !skipped_dir(&name) {
                 walk(&p, exts, out);
             }
-        } else if p
-            .extension()
-            .is_some_and(|e| exts.iter().any(|x| e == *x))
-        {
+        } else if p.extension().is_some_and(|e| exts.iter().any(|x| e == *x)) {
             out.push(p);
         }
     }
@@ -218,4 +214,171 @@ fn cited_names_are_found_in_text() {
     );
     assert_eq!(cited_md("https://example.org/a.md, ./README.md"), ["README.md"]);
     assert!(cited_md("a.mdx, x.md_y").is_empty());
+}
+
+/// Whether `needle` occurs in `hay` as whole words (not inside a longer
+/// word), both lowercase.
+fn has_words(hay: &str, needle: &str) -> bool {
+    let word = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+    hay.match_indices(needle).any(|(i, _)| {
+        let before = hay[..i].chars().next_back();
+        let after = hay[i + needle.len()..].chars().next();
+        (!needle.starts_with(|c: char| c.is_alphanumeric()) || !word(before))
+            && (!needle.ends_with(|c: char| c.is_alphanumeric()) || !word(after))
+    })
+}
+
+/// Whether a doc paragraph narrates a measurement or an attempt — the rule
+/// of `scripts/doc_history.py`, which prints the same count per file.
+fn is_history(paragraph: &str) -> bool {
+    let text = paragraph.to_lowercase();
+    let tokens: Vec<&str> = text
+        .split(|c: char| !c.is_ascii_alphanumeric() && c != '-')
+        .collect();
+    let is_date = |t: &str| {
+        let b = t.as_bytes();
+        b.len() == 10
+            && b[4] == b'-'
+            && b[7] == b'-'
+            && b.iter()
+                .enumerate()
+                .all(|(i, c)| i == 4 || i == 7 || c.is_ascii_digit())
+    };
+    let is_commit = |t: &str| {
+        (7..=40).contains(&t.len())
+            && t.chars().all(|c| c.is_ascii_hexdigit())
+            && t.chars().any(|c| c.is_ascii_digit())
+            && t.chars().any(|c| c.is_ascii_alphabetic())
+    };
+    let dates_or_ids = tokens
+        .iter()
+        .any(|t| t.split('-').any(is_commit) || t.match_indices('-').count() >= 2 && has_date(t, is_date));
+    let seeds = ["seed ", "seeds "].iter().any(|s| {
+        text.match_indices(s).any(|(i, _)| {
+            let before = text[..i].chars().next_back();
+            !before.is_some_and(|c| c.is_alphanumeric())
+                && text[i + s.len()..].starts_with(|c: char| c.is_ascii_digit())
+        })
+    });
+    let measured = [" on", " with", " in", " and", " again", ",", " (", ":"]
+        .iter()
+        .any(|tail| has_words(&text, &format!("measured{tail}")));
+    let used_to = ["it", "they", "we", "robot", "tracker", "which"]
+        .iter()
+        .any(|who| has_words(&text, &format!("{who} used to")));
+    let phrases = [
+        "branch",
+        "at `main`",
+        "on `main`",
+        "we tried",
+        "was tried",
+        "were tried",
+        "been tried",
+        "tried and",
+        "tried but",
+        "not kept",
+        "before →",
+        "→ after",
+        "before:",
+        "| before",
+        "we ran",
+        "traced",
+        "what remains",
+        "was changed",
+    ];
+    dates_or_ids || seeds || measured || used_to || phrases.iter().any(|p| has_words(&text, p))
+}
+
+/// Whether a token holds a date `dddd-dd-dd` between word boundaries.
+fn has_date(token: &str, is_date: impl Fn(&str) -> bool) -> bool {
+    let b = token.as_bytes();
+    (0..b.len().saturating_sub(9)).any(|i| {
+        let edge_ok =
+            (i == 0 || !b[i - 1].is_ascii_digit()) && b.get(i + 10).is_none_or(|c| !c.is_ascii_digit());
+        edge_ok && is_date(&token[i..i + 10])
+    })
+}
+
+/// Module-doc lines and history lines of one file: paragraphs of `//!`
+/// lines, a `# Figures` section exempt (see `scripts/doc_history.py`).
+fn module_doc_history(text: &str) -> (usize, usize) {
+    let (mut doc, mut history) = (0, 0);
+    let mut paragraph: Vec<&str> = Vec::new();
+    let mut figures = false;
+    let mut flush = |paragraph: &mut Vec<&str>, figures: bool| {
+        if !paragraph.is_empty() && !figures && is_history(&paragraph.join(" ")) {
+            history += paragraph.len();
+        }
+        paragraph.clear();
+    };
+    for line in text.lines() {
+        let Some(body) = line.trim_start().strip_prefix("//!") else {
+            flush(&mut paragraph, figures);
+            continue;
+        };
+        doc += 1;
+        let body = body.trim();
+        if body.starts_with('#') && !body.starts_with("#[") {
+            flush(&mut paragraph, figures);
+            figures = body
+                .trim_start_matches('#')
+                .trim()
+                .eq_ignore_ascii_case("figures");
+        } else if body.is_empty() {
+            flush(&mut paragraph, figures);
+        } else {
+            paragraph.push(body);
+        }
+    }
+    flush(&mut paragraph, figures);
+    (doc, history)
+}
+
+/// Outcome 2 of issue 40: module docs hold the design, not the lab
+/// notebook. At most 5 % of the `//!` lines under `crates/*/src` may be
+/// history lines by the rule of `scripts/doc_history.py` (run it to see
+/// which files hold them); what was measured and not kept goes to the
+/// crate's `EXPERIMENTS.md`.
+#[test]
+fn module_docs_are_not_lab_notebooks() {
+    let root = repo_root();
+    let mut files = Vec::new();
+    for krate in std::fs::read_dir(root.join("crates")).unwrap() {
+        let src = krate.unwrap().path().join("src");
+        if src.is_dir() {
+            walk(&src, &["rs"], &mut files);
+        }
+    }
+    let (mut doc, mut history) = (0, 0);
+    for file in &files {
+        let (d, h) = module_doc_history(&std::fs::read_to_string(file).unwrap());
+        doc += d;
+        history += h;
+    }
+    assert!(doc > 0);
+    assert!(
+        history * 100 <= doc * 5,
+        "{history} of {doc} module-doc lines narrate history ({:.1} %, at most 5 %): \
+         run scripts/doc_history.py to see where",
+        100.0 * history as f64 / doc as f64
+    );
+}
+
+#[test]
+fn history_rule_examples() {
+    assert!(is_history("Measured on field 10 of the voting suite"));
+    assert!(is_history("(2026-12-04, issue 13)"));
+    assert!(is_history("before = `main` at f74babb"));
+    assert!(is_history("with seed 4 the robot"));
+    assert!(!is_history(
+        "the measured increments, a seeded RNG, retraced legs"
+    ));
+    assert!(!is_history(
+        "Rejected: the product of likelihoods, because it loses the robot"
+    ));
+    assert_eq!(
+        module_doc_history("//! a\n//!\n//! Tried and worse: b.\n//! c\nfn f() {}\n"),
+        (4, 2)
+    );
+    assert_eq!(module_doc_history("//! # Figures\n//!\n//! seeds 1-5\n"), (3, 0));
 }
