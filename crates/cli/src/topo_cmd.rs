@@ -1,5 +1,5 @@
 //! `petrinav topo …`: topological maps as fuzzy Petri nets (spec
-//! `topo-fpn.md`; library `nav::topo`): plan a route on a map file, convert
+//! `docs/topo-fpn.md`; library `nav::topo`): plan a route on a map file, convert
 //! it for other tools, generate random office-like maps.
 //!
 //! Layout, so that more subcommands (`explore`, `go`: the robot building a

@@ -1,4 +1,4 @@
-//! What the behaviour activity trace costs (activity-trace.md): control
+//! What the behaviour activity trace costs (docs/activity-trace.md): control
 //! ticks per second with and without it, for both controllers, on a
 //! dead-lock-suite world (8 m × 6 m floor at 0.05 m, one U trap across the
 //! course, drawn once from a fixed seed).

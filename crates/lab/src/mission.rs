@@ -16,19 +16,13 @@
 //! `lost`, `unreachable`, `gave_up`).** The guide's operator takes the robot to the
 //! place it was heading for and gives it its pose there (ROS users: drive it
 //! over, then "2D Pose Estimate"): the next leg starts at that place,
-//! estimate = truth. Before, the next leg started where the robot had
-//! stopped, and one failure cascaded: a contour leg timed out in a corner of
-//! building_31's south-west, where the static map has no route for the
-//! 0.70 m robot, so the tour's nine remaining legs were all `unreachable`
-//! at 0 s; timed-out robots left deep in a room timed out again on the next
-//! leg. A leg's outcome now measures that leg (`petrinav lab run maps`,
-//! numbers in the maps suite's docs). A collision used to be followed by
-//! an operator's nudge (the next leg started where the robot was a second
-//! before the contact), but a robot creeping at a door or turning on the
-//! spot is then still touching distance from the wall: `petrinav nav tour
-//! maps/building_31/… --behaviour contour` (seed 1) had one contour
-//! collision followed by three more at 3.5, 25.7 and 3.6 s into the next
-//! legs, 0.01 m driven each; now those legs start at their places.
+//! estimate = truth, so a leg's outcome measures that leg. Rejected:
+//! starting the next leg where the robot stopped, because one failure then
+//! cascaded (a time-out in a corner with no route on the static map made
+//! the tour's remaining legs `unreachable`); rejected: after a collision, a
+//! nudge to where the robot was a second before, because a robot creeping
+//! at a door or turning on the spot is then still touching distance from
+//! the wall. Figures: `crates/lab/EXPERIMENTS.md`.
 //!
 //! **Outcomes.** `reached` (within the goal tolerance of the true position
 //! when the controller declared arrival), `lost` (the controller declared

@@ -1,4 +1,4 @@
-//! Runs of the topological layer (topo-fpn.md) in the simulator, shared by
+//! Runs of the topological layer (docs/topo-fpn.md) in the simulator, shared by
 //! the `topo` suite and the `petrinav topo` commands: exploration that
 //! builds the fuzzy Petri net, routes driven with it, the two baselines a
 //! route is compared with, and the net drawn over the world.

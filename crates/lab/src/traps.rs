@@ -1,5 +1,5 @@
 //! Dead-end traps drawn from a run's seed, for the `deadlock` suite
-//! (spec: activity-trace.md, "experiments").
+//! (docs/activity-trace.md, "experiments").
 //!
 //! A scenario's `[trap]` section adds one trap to its world per run, on the
 //! straight course from start to goal, its opening facing the start (turned

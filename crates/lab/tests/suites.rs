@@ -1,6 +1,6 @@
 //! The shipped suites end to end: common random numbers between scenarios
 //! that differ only in the controller, and the dead-lock experiment's
-//! outcome (activity-trace.md) on its first runs.
+//! outcome (docs/activity-trace.md) on its first runs.
 
 use lab::scenario_suite::ScenarioSuite;
 use lab::suite::{Suite, SuiteArgs};

@@ -1,4 +1,4 @@
-//! Performance of the GSPN engine (spec: gspn.md, *Performance*) on the
+//! Performance of the GSPN engine (docs/gspn.md, *Performance*) on the
 //! scalable families of [`petri::families`] and on the robot's supervisor net.
 //!
 //! Groups:
@@ -274,7 +274,7 @@ mod end_to_end {
     }
 }
 
-/// The robot's decision (spec: gspn.md, tour-guide supervisor): the net is
+/// The robot's decision (docs/gspn.md, tour-guide supervisor): the net is
 /// compiled once per hypothesis, and re-solved whenever the learnt rates
 /// λ3..λ10 change. Each iteration takes the next of 16 precomputed rate
 /// vectors, so no two consecutive solves see the same rates.

@@ -10,7 +10,7 @@
 //! (they are > 0), so the bottom components of a non-ergodic chain are found
 //! once here.
 //!
-//! Long-run distribution from `M0` (spec §4): `Σ_B P(reach B) · π_B` over the
+//! Long-run distribution from `M0` (docs/gspn.md, *The pipeline*, 4): `Σ_B P(reach B) · π_B` over the
 //! bottom strongly connected components `B`; `P(reach B)` comes from the
 //! expected sojourn times `x` in the transient states, `x(−Q_TT) = π0_T`,
 //! as `π0_B + Σ_{s∈T} x_s Σ_{b∈B} q_sb`.
@@ -556,7 +556,7 @@ impl CompiledGspn {
             }
         }
         let n = self.num_tangible();
-        // Solve in the time unit of the fastest rate (spec §4: rates far
+        // Solve in the time unit of the fastest rate (docs/gspn.md, *Steady-state methods*: rates far
         // apart must not break the solver): every value is then at most its
         // coefficient, so no exit rate or elimination entry overflows, and
         // π does not depend on the time unit. Throughputs are scaled back.

@@ -7,7 +7,7 @@ fn compile(net: &Net) -> CompiledGspn {
     CompiledGspn::build(&g, &ExploreParams::default()).unwrap()
 }
 
-/// The supervisor net of the tour-guide robot (spec: gspn.md), built in code.
+/// The supervisor net of the tour-guide robot (docs/gspn.md), built in code.
 fn supervisor(p: f64) -> Net {
     let mut n = Net::new("supervisor");
     let names = ["P0", "P1", "P2", "P3", "P4", "P5", "P6", "P7", "P8"];

@@ -2,7 +2,7 @@
 //! the wheel-speed and acceleration limits of the drive.
 //!
 //! With wheel rim speeds `v_L`, `v_R` (m/s) held constant for `Δt` and wheel
-//! base `d`, the robot moves along a circular arc (sim.md, *Kinematics*):
+//! base `d`, the robot moves along a circular arc (docs/sim.md, *Kinematics*):
 //! `v = (v_R + v_L)/2`, `ω = (v_R − v_L)/d`, `R = v/ω`,
 //! `x' = x + R (sin(θ + ωΔt) − sin θ)`, `y' = y − R (cos(θ + ωΔt) − cos θ)`,
 //! `θ' = θ + ωΔt` (θ counter-clockwise from +x).
@@ -42,7 +42,7 @@ pub struct DriveParams {
     pub max_wheel_accel_mps2: f64,
 }
 
-/// Cruise speed of the AIBOT-like robot, m/s (voting.md: "average speed 0.3 m/s").
+/// Cruise speed of the AIBOT-like robot, m/s (docs/voting.md: "average speed 0.3 m/s").
 pub const AIBOT_CRUISE_SPEED_MPS: f64 = 0.3;
 
 /// Cruise speed assumed for the Jinny-like tour-guide robot, m/s.

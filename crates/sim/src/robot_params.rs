@@ -36,7 +36,7 @@ impl Default for RobotParams {
 }
 
 impl RobotParams {
-    /// The AIBOT-like robot of the voting experiments (voting.md): radius
+    /// The AIBOT-like robot of the voting experiments (docs/voting.md): radius
     /// 0.15 m, 7 binary IR detectors across the front (range 0.8 m), 3 sonar
     /// transducers at −30°, 0°, +30°, odometry, a bumper; no laser.
     pub fn aibot() -> RobotParams {
@@ -54,7 +54,7 @@ impl RobotParams {
     /// transducers 22.5° apart all round (first straight ahead, cones 25°:
     /// the ring leaves no blind bearing), odometry and a bumper; no IR, no
     /// laser. This is the robot of the dead-lock experiments
-    /// (activity-trace.md): the priority controller's behaviours react to
+    /// (docs/activity-trace.md): the priority controller's behaviours react to
     /// obstacles ahead, on either side and *behind* (speed up), which needs
     /// ranges all round, as on the sonar rings of Pioneer- or Khepera-class
     /// robots such experiments use. AIBOT's binary IR says only "something
@@ -76,7 +76,7 @@ impl RobotParams {
         }
     }
 
-    /// The Jinny-like tour-guide robot (tour-guide.md): radius 0.35 m, one
+    /// The Jinny-like tour-guide robot (docs/tour-guide.md): radius 0.35 m, one
     /// 181-beam laser over 180° (30 m) mounted 0.2 m ahead of the centre,
     /// odometry, a bumper; no sonar or IR.
     pub fn jinny() -> RobotParams {

@@ -1,5 +1,5 @@
 //! Potential-field recovery: recorded dead-locks repel, the goal attracts
-//! (spec: activity-trace.md).
+//! (docs/activity-trace.md).
 //!
 //! * repulsion of dead-lock `k` at distance `L_k`:
 //!   `|F_r,k| = k_r (1/L_k − 1/L_0)²` if `L_k < L_0`, else 0, pointing away;

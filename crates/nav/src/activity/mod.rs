@@ -1,6 +1,6 @@
 //! Priority-arbitrated behaviours with a behaviour activity trace that
-//! detects dead-locks and a potential field that escapes them (spec:
-//! activity-trace.md; Skrzypczyk).
+//! detects dead-locks and a potential field that escapes them
+//! (docs/activity-trace.md; Skrzypczyk).
 //!
 //! Eight behaviours compute activations `a_i ∈ [0, 1]` through sigmoids
 //! `σ(x) = 1 / (1 + e^{−x})` of their inputs; the behaviour

@@ -1,5 +1,5 @@
-//! The behaviour activity trace and the dead-lock detector (spec:
-//! activity-trace.md; Skrzypczyk).
+//! The behaviour activity trace and the dead-lock detector
+//! (docs/activity-trace.md; Skrzypczyk).
 //!
 //! The trace is the time-ordered list of characteristic points `CP_k` — the
 //! robot's position when event `k` happened:
@@ -21,20 +21,12 @@
 //! than `progress_m` nearer the goal than its first is not a dead-lock.
 //! Without it ([`ActivityTrace::new`]) the detector is the source's.
 //!
-//! Measured on field 10 of the voting suite (a wall with a 0.55 m gap; the
-//! voting controller with the trace layer, 50 runs, `petrinav lab run` on
-//! copies of the voting suite's `field10.toml` with `[controller.trace_layer]
-//! enabled = true`): without the layer 0.98; with it and the source's
-//! detector (`progress_m = inf`) 0.54, 1.28 dead-locks detected per run —
-//! the robot approaching the gap along the wall makes the chunk, and the
-//! repulsion then keeps it from the gap; with the progress test (0.25 m)
-//! 0.98, 0.16 per run. The price, on the dead-lock suite's priority
-//! controller with recovery (U traps, 200 runs): 0.97 with the test against
-//! 0.99 without — a few genuine dead-locks whose second `CP2` lands more
-//! than 0.25 m nearer the goal are recognised one loop later or not at all.
-//! A false dead-lock costs more than a late one (its repulsion can close the
-//! only way through for good), so the test is on by default for both
-//! controllers.
+//! The test is on by default for both controllers: a false dead-lock
+//! costs more than a late one (its repulsion can close the only way
+//! through for good — on the voting suite's narrow gap the source's
+//! detector took success from 0.98 to 0.54), while the test lets a few
+//! genuine dead-locks be recognised one loop later (figures and command:
+//! `crates/nav/EXPERIMENTS.md`, section `activity/trace.rs`).
 
 use robot::Vec2;
 

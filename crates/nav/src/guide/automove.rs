@@ -1,4 +1,4 @@
-//! AutoMove: the map-based planner of the tour-guide robot (tour-guide.md).
+//! AutoMove: the map-based planner of the tour-guide robot (docs/tour-guide.md).
 //!
 //! A global route on the static map ([`GlobalPlanner`]) gives intermediate
 //! goals at most 4 m apart; every control cycle a navigation function over a

@@ -1,6 +1,6 @@
 //! Contour tracking: following the contour of walls, exhibits (and people)
 //! at a set distance from the raw laser scan, every control cycle, and
-//! leaving it towards the goal when the way is clear (tour-guide.md).
+//! leaving it towards the goal when the way is clear (docs/tour-guide.md).
 //!
 //! **Following.** The contour is the set of scan points on the followed
 //! side (left or right; bearings from 45° across the front to 180° on that
@@ -38,120 +38,63 @@
 //! straight at the goal (`Seek`); when something stands within `hit_m`
 //! ahead and in the goal's way it stops and asks (below), turns on the
 //! spot to face the goal (within 17°) if it does not already, records the
-//! distance to the goal (the hit point) and starts
-//! following the obstacle on the side that turns the robot less from the
-//! goal's bearing. It leaves the contour for the goal when (a) the goal's
-//! bearing is within the laser's view and clear, a corridor as wide as the
-//! robot plus `margin_m`, up to `leave_clear_m` or the goal, and (b) the
-//! goal is at least `leave_progress_m` nearer than at the hit point
-//! (Lumelsky & Stepanov's Bug2 condition, which keeps the robot from
-//! circling an obstacle for ever with exact sensing). It needs the robot's
-//! pose only for the goal's bearing and distance: a poor localization bends
-//! the route, it does not stop the tracking. A contour lost for
-//! `lost_after_s` (nothing seen or remembered on its side: a person who
-//! walked away) is left for the goal too — a Bug algorithm leaves an
-//! obstacle it no longer senses; the arc towards a lost contour otherwise
-//! circles on the spot for ever, since Bug2's progress condition is never
-//! met there. The side is chosen facing the goal: on levine from
-//! `south_west_end`, arriving there facing south with the goal behind on
-//! the left round a corner, the turn towards the goal brought the
-//! corridor's wall into the goal's way 20° into it, and the robot followed
-//! the corridor south (the side chosen from a scan that could not see the
-//! way north) and round the loop: that leg took 130–180 s or failed (2 of
-//! 9 tours); it takes 34 s now. Measured and not kept: no hit at all until
-//! the robot faces the goal (the leg in 35 s, and `lab run maps --runs 9`
-//! as good, but in the museum the robot that AutoMove hands over to
-//! contour tracking among visitors then drove on towards the goal's
-//! bearing instead of stopping to ask: `petrinav lab run tourguide`,
-//! moderate density, the supervisor 0.93 → 0.82 of its missions and the
-//! rule 0.96 → 0.93, collisions 5 → 15 each; with the stop first, 0.92
-//! and 0.96, 5 collisions each).
-//! Measured and not kept either (2026-12-04): a hit that ends only once
-//! the way has stayed clear for 0.25 s (or 0.5 s), the robot standing
-//! still meanwhile. It cures a dither: from the tour's start of
-//! `middle_corridor_south` → `hall_north` with seed 4 (`petrinav nav go
-//! maps/building_31/building_31.yaml --goals maps/building_31/places.yaml
-//! --from=-10.848,3.468,-1.5736 --to hall_north --behaviour contour --seed
-//! 4`) the corridor's wall at the edge of the tested strip came and went
-//! with the scan's noise, every clear cycle reset the 3 s wait and drove
-//! the robot 5 mm on, and it crept 0.28 m in 27 s, then chose the side
-//! with the goal 40° off and went north up the corridor (time limit); with
-//! the debounce it waits, turns to the goal and arrives in 81 s (seeds
-//! 1–16 all arrive, 80–84 s but one of 199 s). But `lab run maps --runs 9` gave 98
-//! of 99 on building_31 without people as before (that leg now reached,
-//! the door leg `hall_south` → `south_corridor` from the tour's start
-//! failing instead), levine among 20 / 60 people 97 / 92 → 96 / 91 legs
-//! and 35 → 43 s / 71 → 77 s per leg (the robot waits out every brief
-//! opening between visitors), and `lab run tourguide` (moderate) the
-//! supervisor 0.92 → 0.89 (time limits 34 → 49) and the rule 0.96 → 0.94,
-//! while contour tracking alone rose 0.39 → 0.42 and collisions fell
-//! (supervisor 5 → 3). Keeping the wait's clock through clear spells but
-//! driving on in them changed nothing (seed 4 still timed out). The door
-//! leg's failure, traced: the robot passes the 0.80 m door west along its
-//! middle line, 0.40 m from the south wall; just past it that wall juts
-//! 5–7 cm north, its points (0.31 m off the robot's axis, ahead on the
-//! left) enter the front sector of the right-hand contour as its nearest
-//! point, and the look-ahead law, keeping them on the right, turns the
-//! robot 140° back through the door. Counting the other half's front
-//! points only inside the footprint's strip did not help (they were inside
-//! it) and cost among people.
+//! distance to the goal (the hit point) and starts following the obstacle
+//! on the side that turns the robot less from the goal's bearing, chosen
+//! once it faces the goal (a side chosen from a scan that cannot see the
+//! way round sent the robot the long way). It leaves the contour for the
+//! goal when (a) the goal's bearing is within the laser's view and clear, a
+//! corridor as wide as the robot plus `margin_m`, up to `leave_clear_m` or
+//! the goal, and (b) the goal is at least `leave_progress_m` nearer than at
+//! the hit point (Lumelsky & Stepanov's Bug2 condition, which keeps the
+//! robot from circling an obstacle for ever with exact sensing). It needs
+//! the robot's pose only for the goal's bearing and distance: a poor
+//! localization bends the route, it does not stop the tracking. A contour
+//! lost for `lost_after_s` (nothing seen or remembered on its side: a
+//! person who walked away) is left for the goal too — a Bug algorithm
+//! leaves an obstacle it no longer senses; the arc towards a lost contour
+//! otherwise circles on the spot for ever, since Bug2's progress condition
+//! is never met there. Rejected: no hit until the robot faces the goal,
+//! because AutoMove's hand-over among visitors then drove on instead of
+//! stopping to ask (collisions tripled in the museum); rejected: a hit that
+//! ends only once the way has stayed clear for 0.25–0.5 s, because the
+//! robot then waits out every brief opening between visitors.
 //!
 //! **The scan.** Every cycle the tracker reads the scan through a 3-beam
 //! median filter ([`scan::median3`]): the safety layer's margins below are
 //! a few σ of the laser's noise (σ 0.01 m), and a lone short reading must
 //! not stop the robot in a door.
 //!
-//! **Decision — doors (gaps narrower than the usual clearance).** On
-//! building_31 the way from the hall into the south corridor is a door of
-//! 0.80 m between a jamb's corner and the opposite wall (the map's cells;
-//! 5 cm either side of the 0.70 m robot). The tracker used to creep at it
-//! for ~15 s and turn round: its room check wanted the footprint + 5 cm
-//! clear straight ahead (0.80 m), the centred law took the jamb's corner
-//! for a wall (its "tangent" pointed across the door), and the stall rule
-//! (0.3 m in 8 s) fired on the crawl (0.005–0.02 m/s). The cause is not a
-//! margin but the lack of a way to pass a gap, so there is one: a *gap* is
-//! the narrowest pair of scan points, one inside the usual clearance
-//! ahead, between `2 (r + pass_margin_m)` and `2 (r + margin_m)` apart,
-//! with nothing between them and room for the footprint beyond (not a
-//! corner), in the direction the law wants to go when that direction is
-//! blocked for the usual clearance (not a niche beside a free corridor).
-//! The robot then steers by pure pursuit onto the line through the gap's
-//! middle ([`GAP_LOOKAHEAD_M`] ahead: from 0.5 m it arrived 5–6 cm off the
-//! axis and touched the jamb; 0.25 m centres it within 1 cm over the
-//! metre before the door), at `creep_mps`, until its footprint is through.
-//! From off the line and near the sides the look-ahead shortens so that
-//! the offset, decaying as `e^(−s / L)`, is within 2 cm when the
-//! footprint's front reaches the sides' line (`L` between 0.05 and
-//! 0.25 m): with a fixed 0.25 m the pursuit curve from 0.3 m off the axis
-//! of the door at the end of a wall stub (building_31, (−11.4, 1.5)) cut
-//! the stub's out-of-view corner (2 of 33 legs collided). Once found, a
-//! gap is what its sides are: its middle between them and its line square
-//! to them (smoothing the pairs' directions instead let a door's line turn
-//! 9° as its sides were seen from nearer, and the robot stood 1.3 cm from
-//! a jamb), and while it is being passed only pairs within 0.2 m of its
-//! middle are looked at (a narrower false pair — a jamb and a point
-//! beyond — once took the door's place, the door went unseen and was
-//! dropped). Not solved: a door approached steeply from within ~0.5 m of
-//! its wall is lost when its far jamb is beyond the 1.5 m search reach,
-//! and the robot then follows the wall past it (the leave rule wants
-//! `leave_progress_m` of progress, which a door next to the hit point does
-//! not give): from 4 of 9 such starts in the 8 m × 4 m test room the robot
-//! went round the room until the time limit. Of each side
-//! the point nearest its line is kept once the robot is in the gap (the
-//! safety layer's remembered echoes, one per 5 cm square, were 1.8 cm off
-//! the jamb's corner and were forgotten after 3 s: the robot touched the
-//! corner with the safety layer "clear"), and the sides are obstacles for
-//! the safety layer. Only there, at creep speed, the safety layer's margin
-//! is `pass_margin_m` (0.015 m: 2.2 σ of the filtered noise; speed-dependent
-//! protective fields as on industrial safety scanners), growing linearly to
-//! `safety_margin_m` at `cruise_mps`. A gap the robot stalls at is refused
+//! **Decision — doors (gaps narrower than the usual clearance).** A door of
+//! 0.80 m is 5 cm wider than the 0.70 m robot on either side: the usual
+//! room check, the centred law (which takes a jamb's corner for a wall) and
+//! the stall rule all refuse it, and the cause is not a margin but the lack
+//! of a way to pass a gap, so there is one. A *gap* is the narrowest pair
+//! of scan points, one inside the usual clearance ahead, between
+//! `2 (r + pass_margin_m)` and `2 (r + margin_m)` apart, with nothing
+//! between them and room for the footprint beyond (not a corner), in the
+//! direction the law wants to go when that direction is blocked for the
+//! usual clearance (not a niche beside a free corridor). The robot then
+//! steers by pure pursuit onto the line through the gap's middle
+//! ([`GAP_LOOKAHEAD_M`] ahead), at `creep_mps`, until its footprint is
+//! through; from off the line and near the sides the look-ahead shortens
+//! (`L` between 0.05 and 0.25 m) so that the offset, decaying as
+//! `e^(−s / L)`, is within 2 cm when the footprint's front reaches the
+//! sides' line. Once found, a gap is what its sides are: its middle between
+//! them and its line square to them (smoothed pair directions let a door's
+//! line turn as its sides were seen from nearer), and while it is being
+//! passed only pairs within 0.2 m of its middle are looked at (a narrower
+//! false pair can otherwise take the door's place). Of each side the point
+//! nearest its line is kept once the robot is in the gap (the safety
+//! layer's 5 cm squares lie up to 1.8 cm off a jamb's corner and are
+//! forgotten after 3 s), and the sides are obstacles for the safety layer.
+//! Only there, at creep speed, the safety layer's margin is
+//! `pass_margin_m` (0.015 m: 2.2 σ of the filtered noise), growing linearly
+//! to `safety_margin_m` at `cruise_mps` (speed-dependent protective fields
+//! as on industrial safety scanners). A gap the robot stalls at is refused
 //! for 30 s. In a gap the robot asks people to step aside: a gap between
-//! people widens, a door does not. Measured (`petrinav nav go
-//! maps/building_31/building_31.yaml --goals maps/building_31/places.yaml
-//! --from hall_south --to south_corridor --behaviour contour`): timeout at
-//! 300 s before, reached in 52.7 s after (AutoMove: 95 s round through the
-//! rooms); tests: a door 0.80 m wide passed without contact from 0.3 m off
-//! its axis, one of 0.66 m not touched.
+//! people widens, a door does not. Not solved: a door approached steeply
+//! from within ~0.5 m of its wall is lost when its far jamb is beyond the
+//! 1.5 m search reach, and the robot then follows the wall past it.
 //!
 //! **Decision — asking people to step aside.** Contour tracking has no map
 //! and cannot tell a person from a wall, so it does what a guide robot
@@ -169,91 +112,32 @@
 //! the 3 s AutoMove's uses): after a 3 s wait it forgot the wall beside it
 //! and turned into it.
 //!
-//! **Decision — passages (the far side ahead is not a wall ahead).** On
-//! building_31 from `middle_corridor_south` to `hall_north` the way out of
-//! the room is a 1.05 m passage between the end of a long wall and a low
-//! wall, with a small box 0.8 m before the wall's end. Following the box on
-//! its left into the passage, the robot heads at the low wall; the front
-//! sector (from −45° on the other side) puts that wall into the followed
-//! contour, its nearest point (0.45–0.6 m) failed the corridor check (the
-//! contour nearer than the half width: "a wall ahead") and its tangent
-//! turned the robot back west, to creep along the room's furniture: 2 of 8
-//! seeds reached the goal (`petrinav nav go maps/building_31/building_31.yaml
-//! --goals maps/building_31/places.yaml --from middle_corridor_south --to
-//! hall_north --behaviour contour --seed S --html leg.html` shows it tick by
-//! tick). The corridor check now asks that nothing of the followed side's
-//! *own half* be nearer than the middle: what stands ahead on the other
-//! half is the far side of a passage, and the robot centres between the
-//! two. Only while it moves (the last command at least `creep_mps`): turning
-//! on the spot sweeps the front sector across both halves, and without
-//! that condition the centred flag flipped every few cycles while the robot
-//! was wedged, until it touched a wall beside it that the safety layer's
-//! memory had let go (contacts among people 5 → 13 of 396 legs). Measured
-//! (`petrinav lab run maps --runs 9`, 99 legs per row, contour tracking,
-//! before → after): building_31 0 / 20 / 60 people 0.96 / 0.87 / 0.69 →
-//! 0.97 / 0.86 / 0.71 with contacts 0 / 2 / 3 → 0 / 4 / 1; levine 0.99 /
-//! 0.94 / 0.91 → 0.99 / 0.96 / 0.89, contacts 0 / 0 / 0 → 0 / 0 / 0;
-//! AutoMove unchanged (1.00 without people on both). The 8 seeds above:
-//! 8 of 8 (84–85 s, one 224 s). Still failing without people: 2 of 9 tours
-//! on the same leg (its start is where the previous leg ended, 0.27 m
-//! further north), one on levine from `south_west_end` (both failing
-//! before too) and, new, one of 9 from `hall_south` through its door.
-//! Tried and worse: front points counted only when joined to the contour
-//! beside the robot by a chain of beams (0 of 8 and
-//! two contacts: the obstacle met at the hit point was lost), and the
-//! tangent taken from the nearest point of the followed half (0 of 8: the
-//! robot took the middle corridor north), and the corridor check looking
-//! at the own half's points ahead only, not those beside (6 of 8, two
-//! contacts, 105–154 s instead of 84 s). Test: `tests/contour.rs`, the
-//! leg on the real map by dead reckoning.
+//! **Decision — passages (the far side ahead is not a wall ahead).** The
+//! front sector (from −45° on the other side) can put the far side of a
+//! passage into the followed contour, and its nearest point then fails the
+//! corridor check and turns the robot back. So the corridor check asks that
+//! nothing of the followed side's *own half* — what lies beside or ahead of
+//! the robot's centre on that side, remembered points included — be nearer
+//! than the middle: what stands ahead on the other half is the far side of
+//! a passage, and the robot centres between the two. Only while it moves
+//! (the last command at least `creep_mps`): turning on the spot sweeps the
+//! front sector across both halves, and the centred flag then flipped every
+//! few cycles while the robot was wedged. Rejected: front points counted
+//! only when chained to the contour beside the robot, and the tangent taken
+//! from the own half's nearest point, because the obstacle met at the hit
+//! point was then lost; rejected: the other half's point taken as the
+//! nearest only when 0.1 m nearer than the own half's, because a person
+//! ahead on the other side was then followed too late. Still fragile: a
+//! room whose way out is a maze of furniture, where the nearest contour
+//! point can jump to furniture on the other half and the law follows that
+//! instead. Test: `tests/contour.rs`, the passage leg on the real map by
+//! dead reckoning.
 //!
-//! The own half is what lies beside or ahead of the robot's centre: a box
-//! passed, out of the laser's view and remembered behind on the followed
-//! side, is not a wall ahead either. From where a tour's previous leg ends
-//! (0.27 m north of `middle_corridor_south`) the remembered box, 0.63 m
-//! behind on the left, failed the corridor check in the passage and the
-//! robot turned back (2 of 9 tours). With this and the hit rule above
-//! (`petrinav lab run maps --runs 9`, contour tracking, before → after):
-//! without people 96 → 98 of 99 legs on building_31 and 98 → 99 on levine
-//! (mean 36.5 → 32.0 s and 31.0 → 19.2 s; AutoMove 25.4 s and 15.4 s, 99 of
-//! 99 each); among 20 / 60 people building_31 85 / 70 → 82 / 67, levine
-//! 95 / 88 → 97 / 92, legs with a contact 4 / 1 → 5 / 6 and 0 → 0 (all
-//! with people, none with a wall). The one leg left without people is
-//! the room's (below). With the hit rule that was not kept (no hit before
-//! facing the goal) the same run gave 99 / 84 / 75 and 99 / 96 / 90, with
-//! contacts 0 / 4 / 2 (in five of those six the robot stood or crept at
-//! ≤ 0.08 m/s and a visitor walked into it).
-//! Still fragile: the room's way out is a maze of furniture for a
-//! reactive follower. From that tour start with the localizer (`petrinav
-//! nav go maps/building_31/building_31.yaml --goals
-//! maps/building_31/places.yaml --from=-10.848,3.468,-1.5736 --to
-//! hall_north --behaviour contour --seed S`, S = 1..8) 7 of 8 arrive, one
-//! after 199 s (7 of 8 before, one contact; 6 of 8 with the hit rule not
-//! kept): in the others the robot, heading south between the box and the
-//! furniture south of it, is blocked, turns on the spot away from the box
-//! it follows and creeps west along the furniture. The cause (seed 1 with
-//! the hit rule not kept, traced): circling the small box, out of view and
-//! remembered beside the robot, the nearest contour point jumped to the
-//! furniture 0.73 m ahead on the other half, 2 cm nearer than the box, and
-//! the look-ahead law turned the robot 116° to follow that instead. Tried
-//! and not kept: a point on the other half taken as the nearest only when
-//! 0.1 m nearer than the own half's (16 of 16 from the two starts, but
-//! `lab run maps --runs 9` worse among people — building_31 60 people 75 →
-//! 71 legs and contacts 2 → 6, levine 90 → 84 — and one contact without
-//! people: a person ahead on the other side was followed too late); and,
-//! blocked ahead, turning towards the followed side when that opens the
-//! way within 40° and sooner than turning away (no change from that
-//! start: it was not the turn on the spot that sent the robot west).
-//!
-//! **Figures** (contour tracking alone; before = `main` at f74babb, after =
-//! this module; `petrinav lab run maps` with its 3 tours, success rate
-//! `I_R`): building_31 0 / 20 / 60 people 0.82 / 0.39 / 0.15 → 0.85 /
-//! 0.64 / 0.27; levine 0.97 / 0.79 / 0.39 → 0.97 / 0.97 / 0.79. The museum
-//! (`cargo run --release -p lab --example museum_batch -- contour N 20`,
-//! the suite's first 20 mission seeds): nobody 20/20 (mean 131 s) →
-//! 20/20 (99 s), 25 visitors 8/20 → 8/20, 60 visitors 1/20 → 1/20: among
-//! a crowd the tracker still wanders (long contours round groups at the
-//! exhibits, which asking shortens but does not remove) — not solved here.
+//! The figures behind these decisions, and the variants rejected, are in
+//! `crates/nav/EXPERIMENTS.md` (section `guide/contour.rs`);
+//! the figures of contour tracking on the maps and in the museum are in the
+//! `maps` and `tourguide` suites' reports (`petrinav lab run maps`,
+//! `petrinav lab run tourguide`).
 
 use std::collections::VecDeque;
 
@@ -600,11 +484,9 @@ const FACING_RAD: f64 = 0.3;
 /// the corner as often as away from it (building_31's room north of the
 /// middle corridor: wedged in the corner for 12 s, then a stall and a turn
 /// round). The next moves push it off the side wall, to the corner of the
-/// offset curve, away from the followed side. Pushing ahead of the robot
-/// too (whenever a point is nearer than `d`) was measured and not kept:
-/// the maps suite's contour legs 138 → 120 of 198 (crowds: 60 people 34
-/// → 21), against 138 → 142 for the rule as it is (`lab run maps`,
-/// 2026-12-03, tours carried on after failures as they were then).
+/// offset curve, away from the followed side. Rejected: pushing ahead of
+/// the robot too (whenever a point is nearer than `d`), because fewer of
+/// the maps suite's contour legs arrived (`crates/nav/EXPERIMENTS.md`).
 fn offset_point(contour: &[Vec2], q: Vec2, d: f64) -> Vec2 {
     let mut at = q;
     for step in 0..OFFSET_STEPS {
@@ -634,7 +516,8 @@ fn clear_along(points: &[Vec2], bearing: f64, half_m: f64, length_m: f64) -> boo
 /// How far ahead on the line through a gap the robot steers, metres: a
 /// lateral offset decays as `e^(−s / L)` over the distance `s` driven, so
 /// 0.25 m takes a 30 cm offset to under 1 cm in the metre before a gap
-/// found 1.5 m ahead (0.5 m left 4 cm: measured, module docs).
+/// found 1.5 m ahead. Rejected: 0.5 m, because the robot then arrived
+/// 5–6 cm off the axis and touched the jamb.
 pub const GAP_LOOKAHEAD_M: f64 = 0.25;
 
 /// A gap found with its middle within this of the one being passed is

@@ -20,7 +20,7 @@
 //! It never sees the true pose: it declares the goal reached from its
 //! estimate, and the simulator judges that by the truth.
 //!
-//! **Policies** (tour-guide.md, the comparison): one behaviour throughout;
+//! **Policies** (docs/tour-guide.md, the comparison): one behaviour throughout;
 //! AutoMove until the first Warning and contour tracking from then on (the
 //! rule added to AutoMove); the rule alone (contour tracking while the
 //! localizer warns, AutoMove while it succeeds); and the GSPN supervisor:

@@ -1,4 +1,4 @@
-//! The tour-guide robot's navigation (tour-guide.md): contour tracking,
+//! The tour-guide robot's navigation (docs/tour-guide.md): contour tracking,
 //! AutoMove, and the controller that runs them with the localizer.
 
 pub mod automove;

@@ -117,55 +117,18 @@ pub fn safe_speed(points: &[Vec2], v: f64, omega: f64, radius_m: f64, decel_mps2
 /// robot may have been a person who left; [`NearbyPoints::forgetting_after`]
 /// for another time), or when they are out of reach.
 ///
-/// **Measured, not kept** (2026-12-03): forgetting a point by the robot's
-/// *net* motion from where it saw it instead of the motion summed since
-/// (turning back and forth on the spot sums a metre of rim arc in seconds,
-/// and the contour tracker then forgot a jamb beside it and turned into
-/// it). On the real maps (`lab run maps`) contour legs among nobody / 20 /
-/// 60 people went from 23 / 11 / 7 to 28 / 14 / 10 of 33 on building_31 and
-/// 21 → 27 among 60 on levine; but in the museum (`lab run tourguide`)
-/// what people were beside the robot held it longer: moderate density,
-/// contour 0.40 → 0.35, the rule 0.97 → 0.93, the supervisor 0.89 → 0.86;
-/// packed, AutoMove 0.93 → 0.90 with collisions 27 → 39 of 480. Telling a
-/// wall from a person out of view is what is missing, not the distance.
+/// Rejected: forgetting a point by the robot's *net* motion from where it
+/// saw it instead of the motion summed since, because in the museum what
+/// people stood beside the robot then held it up longer; telling a wall
+/// from a person out of view is what is missing, not the distance.
 ///
-/// **Traced, not yet changed** (2026-12-03, the last contour contacts on
-/// building_31 without people, legs 29 and 32 of `lab run maps`, and leg
-/// 10 once those were gone): each time the wall the robot touched stood
-/// beside it, 55°–90° off its heading at 0.35–0.37 m, where a laser 0.2 m
-/// ahead of the centre cannot see. Three causes: (a) the robot stood still
-/// or turned back and forth beside the wall for 10 s, the memory forgot it
-/// by time (or by rim arc), and the law then turned into it; (b) a 5 cm
-/// square keeps its latest echo, up to 2.6 cm from a block's corner — more
-/// than the 1.5 cm margin in a gap; (c) a robot already inside its margin
-/// is stopped for good by [`safe_speed`] until the memory lets it go.
-/// Variants measured on `lab run maps` (contour legs reached of 33,
-/// building_31 / levine at 0 / 20 / 60 people; `main` 31 26 20 / 33 31 27):
-/// for the contour tracker only, points the laser sees through again
-/// cleared, 2 cm squares, turns not counted: 32 24 27 / 33 33 28 (AutoMove
-/// unchanged); the same without forgetting by time: 29 25 23 / 32 33 29
-/// (four legs then stood at 1–4 cm from a wall for the rest of the leg:
-/// cause (c)); with, in addition, the safety disc shrunk to the nearest
-/// point's distance when inside it (move along or away, never nearer):
-/// 31 24 24 / 33 33 31, AutoMove 33 33 27 / 33 33 29 (from 33 32 25 /
-/// 33 33 27). None completes every leg AutoMove completes on building_31;
-/// the next step is a look before moving towards a side the laser cannot
-/// see (turning sweeps nothing), measured in the museum as well.
-///
-/// **The look, measured, not kept** (2026-12-03, late): for the contour
-/// tracker, points kept until the laser sees through them (both beams
-/// beside the bearing 5 cm beyond, 2 cm squares, no forgetting by time or
-/// turning); a remembered point older than 3 s that holds the robot up is
-/// looked at first (turn on the spot towards it, v = 0); and inside its
-/// margin the disc shrinks to the nearest point (along or away, an arc
-/// nearer after its first 2 cm refused). `lab run maps`, contour legs of
-/// 33: building_31 30 / 24 / 27, levine 33 / 30 / 30 — no collision on
-/// building_31 without people, but three legs (18, 21, 29, from hall_north
-/// and south_corridor) now time out: the robot first stood 1 cm from a
-/// wall for 135 s (a floor of r + 7.5 mm under the shrunk disc: the
-/// scan's noise crossed it), and without that floor it wanders between
-/// the north hall's doors, passing gaps and turning back, until the limit
-/// (60 people: 2 collisions). Not kept; the patch is not on `main`.
+/// Known weakness: a wall beside the robot, where a laser 0.2 m ahead of
+/// the centre cannot see, is forgotten while the robot stands or turns
+/// beside it for long, and the law can then turn into it. The variants
+/// examined (points cleared when the laser sees through them, 2 cm
+/// squares, no forgetting by time, a look before moving towards an unseen
+/// side) each cost legs elsewhere: `crates/nav/EXPERIMENTS.md`, section
+/// `guide/scan.rs`.
 #[derive(Debug, Clone, Default)]
 pub struct NearbyPoints {
     /// Remembered points are forgotten after this long, seconds (`None`:

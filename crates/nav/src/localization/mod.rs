@@ -1,6 +1,6 @@
 //! Monte Carlo localization: a particle filter on the laser scan against a
 //! known occupancy map, for the tour-guide robot's Localizer
-//! (tour-guide.md).
+//! (docs/tour-guide.md).
 //!
 //! ```
 //! use nav::localization::{Localizer, LocalizationStatus, MclParams};

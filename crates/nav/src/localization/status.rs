@@ -1,4 +1,4 @@
-//! The localizer's Success / Warning state machine (tour-guide.md,
+//! The localizer's Success / Warning state machine (docs/tour-guide.md,
 //! *Localizer*).
 //!
 //! At every filter iteration the scan is scored against the map at two
@@ -36,15 +36,11 @@
 //! [`StatusParams::min_explained`] (0.8) of the beams at the estimate, and
 //! fails otherwise (people, or anything not on the map, hide the walls).
 //!
-//! The level rule is needed. A pure comparison is a coin toss for a
-//! localizer that tracks well: its estimate and the prediction are
-//! equally far from the truth (0.040–0.042 m on average on building_31,
-//! with or without people), because the filter is not pulled by people, it
-//! only loses evidence. With ties counted as matches (`min_explained = 0`,
-//! the comparison alone) the robot spent 0.9 %, 0.3 % and 0.6 % of its
-//! filter iterations in Warning with 0, 20 and 60 people; with the level
-//! rule 0.9 %, 13.8 % and 46.8 % (five 135.8 m drives each; the command is
-//! in [`super`]).
+//! The level rule is needed: a pure comparison is a coin toss for a
+//! localizer that tracks well — its estimate and the prediction are
+//! equally far from the truth, because people do not pull the filter,
+//! they only hide evidence — so the comparison alone leaves the Warning
+//! rate unchanged by crowds (the table in [`super`], *Figures*).
 //!
 //! **Decision (d): what a Warning means — the contradiction rule, the
 //! default.** Decisions (b) and (c) are the source's reading, kept as
@@ -61,11 +57,10 @@
 //! nothing with fewer than `min_evidence_beams` (15) of them (a group
 //! round the robot). The odometry pose plays no part: after a push or a
 //! slip the prediction is as wrong as the estimate, so a comparison of the
-//! two cannot see the loss. Measured on the museum's scans
-//! (`cargo run --release -p lab --example status_roc -- 60 4`, 722 scans
-//! among 60 visitors): at the true pose the contradiction was 0 in 95 % of
-//! the scans and above 0.05 in none; at poses off by 0.5 m it exceeded 0.1
-//! in 91 %, off by 1 m in 96 %, by 20° in 99 %. Because the robot may be
+//! two cannot see the loss. At the true pose the contradiction stays near
+//! 0 among 60 visitors, and it exceeds 0.1 at nearly every pose off by
+//! 0.5 m or 20° (`cargo run --release -p lab --example status_roc -- 60 4`;
+//! figures in `crates/nav/EXPERIMENTS.md`). Because the robot may be
 //! pushed while it stands still (no filter iteration runs then), the scan
 //! is also judged at the current estimate every `check_period_s` (0.25 s)
 //! between iterations.

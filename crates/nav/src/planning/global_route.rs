@@ -1,7 +1,7 @@
 //! The global route on the static map, cut into intermediate goals.
 //!
 //! The local planner sees a 10 m window; a goal farther away is reached
-//! through a chain of intermediate goals (tour-guide spec, AutoMove). The
+//! through a chain of intermediate goals (docs/tour-guide.md, *AutoMove*). The
 //! route is computed with the same cost model as the local planner, over
 //! the whole map:
 //!

@@ -1,5 +1,5 @@
-//! Learning the supervisor's rates from the mission log (gspn.md,
-//! "Parameters"; tour-guide.md, "Learning across missions").
+//! Learning the supervisor's rates from the mission log (docs/gspn.md,
+//! "Parameters"; docs/tour-guide.md, "Learning across missions").
 //!
 //! | rate | from the log |
 //! |---|---|

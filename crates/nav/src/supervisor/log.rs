@@ -1,6 +1,6 @@
 //! The mission log: what the guide robot keeps between missions, one JSON
 //! line per calibration run or mission, appended and flushed, never
-//! rewritten (tour-guide.md, "Learning across missions").
+//! rewritten (docs/tour-guide.md, "Learning across missions").
 //!
 //! ```text
 //! {"kind":"calibration","net":"…","behaviour":"automove","success":true,"duration_s":61.2,"path_m":21.8,"trajectory":[[8.1,6.4],…]}

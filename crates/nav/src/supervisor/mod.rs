@@ -1,5 +1,5 @@
-//! GSPN behaviour selection for the tour-guide robot (spec: `gspn.md`,
-//! `tour-guide.md`).
+//! GSPN behaviour selection for the tour-guide robot (`docs/gspn.md`,
+//! `docs/tour-guide.md`).
 //!
 //! The supervisor net (`models/supervisor.toml`, embedded as [`MODEL`]) is
 //! solved under two hypotheses:

@@ -1,5 +1,5 @@
 //! Reference runs of a behaviour: how long it takes, how fast it goes, and
-//! the trajectory it drove — what λ7 and λ8 come from (gspn.md, "Parameters").
+//! the trajectory it drove — what λ7 and λ8 come from (docs/gspn.md, "Parameters").
 //!
 //! At the start of a mission the completion rate of a behaviour is
 //! `1 / mean travel time` of its reference runs; mid-mission it is

@@ -1,5 +1,5 @@
 //! Exploration: the robot drives from reference place to reference place
-//! and builds the fuzzy Petri net as it goes (topo-fpn.md, "Experiments":
+//! and builds the fuzzy Petri net as it goes (docs/topo-fpn.md, "Experiments":
 //! "explore with wall following and free movement").
 //!
 //! At the very start it drives straight ahead to the first obstacle: the

@@ -1,5 +1,5 @@
 //! The fuzzy Petri net of a topological map, `FPN = (P, T, D, I, O, f, λ, α, β)`
-//! (spec: `topo-fpn.md`), and its JSON file format.
+//! (`docs/topo-fpn.md`), and its JSON file format.
 //!
 //! * `P`: reference places ([`Place`]): where the robot had to abandon its
 //!   strategy because of an obstacle in front, with the odometry pose, the

@@ -1,4 +1,4 @@
-//! Topological maps as fuzzy Petri nets (spec: `topo-fpn.md`).
+//! Topological maps as fuzzy Petri nets (`docs/topo-fpn.md`).
 //!
 //! The robot's map is built from what its control system does: every
 //! reference place is where an obstacle made it abandon its strategy, and

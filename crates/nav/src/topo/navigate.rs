@@ -1,5 +1,5 @@
 //! Navigating with the map: from a known reference place to one of several
-//! goal places, transition by transition (topo-fpn.md, "Navigating with the
+//! goal places, transition by transition (docs/topo-fpn.md, "Navigating with the
 //! map").
 //!
 //! At the start the robot stands at the start place (its map pose is set to
@@ -88,254 +88,48 @@
 //! straight to the next obstacle. More than [`NavigateParams::max_legs`]
 //! legs: give up.
 //!
-//! **Measured, not kept** (the `topo` suite, 100 office routes, 2026-12-02;
-//! routes by map arrived on 45–48 % with the simulator's default odometry):
-//! heading from a place without a route towards the nearest place the map
-//! can route from, instead of a random untried action (42 %); leaving out of
-//! the rest of a route every transition that already failed on it (45 %);
-//! replaying a transition's exit turn as far as it turned when recorded (90°,
-//! 180° or 270°: 60 % against 64 % with calibrated odometry). What limits the
-//! routes is that a strategy played again from a place ends where it ended
-//! while exploring in about three legs of four, and a leg that ends at a
-//! new place leaves the robot off the map.
+//! **Why a replayed transition ends elsewhere.** Recognition is rarely the
+//! cause; the driving is. A place covers several stops (the two ends of a
+//! corridor hold a stop against either wall), and a stop reached while
+//! arcing round a door jamb is marginal: the same action from the same pose
+//! passes the door in one replay and stops on the jamb in the next. The
+//! decisions above — the recorded leaving heading, the way back, retracing,
+//! homing toward the goal, rejection after two equal wrong ends — each
+//! answer one of these failure modes; what still limits the routes is a
+//! door jamb met differently on replay, which leaves the robot in a room
+//! the map does not know.
 //!
-//! **Why a replayed transition ends elsewhere** (2026-12-03: 4 office
-//! explorations of 600 s, 10 routes each, the true pose logged at every
-//! leg; 28 of 40 routes arrived). Of 169 planned legs 35 ended elsewhere
-//! than planned, and 34 of those truly were elsewhere (more than 0.5 m or
-//! 45° from where the expected place was recorded): recognition is not the
-//! cause, the driving is. Two causes, often together:
+//! Rejected (on the `topo` suite; figures and commands in
+//! `crates/nav/EXPERIMENTS.md`, section `topo/navigate.rs`):
 //!
-//! - *where in a place the robot stands*: 11 of the 27 surprises on
-//!   explored transitions started 0.15–0.40 m from where the transition was
-//!   recorded, all at the two ends of the 1.5 m corridor, where one place
-//!   covers a stop against the south wall and one on the north side. From
-//!   0.55 m off the south wall the way north is 0.95 m, beyond the exit
-//!   turn's `clear_m` (0.9): the turn stops at 90° and the leg ends 0.4 m on
-//!   at the north wall; from 0.85 m it is 0.65 m, the turn goes on to 180°
-//!   and the wall follower runs down the corridor. Wall following from the
-//!   far side of the corridor meets a door with the wall still 0.6–0.8 m
-//!   away and stops on the jamb instead of passing it;
-//! - *destinations recorded on a marginal stop*: 16 of those 27 led to a
-//!   place recorded facing more than 20° off the walls' axes, a stop on a
-//!   door jamb while arcing through the door (e.g. the corridor's east end
-//!   → (8.3, 1.15) facing 133°, room 2 → (5.0, 1.9) facing −62°). Played
-//!   again even from the very pose it was recorded from (two legs started
-//!   within 1 cm), the same action passes the door: a few centimetres
-//!   decide such a stop.
-//!
-//! Then measured on the suite (office / floor / office_slips by map; 64 /
-//! 78 / 44 % before), and not kept: the exit turn's `clear_m` at 1.3 m
-//! (the stop distance and twice the recognition's base tolerance, so that
-//! no way across the corridor counts as free: 55 / 55 / 42 %, the
-//! explorations changed and fewer of their nets were connected, 1 of 10 in
-//! the office); planning on costs divided by each transition's reliability
-//! (Laplace's `(s + 1) / (n + 2)` from its attempts while navigating, the
-//! expected cost if a failed try were retried: 63 / 78 / 46 %, no change
-//! beyond noise — the failures come from transitions tried once or twice,
-//! whose estimate says little). Left to try: telling apart the stops a
-//! place covers by what the ring sees beside the robot (the side ranges at
-//! a corridor's end say which wall it stands against), so that a
-//! transition is replayed only from the standing it was recorded from; and
-//! not recording a stop reached while arcing round a wall's end as a
-//! destination to plan for.
-//!
-//! **What was changed then** (2026-12-03, the `topo` suite; office / floor
-//! / office_slips routes by map; with 30 explorations per world, 300
-//! routes each, `petrinav lab run topo --runs 30`, besides the default
-//! 10):
-//!
-//! | | 10 explorations | 30 explorations |
-//! |---|---|---|
-//! | before | 64 / 78 / 44 % | 60 / 71 / 57 % |
-//! | leaving on the recorded heading | 66 / 76 / 54 % | 70 / 74 / 62 % |
-//! | and the way back onto the net | 64 / 78 / 58 % | 73 / 76 / 63 % |
-//!
-//! - *leaving on the recorded heading*: the trace showed the stops'
-//!   headings spread by 20–40° (a wall follower stops wherever its arc
-//!   round a door jamb met something ahead), so a 90° step from the arrival
-//!   heading left on another heading than when the transition was
-//!   recorded: from the corridor's west end at −159° instead of 180° a
-//!   left turn to the east led 21° off the corridor's axis into the first
-//!   door's jamb, three times in a row on one route. Replayed on the
-//!   recorded map heading (odometry, recalibrated at concave places), the
-//!   legs that ended elsewhere fell from 161 to 112 of about 550 planned
-//!   legs (10 explorations) and from 1.59 to 1.10 per route;
-//! - *the way back*: it only uses transitions that have a recorded leaving
-//!   heading, since the robot arrives on the spot from another side; the
-//!   leg is then played as it was from the known place.
-//!
-//! Measured and not kept: recognising a stop only as a place whose side
-//! walls agree (the ranges at ±90° where a side is closed, within 0.15 m:
-//! the suggestion above) — the same corner is reached at different
-//! distances from its side walls by different strategies, so recall fell
-//! from 0.89 to 0.55, a fifth of the explorations' places split, and routes
-//! by map arrived on 44 / 62 / 49 %; following the wall on the closed side
-//! instead of a random untried action from a place without a route (58 /
-//! 74 / 58 %): in a room the map does not know, the walls lead round the
-//! room as often as out of it; leaving out of the rest of a route every
-//! transition that already ended elsewhere on it (30 explorations: 67 /
-//! 73 / 61 % against 73 / 76 / 63 %): with fewer ways left the robot more
-//! often has no route and wanders; avoiding them only while another route
-//! is known, and retrying them otherwise (71 / 76 / 64 %): where a failed
-//! transition has an alternative, λ's drop already finds it; ignoring, while the robot drives an
-//! arc, echoes on the arc's outer side that the arc turns away from (the
-//! door jamb a wall follower arcing through a door stops on: 63 / 63 /
-//! 65 %, the floor's explorations and routes worse); the explorer, too,
-//! leaving on the recorded heading when it replays a transition toward
-//! its frontier (30 explorations: 67 / 73 / 66 %, the office's nets no
-//! better connected).
-//!
-//! What remains (the suite's report counts it from the legs judged
-//! against the true poses; 30 explorations): 82 of the office's 300 routes
-//! fail, 80 on the time limit. Of the 291 planned legs that ended
-//! elsewhere 241 truly were elsewhere and 17 were at the planned place but
-//! not recognised as it. In 40 of the failures the robot played again a
-//! transition that had already ended elsewhere on the same route and ended
-//! at the same wrong place again (replays are now repeatable: the outcome
-//! recorded while exploring was the marginal one — a door jamb passed
-//! once and stopped on ever after), and in 33 it spent most of its legs
-//! off the net, in a room the exploration had not mapped, where
-//! no known place is near enough for a way back.
-
-//!
-//! **What was changed then** (2026-12-04, issue 13: the office's routes
-//! by map arrived on 73 % with 30 explorations; `petrinav lab run topo
-//! --runs 30`, office / floor / office_slips routes by map, 300 each):
-//!
-//! | | office | floor | office_slips |
-//! |---|---|---|---|
-//! | before | 73 % (67–77) | 76 % | 63 % |
-//! | homing toward the nearest place with a route, instead of untried actions | 74 % | 76 % | 69 % |
-//! | homing toward the goal, rejection after two same wrong ends, turning on a goal's spot | 78 % | 80 % | 72 % |
-//! | and the thresholds of earlier routes restored when there is no route | 84 % | 78 % | 74 % |
-//! | and homing along the free heading nearest the bearing | 87 % | 77 % | 77 % |
-//! | and homing from every place without a route, a Bug-like side, no re-borrowing, stopping at the point, facing by going on to the obstacle (as now) | 87 % (83–91) | 80 % | 79 % |
-//!
-//! Found in the failing routes (true poses beside every leg): the
-//! replayed transitions' durations tell the surprises apart (of 1,021
-//! legs that ended as planned, 1,012 lasted 0.6–1.5 times the recorded
-//! duration; of 215 that did not, 158 lasted less or more); in 47 of 300
-//! routes the map learnt on earlier routes had no route left at the start
-//! (λ lowered by their failures on the only known way); a third of the
-//! failures spent most of their legs off the net in a room the
-//! exploration had not mapped, where random untried actions rarely found
-//! the door back; a route whose failing transition was a way back looped
-//! on it, since borrowed legs were not counted. Measured and not kept:
-//! homing toward the nearest place with a route (85–86 %) or toward the
-//! last place left by a planned route (78 %) instead of the goal; a spot
-//! of 0.6 m instead of the base tolerance's 0.4 (85 %, more routes
-//! declared arrived at the wrong place, the floor 73 %); the wall
-//! follower's side distance measured from 67.5° instead of 45° so that a
-//! far door jamb does not look like the wall (office 77 %, the floor 55 %);
-//! flipping homing's side on revisiting a place instead of on not getting
-//! nearer (the same 88 %); recognising the goal after turning on its spot
-//! with the expected place's extra tolerance and compatible types (88 %
-//! against 87 %, more routes of the floor and office_slips declared
-//! arrived at the wrong place). With 900 s instead of 300 s per route the
-//! routes before the change arrived on 86 %: the time lost was in loops,
-//! not only in slow recoveries.
-//!
-//! What remains (30 explorations, 38 of the office's 300 routes fail, 33
-//! on the time limit, 4 declared arrived 0.6–2.5 m from the goal): in
-//! 26 the robot spent most of its legs off the net — mostly in a room the
-//! exploration did not map, which homing leaves only when its detour
-//! meets the door — and in 13 one transition ended twice at the same
-//! wrong place (the door jambs of the corridor: a wall follower arcing
-//! into a door stops on the far jamb in one replay and passes it in the
-//! next).
-//!
-//! **What was changed then** (2026-12-04, issue 13 outcome 3, branch
-//! `topo6`; `petrinav lab run topo --runs 30`, office / floor /
-//! office_slips routes by map, 300 each; and the default `petrinav lab
-//! run topo`, 100 each):
-//!
-//! | | 30 explorations | 10 explorations |
-//! |---|---|---|
-//! | before | 87 % (83–91) / 80 / 79 % | 86 / 82 / 70 % |
-//! | homing stops past the closest approach alone | 89 / 81 / 76 % | |
-//! | retracing alone | 88 / 78 / 80 % | |
-//! | both | 91 % (87–93) / 80 / 80 % | 91 / 81 / 70 % |
-//! | and recalibrating only on a firm match (as now; [`super::RecognitionParams::firm_recalibration`]) | 91 % (87–94) / 80 / 81 % | 90 / 81 / 70 % |
-//!
-//! In routes: 262 / 241 / 236 of 300 before, 273 / 239 / 242 now.
-//!
-//! The 30 campaigns are not enough to tell 91 % from 86 %: with
-//! `petrinav lab run topo --runs 60` (the same first 30 campaigns, 30
-//! more; measured 2026-12-04 at dff460a) the office's routes by map arrive
-//! on 86 % (83–88) of 600 and office_slips' on 82 % (79–85), with 79 and
-//! 97 time limits; the office's nets were strongly connected in 13 % of
-//! the 60 explorations.
-//!
-//! Found in the 38 failing office routes (true poses beside every leg):
-//! in 28 of them the first leg that ended elsewhere than planned truly
-//! ended in another room than the planned place (a door passed where the
-//! exploration had stopped on its jamb, or the other way round; 17 of
-//! those planned places were stops more than 20° off the walls' axes, on
-//! a jamb); 4 had no such leg. Most often the
-//! corridor's west end → the jamb of room 1's door, where the replay
-//! passed the door (6 routes), its east end → into room 3, where the
-//! replay stopped on the jamb (5), room 3's north-west corner → the jamb
-//! of the door to room 2 (4). Then the robot stood at a new place in a
-//! room the map did not know, and homing toward the goal's map position,
-//! along the free heading nearest its bearing, went round the room (the
-//! room's walls block every bearing but the door's) or drove past the
-//! door to the goal's room to the corridor's end, 5 m on. Both changes
-//! are in the list above:
-//!
-//! - *retracing* (3.): the leg that led off the net is a strategy that
-//!   can be played backwards: wall following on the other side follows
-//!   the same wall back through the same door, to the spot of the place
-//!   it left, from which the way back (2.) or the plan go on. Of the
-//!   office's planned legs that ended at a new place (104), the next leg
-//!   ended within 0.5 m of where the surprising one had started in 47
-//!   (16 of 92 before); the rest stopped on a jamb again on the way
-//!   back (room 1's door from inside: the arc round its west jamb meets
-//!   the east one) or came back elsewhere;
-//! - *homing stops past the closest approach* (4.): along the corridor
-//!   the robot stops below the door, and the next homing leg's free
-//!   heading nearest the bearing is the way through it. Its first form,
-//!   without "nearer than any homing leg came before" (89 / 82 / 76 %),
-//!   looped in an office_slips route between two legs passing a
-//!   misplaced goal point back and forth; the condition ends that loop,
-//!   but office_slips stayed at 76 % until retracing came with it;
-//! - *a firm match to recalibrate* (recognition module docs): in one
-//!   failing route the expected place, matched 0.7 m and 43° off thanks
-//!   to its extra tolerance, moved the map pose by 0.7 m, and the robot
-//!   then shuttled for 40 legs between two new places on the goal's very
-//!   spot. Fixed; over the suite within noise (+1 office route, +1
-//!   office_slips, the floor identical).
-//!
-//! Measured and not kept (30 explorations, with the three above):
-//! homing along a free heading up to 87° off the bearing instead of
-//! 67.5° (every heading along which the distance still shrinks; from
-//! inside room 1 the way out through its door is 77–85° off the goal's
-//! bearing: 90 / 79 / 81 %); stopping a homing leg when the point is
-//! abeam (90° off the heading) instead of 0.25 m past the nearest (in a
-//! looping route of room 3 the stop past the nearest came 0.7 m beyond
-//! the door below, whose way out the ring then did not see: 91 / 79 /
-//! 79 %);
-//! leaving a place by an untried action instead of homing once a homing
-//! leg from there ended twice at one place (in 9 of the 27 failing
-//! office routes an unplanned leg from one place to another recurs
-//! three times or more: 90 / 80 / 81 % — in a
-//! room the map does not know, untried actions find the door no better);
-//! after a retrace that ended at a new place short of the place it led
-//! back to (room 1's other jamb), homing toward that place instead of
-//! the goal (91 / 81 / 80 %: the office unchanged, 5 routes won and 5
-//! lost); retracing also a leg that ended at a known place without a
-//! route, not only at a new one (86 / 79 / 79 %: a known place is on
-//! ground the map covers, where homing does better than going back).
-//!
-//! What remains (30 explorations, 27 of the office's 300 routes fail, 22
-//! on the time limit, 5 declared arrived 0.5–1.8 m from the goal): in 19
-//! the first leg that ended elsewhere than planned ended in another room
-//! than the planned place (a door jamb again: above all the corridor's
-//! west end → the jamb of room 1's door, whose replay passes the door,
-//! and whose retrace stops on the other jamb from inside), 3 had none;
-//! 17 spent at least half of their legs off the net, 12 played a
-//! transition that ended twice at the same wrong place. Floor: 61 of
-//! 300 fail (49 on time), office_slips: 58 (50 on time).
+//! - heading from a place without a route towards the nearest place the
+//!   map can route from, or toward the last place a planned route left,
+//!   instead of homing toward the goal, because routes arrived less often;
+//! - replaying the exit turn by its recorded steps (90°, 180°, 270°),
+//!   because the stops' headings spread by tens of degrees;
+//! - the exit turn's `clear_m` at 1.3 m, because the explorations changed
+//!   and fewer of their nets were connected;
+//! - planning on costs divided by each transition's reliability, because
+//!   the failures come from transitions tried once or twice, whose
+//!   estimate says little;
+//! - recognising a stop only where its side walls agree, because one corner
+//!   is reached at different distances from its walls by different
+//!   strategies (recall fell by a third);
+//! - following the wall on the closed side instead of an untried action,
+//!   because in a room the map does not know the walls lead round the room
+//!   as often as out of it;
+//! - leaving out of the rest of a route every transition that already
+//!   failed on it (or avoiding them only while another route is known),
+//!   because with fewer ways left the robot more often has no route and
+//!   wanders;
+//! - ignoring echoes on an arc's outer side, a spot of 0.6 m around a goal,
+//!   the wall follower's side distance from 67.5°, flipping homing's side
+//!   on revisiting a place, and the explorer leaving on the recorded heading
+//!   too, because none did better and most did worse on one of the worlds;
+//! - homing along free headings up to 87° off the bearing, stopping a
+//!   homing leg abeam of the point, leaving by an untried action after two
+//!   equal homing ends, and retracing legs that end at a known place,
+//!   because none beat the rules above.
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

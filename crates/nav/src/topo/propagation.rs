@@ -1,5 +1,5 @@
-//! Route planning by propagation over the fuzzy Petri net (spec:
-//! `topo-fpn.md`, "Route planning by propagation").
+//! Route planning by propagation over the fuzzy Petri net
+//! (`docs/topo-fpn.md`, "Route planning by propagation").
 //!
 //! 1. `α(p_g) = 0` for every goal place, `α(p) = 1` for the others.
 //! 2. Rounds of, with synchronous updates (every `f` from the `α` of the

@@ -1,6 +1,6 @@
 //! Is a newly detected reference place one the robot already knows?
 //!
-//! The source does not say; **Decision** (topo-fpn.md): a detection matches
+//! The source does not say; **Decision** (docs/topo-fpn.md): a detection matches
 //! a known place when
 //!
 //! 1. it is of the **same type** (a, b or c),
@@ -20,12 +20,9 @@
 //! still required, and a type that is the same or *compatible*
 //! ([`PlaceKind::compatible`]: one of the two is (c)) — the route says where
 //! the robot should be, and a side whose free distance is near the
-//! threshold of "open" flips a stop between (a) or (b) and (c). Measured
-//! on 48 office routes (6 explorations): a quarter of the legs that ended
-//! elsewhere than planned had truly ended at the planned place, half of
-//! them for a flipped type; with compatible types the legs as planned rose
-//! from 70 % to 76 %, and the `topo` suite's routes by map from 48 % to
-//! 51 % (office) and 68 % to 72 % (floor).
+//! threshold of "open" flips a stop between (a) or (b) and (c): legs that
+//! truly ended at the planned place were otherwise counted as failures
+//! (figures: `crates/nav/EXPERIMENTS.md`, section `topo/recognition.rs`).
 //!
 //! Matching a **concave** place from a concave situation **recalibrates**
 //! odometry: the robot's map position is reset to the place's (its two

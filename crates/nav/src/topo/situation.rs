@@ -1,6 +1,6 @@
 //! What kind of reference place the robot has stopped at: which turns the
 //! obstacle ahead leaves open, and whether a concave corner is there to
-//! recalibrate odometry against (topo-fpn.md, "Reference places").
+//! recalibrate odometry against (docs/topo-fpn.md, "Reference places").
 //!
 //! Read from the ring when the robot has stopped with an obstacle ahead:
 //!

@@ -1,6 +1,6 @@
 //! The navigation strategies of the topological layer, executed from one
 //! reference place to the next on a sonar-ring robot: free movement, wall
-//! following left or right, detour left or right (topo-fpn.md).
+//! following left or right, detour left or right (docs/topo-fpn.md).
 //!
 //! A transition starts where the robot stopped in front of an obstacle (a
 //! reference place). [`Executor`] plays it in two phases:

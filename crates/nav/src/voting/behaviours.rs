@@ -1,4 +1,4 @@
-//! The four voting behaviours (spec: voting.md). Each maps its sensors to
+//! The four voting behaviours (docs/voting.md). Each maps its sensors to
 //! one vote in [0, 1] per action (1 = most desired).
 
 use std::f64::consts::PI;

@@ -1,4 +1,4 @@
-//! Dynamic weighted voting (spec: voting.md; Amin, Mamat & Kwong 2005).
+//! Dynamic weighted voting (docs/voting.md; Amin, Mamat & Kwong 2005).
 //!
 //! Every behaviour votes in [0, 1] for every action of a small discrete set;
 //! a weight manager sets the behaviours' weights from the situation; the

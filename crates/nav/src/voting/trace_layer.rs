@@ -1,5 +1,5 @@
-//! The behaviour activity trace as a layer on the voting controller (spec:
-//! activity-trace.md, "Beyond the source").
+//! The behaviour activity trace as a layer on the voting controller
+//! (docs/activity-trace.md, "Beyond the source").
 //!
 //! **Decision — characteristic events from the voting outcome:**
 //!

@@ -1,4 +1,4 @@
-//! The dead-lock suite (activity-trace.md): a dead-end trap drawn per run
+//! The dead-lock suite (docs/activity-trace.md): a dead-end trap drawn per run
 //! (U, and V in two rows) on the course to the goal; priority arbitration
 //! on the 16-sonar ring robot with and without dead-lock detection +
 //! recovery (and with drifting odometry), voting on AIBOT with and without

@@ -10,19 +10,9 @@
 //!
 //! After a leg that ends without arriving (collision, time-out, lost, no route), the
 //! next starts at the place it was heading for, the robot put there by its
-//! operator ([`crate::mission`]'s decision): before, one failure cascaded
-//! through the rest of the tour. Measured (`lab run maps`, 2026-12-03,
-//! contour legs reached of 33, building_31 / levine at 0 / 20 / 60
-//! people): cascading 28 13 12 / 32 31 22; with the operator 30 25 20 /
-//! 32 31 29; with the operator and the concave-corner rule of
-//! `nav::guide::contour` 31 26 20 / 33 31 27. AutoMove 33 31 27 / 33 33 29
-//! → 33 32 25 / 33 33 27: the legs after its time-outs now start elsewhere,
-//! so they meet other crowds; the two fewer among 60 people were not
-//! examined further. Since 2026-12-04 a collision is followed the same way
-//! (it used to be an operator's nudge to where the robot was a second
-//! before, still touching distance from the wall): with contour tracking's
-//! door rules of that day, contour 33 26 24 / 33 33 29 → 33 27 24 /
-//! 33 33 29, AutoMove unchanged.
+//! operator ([`crate::mission`]'s decision), so that one failure does not
+//! cascade through the rest of the tour (figures before and after:
+//! `crates/lab/EXPERIMENTS.md`).
 //!
 //! Per leg it records the common measures and, as metrics, the localizer's
 //! true error (`loc_mean_error_m`, `loc_max_error_m`), its warnings

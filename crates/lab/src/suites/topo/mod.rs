@@ -1,4 +1,4 @@
-//! The topological-map suite (topo-fpn.md, "Experiments"): a robot with
+//! The topological-map suite (docs/topo-fpn.md, "Experiments"): a robot with
 //! only a ring of 16 sonars and odometry explores an office, builds its
 //! fuzzy Petri net from its own stops, and then drives routes between the
 //! places it knows — with the map, and, for comparison, by wall following
@@ -29,16 +29,11 @@
 //! place), from which the report counts the failures' causes.
 //!
 //! **Decision — exploration time.** 600 s in the office (about 100 m of
-//! driving, 23 stops): explored for 1,800 s instead, the net grew to 40
-//! places and 70 transitions (40 % strongly connected instead of 20 %),
-//! its routes got longer, and routes by the map arrived less often (40 %
-//! against 51 %): each place approached from another heading is another
-//! place, so the map keeps growing and every extra transition on a route
-//! is another chance of a surprise. Measured again once transitions were
-//! replayed on their recorded leaving headings (2026-12-03): 1,200 s in
-//! both offices gave 26 places and 44 transitions, 40 % of the office's
-//! nets strongly connected instead of 30 %, and routes by the map arrived
-//! on 55 % (office) and 51 % (office_slips) against 64 % and 58 %.
+//! driving, 23 stops). Rejected: longer explorations (1,200 s, 1,800 s),
+//! because each place approached from another heading is another place,
+//! so the map keeps growing, routes get longer, and every extra
+//! transition on a route is another chance of a surprise: routes by the
+//! map arrived less often (`crates/lab/EXPERIMENTS.md`).
 //!
 //! **Decision — connectivity, reported both ways.** A net is *connected*
 //! when its graph, arcs taken either way, is in one piece, and *strongly
@@ -50,12 +45,8 @@
 //! again from nowhere known), while the first places (met from wherever
 //! the robot happened to start) and the last ones (found just before the
 //! time ran out) are rarely reached again, so a whole net is seldom
-//! strongly connected. Measured (`petrinav lab run topo --runs 30`,
-//! 2026-12-04): the office's nets connected 30 of 30, strongly connected
-//! 5 of 30, the largest strongly connected part 69 % of the places; the
-//! floor's 0 of 30 connected (10 failed legs per exploration), its largest
-//! strongly connected part 15 %. The `explore` rows' `I_R` stays the
-//! strong notion.
+//! strongly connected. The `explore` rows' `I_R` stays the strong
+//! notion (figures: `crates/lab/EXPERIMENTS.md`).
 //!
 //! **Decision — the odometry** is calibrated (slips of σ 1 % per wheel and
 //! step, no large slips; [`crate::topo`]'s docs), as in the dead-lock

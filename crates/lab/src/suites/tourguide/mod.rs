@@ -1,4 +1,4 @@
-//! The tour-guide suite (tour-guide.md, "The museum experiment"): the
+//! The tour-guide suite (docs/tour-guide.md, "The museum experiment"): the
 //! guide robot takes visitors from the start (8.1, 6.4) to the goal
 //! (8.5, 27.5) of a 15 m × 35 m museum hall (`museum.toml`), mission after
 //! mission, among visitors, with six strategies:

@@ -1,5 +1,5 @@
 //! The voting suite's explanation: every observation the source reports
-//! (voting.md, "What the source observed") checked against this batch's
+//! (docs/voting.md, "What the source observed") checked against this batch's
 //! numbers — each marked as holding or not, with the reason where not —
 //! and why the results come out as they do.
 //!
@@ -180,7 +180,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let mut out = String::from("\n## The source's observations, checked against this batch\n\n");
     let _ = writeln!(
         out,
-        "Each observation of the source (voting.md, \"What the source observed\") is tested on the numbers above; the thresholds are the words' plain reading: *reliably* is I_R ≥ {RELIABLE}, *sufficient, with only a few failures* is I_R ≥ {SUFFICIENT} on every field, *rarely* is a mean I_R ≤ {RARELY} over the traps, *several-fold* is at least {SEVERAL}×; comparisons of groups of fields use the mean over the group's fields.\n"
+        "Each observation of the source (docs/voting.md, \"What the source observed\") is tested on the numbers above; the thresholds are the words' plain reading: *reliably* is I_R ≥ {RELIABLE}, *sufficient, with only a few failures* is I_R ≥ {SUFFICIENT} on every field, *rarely* is a mean I_R ≤ {RARELY} over the traps, *several-fold* is at least {SEVERAL}×; comparisons of groups of fields use the mean over the group's fields.\n"
     );
 
     // 1. Field 1.
@@ -506,7 +506,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             .collect();
         let _ = writeln!(
             out,
-            "With the activity-trace layer (e5 = e4 + dead-lock detection and potential-field recovery, activity-trace.md) the traps' mean I_R is {} against {} with planning alone; on fields 1–11 {} against {}. e4 and e5 meet the same start, jitter and noise in run k, so a run in which the layer detects no dead-lock is the e4 run tick for tick; the layer detects {} dead-locks per run on fields 1–11 and {} on the traps. Run by run, e5 against e4: {} of {} runs on fields 1–11 are identical, {} won and {} lost; on the traps {} won and {} lost ({}).\n",
+            "With the activity-trace layer (e5 = e4 + dead-lock detection and potential-field recovery, docs/activity-trace.md) the traps' mean I_R is {} against {} with planning alone; on fields 1–11 {} against {}. e4 and e5 meet the same start, jitter and noise in run k, so a run in which the layer detects no dead-lock is the e4 run tick for tick; the layer detects {} dead-locks per run on fields 1–11 and {} on the traps. Run by run, e5 against e4: {} of {} runs on fields 1–11 are identical, {} won and {} lost; on the traps {} won and {} lost ({}).\n",
             f2(t5),
             f2(t4),
             f2(r5),

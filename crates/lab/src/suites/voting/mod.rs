@@ -1,4 +1,4 @@
-//! The voting suite (voting.md): the fourteen fields of
+//! The voting suite (docs/voting.md): the fourteen fields of
 //! `scenarios/` here × the four behaviour combinations of the source
 //! (`e1`…`e4`), and `e4` with the activity-trace layer (`e5`).
 //!
@@ -24,8 +24,8 @@
 //! middle line, inside the ±90° IR beams' reach (0.95 m), so from near
 //! that line the IR sees both arms and the IR-only robot drives out as
 //! down a corridor — its escapes come from this geometry, not from chance
-//! (the explanation, observation 6, gives the numbers and the wider U
-//! measured and not kept). Every goal is 1.4 m or more from the wall
+//! (the explanation, observation 6, gives the numbers, and why a wider U
+//! was rejected). Every goal is 1.4 m or more from the wall
 //! beyond it. Per run, the start pose spreads by 0.1 m and ±15°, obstacles
 //! of fields 2–5 and 14 move by up to 5 cm, and sensor and odometry noise
 //! are drawn from the run's seed.
@@ -75,7 +75,7 @@ pub const FIELDS: [(&str, &str); 14] = [
 
 /// The experiments: `e1`…`e4` are the source's four behaviour
 /// combinations; `e5` is `e4` with the activity-trace layer (dead-lock
-/// detection and recovery, activity-trace.md).
+/// detection and recovery, docs/activity-trace.md).
 pub const EXPERIMENTS: u32 = 5;
 
 /// The label of an experiment (`e1` … `e5`), e.g. "IR+sonar / odo+plan".
