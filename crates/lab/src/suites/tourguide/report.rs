@@ -6,7 +6,7 @@
 //! the true losses, and an explanation — every figure from the batch's
 //! records.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
@@ -527,6 +527,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     blocks.push(Block::Heading("The museum day, mission by mission".into()));
     blocks.push(Block::Text(day_text(runs)));
     blocks.push(Block::Table(day_table(runs)));
+    blocks.push(Block::Text(day_why(runs)));
 
     // 6. The Warning against true losses.
     blocks.push(Block::Heading("What a Warning means".into()));
@@ -722,6 +723,76 @@ fn day_table(runs: &Runs) -> String {
         );
     }
     md
+}
+
+/// Why the supervisor failed the missions a fixed strategy reached on the
+/// museum day, read from its decisions, and what the net would need: one
+/// paragraph per cause (empty where the supervisor lost none).
+fn day_why(runs: &Runs) -> String {
+    let sup = by_run(runs, "day/supervisor");
+    let decisions: Vec<&Event> = sup
+        .values()
+        .flat_map(|r| r.events.iter().filter(|e| e.kind == "decision"))
+        .collect();
+    let as_rule = decisions
+        .iter()
+        .filter(|e| {
+            let contour = e.text("choice") == Some("contour");
+            contour == (e.text("reason") == Some("warning"))
+        })
+        .count();
+    // Causes, in this order: began in contour tracking, kept AutoMove at a
+    // Warning, chose contour tracking at a Warning, no Warning at all.
+    let mut causes = [0usize; 4];
+    let mut lost_to = BTreeSet::new();
+    for other in FIXED {
+        let oth = by_run(runs, &format!("day/{other}"));
+        for (k, r) in &sup {
+            if r.success || !oth.get(k).is_some_and(|o| o.success) || !lost_to.insert(*k) {
+                continue;
+            }
+            let at_warning: Vec<Option<&str>> = r
+                .events
+                .iter()
+                .filter(|e| e.kind == "decision" && e.text("reason") == Some("warning"))
+                .map(|e| e.text("choice"))
+                .collect();
+            let cause = if start_decision(r).and_then(|e| e.text("choice")) == Some("contour") {
+                0
+            } else if at_warning.contains(&Some("automove")) {
+                1
+            } else if !at_warning.is_empty() {
+                2
+            } else {
+                3
+            };
+            causes[cause] += 1;
+        }
+    }
+    if decisions.is_empty() {
+        return String::new();
+    }
+    let mut out = format!(
+        "The supervisor chose as the rule does (AutoMove at the start and on recovery, contour tracking at a Warning) at {as_rule} of its {} decisions. Of the {} missions that some fixed strategy reached and the supervisor did not:",
+        decisions.len(),
+        lost_to.len()
+    );
+    let needs = [
+        "began in contour tracking among visitors — contour tracking had been seen only in emptier halls, and the net can only weigh what the log holds: it would need the crowd's effect on contour tracking before its first crowded mission (the learning assumes the crowd acts on both behaviours alike until their own data say otherwise)",
+        "kept AutoMove at a Warning — λ12 is one exponential rate for every Warning, a short one that clears by itself and a kidnap alike: the net would need the Warning's cause or age (a Warning state per cause, or a phase-type sojourn) to tell them apart",
+        "chose contour tracking at a Warning and still failed — the choice the rule makes; no decision of the net would have saved these",
+        "met no Warning before failing — a true loss the localizer did not flag, or a collision while localized: the net had nothing to decide on; it would need the loss to be seen (sensing the push itself, e.g. an IMU)",
+    ];
+    for (n, need) in causes.iter().zip(needs) {
+        if *n > 0 {
+            let _ = write!(out, " {n} {need};");
+        }
+    }
+    if out.ends_with(';') {
+        out.pop();
+    }
+    out.push_str(".\n\n");
+    out
 }
 
 /// What the day measures, and per quarter how the supervisor chose.
