@@ -215,6 +215,20 @@ impl Chain<'_> {
         self.incoming.dot_row(j, self.values, x)
     }
 
+    /// Relative residual of `x`: `‖x Q (+ b)‖₁ / Σ_j exit_j x_j`, the total
+    /// flow imbalance over the total flow; `rhs` is `b`, or none for the
+    /// stationary equations.
+    pub(crate) fn residual(&self, x: &[f64], rhs: Option<&[f64]>) -> f64 {
+        let (mut imbalance, mut flow) = (0.0, 0.0);
+        for j in 0..self.n() {
+            let b = rhs.map_or(0.0, |b| b[j]);
+            let out = self.exit(j) * x[j];
+            imbalance += (self.inflow(j, x) + b - out).abs();
+            flow += out.abs();
+        }
+        if flow > 0.0 { imbalance / flow } else { imbalance }
+    }
+
     /// Calls `f(i, q_ij)` for the incoming entries of `j`.
     pub(crate) fn for_each_in(&self, j: usize, f: &mut dyn FnMut(usize, f64)) {
         let (a, b) = self.incoming.range(j);
@@ -225,4 +239,12 @@ impl Chain<'_> {
             );
         }
     }
+}
+
+/// Index of the largest finite positive entry (0 if none).
+pub(crate) fn most_probable(x: &[f64]) -> usize {
+    (0..x.len())
+        .max_by(|&a, &b| x[a].total_cmp(&x[b]))
+        .filter(|&k| x[k] > 0.0 && x[k].is_finite())
+        .unwrap_or(0)
 }
