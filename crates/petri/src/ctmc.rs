@@ -38,7 +38,7 @@ use crate::interrupt::Interrupt;
 use crate::marking::MarkingStore;
 use crate::net::{Params, PlaceId, TransitionId};
 use crate::reachability::{ExploreParams, ExploreStats, ReachabilityGraph};
-use crate::rows::{Chain, Ids, Rows};
+use crate::rows::{Chain, Ids, Offset, Offsets, Rows};
 use crate::scc::{Components, Successors};
 use crate::steady_state::{self, SolveInfo, SolveParams};
 use crate::vanishing;
@@ -266,6 +266,54 @@ impl Dictionary {
     }
 }
 
+/// The incoming rows of the outgoing rows `(offsets, dst, ids)`, self-loops
+/// left out (and pushed on `self_loops` as `(state, value id)`), each row
+/// sorted by source. `in_offsets[d]` serves as row `d`'s fill cursor, so no
+/// other array of states is allocated; at the end it holds the row's end,
+/// i.e. the next row's start, and is shifted back. `O(entries + states)`.
+fn transpose<O: Offset>(
+    offsets: &Offsets,
+    dst: &[u32],
+    ids: &Ids,
+    dictionary_len: usize,
+    self_loops: &mut Vec<(u32, u32)>,
+) -> (Vec<O>, Vec<u32>, Ids) {
+    let n = offsets.len() - 1;
+    let mut in_offsets = vec![O::ZERO; n + 1];
+    for s in 0..n {
+        let (a, b) = (offsets.get(s), offsets.get(s + 1));
+        for (k, &d) in (a..b).zip(&dst[a..b]) {
+            if d as usize != s {
+                let c = &mut in_offsets[d as usize + 1];
+                *c = O::of(c.to() + 1);
+            } else {
+                self_loops.push((s as u32, ids.get(k) as u32));
+            }
+        }
+    }
+    for j in 0..n {
+        in_offsets[j + 1] = O::of(in_offsets[j + 1].to() + in_offsets[j].to());
+    }
+    let m = in_offsets[n].to();
+    let mut in_src = vec![0u32; m];
+    let mut in_ids = Ids::zeros(m, dictionary_len);
+    for s in 0..n {
+        let (a, b) = (offsets.get(s), offsets.get(s + 1));
+        for (k, &d) in (a..b).zip(&dst[a..b]) {
+            let d = d as usize;
+            if d != s {
+                let pos = in_offsets[d].to();
+                in_offsets[d] = O::of(pos + 1);
+                in_src[pos] = s as u32;
+                in_ids.set(pos, ids.get(k));
+            }
+        }
+    }
+    in_offsets.copy_within(0..n, 1);
+    in_offsets[0] = O::ZERO;
+    (in_offsets, in_src, in_ids)
+}
+
 /// Whether every state reaches and is reached from state 0 (one forward
 /// and one backward search; cheaper than Tarjan for the common ergodic case).
 /// When `M0` is tangible (state 0), every state is reachable from it by
@@ -403,43 +451,20 @@ impl CompiledGspn {
         }
 
         // Incoming rows: the transpose without self-loops. Sources are visited
-        // in order, so each row comes out sorted.
+        // in order, so each row comes out sorted. Offsets are narrowed
+        // before the value ids, while the transitions are still 4 bytes
+        // wide and the incoming rows not yet allocated (the peak is later).
         let dl = dict.pairs.len();
+        let offsets = Offsets::new(offsets);
         let ids = Ids::new(ids, dl);
         let mut self_loops = Vec::new();
-        let mut in_offsets = vec![0u64; n + 1];
-        for s in 0..n {
-            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
-            for (k, &d) in (a..b).zip(&dst[a..b]) {
-                if d as usize != s {
-                    in_offsets[d as usize + 1] += 1;
-                } else {
-                    self_loops.push((s as u32, ids.get(k) as u32));
-                }
-            }
-        }
-        for j in 0..n {
-            in_offsets[j + 1] += in_offsets[j];
-        }
-        let m = in_offsets[n] as usize;
-        let mut in_src = vec![0u32; m];
-        let mut in_ids = Ids::zeros(m, dl);
-        // `in_offsets[d]` serves as row d's fill cursor; at the end it holds
-        // the row's end, i.e. the next row's start: shifted back below.
-        for s in 0..n {
-            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
-            for (k, &d) in (a..b).zip(&dst[a..b]) {
-                let d = d as usize;
-                if d != s {
-                    let pos = in_offsets[d] as usize;
-                    in_offsets[d] += 1;
-                    in_src[pos] = s as u32;
-                    in_ids.set(pos, ids.get(k));
-                }
-            }
-        }
-        in_offsets.copy_within(0..n, 1);
-        in_offsets[0] = 0;
+        let (in_offsets, in_src, in_ids) = if dst.len() <= u32::MAX as usize {
+            let (o, s, i) = transpose::<u32>(&offsets, &dst, &ids, dl, &mut self_loops);
+            (Offsets::U32(o), s, i)
+        } else {
+            let (o, s, i) = transpose::<u64>(&offsets, &dst, &ids, dl, &mut self_loops);
+            (Offsets::U64(o), s, i)
+        };
         let mut fires = vec![false; gspn.num_transitions()];
         for k in 0..dst.len() {
             fires[dict.pairs[ids.get(k)].0 as usize] = true;
@@ -648,7 +673,7 @@ impl CompiledGspn {
         add("packed markings", "chain", self.store.heap_bytes());
         add("tangible → graph index", "chain", self.tangible_rg.capacity() * 4);
         let inc = &self.incoming;
-        add("incoming rows: offsets", "chain", inc.offsets.capacity() * 8);
+        add("incoming rows: offsets", "chain", inc.offsets.bytes());
         add("incoming rows: column indices", "chain", inc.index.capacity() * 4);
         add("incoming rows: value ids", "chain", inc.ids.bytes());
         add("incoming rows: diagonal split", "chain", inc.below.capacity() * 4);

@@ -75,18 +75,21 @@ pub fn default_max_memory() -> u64 {
 }
 
 /// Bytes per tangible marking that solving adds to the compiled chain's
-/// incoming rows and packed markings: the rows' offsets (8) and diagonal
-/// split (4), the exit rates (8) and BiCGSTAB's seven vectors of doubles
-/// (56); a few more for the dictionary's values and the reductions.
-pub const SOLVE_BYTES_PER_STATE: u64 = 80;
+/// incoming rows and packed markings: the rows' offsets (4, or 8 beyond
+/// 2³² entries) and diagonal split (4), the exit rates (8) and BiCGSTAB's
+/// seven vectors of doubles (56); a little more for the dictionary's values
+/// and the reductions.
+pub const SOLVE_BYTES_PER_STATE: u64 = 72;
 /// Bytes per edge that compiling adds to the graph's 8 (4-byte target,
 /// 4-byte transition) while both directions of the generator exist: the
 /// incoming rows (4-byte index, 2-byte value id) less the 2 bytes saved by
 /// narrowing the outgoing transitions to 2-byte value ids.
 pub const COMPILE_BYTES_PER_EDGE: u64 = 4;
 /// Bytes per marking that compiling adds to the graph: the incoming rows'
-/// offsets, built while the outgoing rows still exist.
-pub const COMPILE_BYTES_PER_STATE: u64 = 8;
+/// offsets (4 bytes, or 8 beyond 2³² entries, when the outgoing ones are
+/// narrowed from 8 to 4 bytes as well), built while the outgoing rows still
+/// exist.
+pub const COMPILE_BYTES_PER_STATE: u64 = 4;
 
 /// Estimated peak bytes of generating, compiling and solving a state space
 /// whose reachability graph takes `graph_bytes` *without* the marking
@@ -107,8 +110,10 @@ pub const COMPILE_BYTES_PER_STATE: u64 = 8;
 /// `CompiledGspn::memory_account` lists what was actually allocated.
 pub fn estimated_bytes(graph_bytes: u64, markings: usize, edges: usize) -> u64 {
     let (m, e) = (markings as u64, edges as u64);
-    let compile = graph_bytes + e * COMPILE_BYTES_PER_EDGE + m * COMPILE_BYTES_PER_STATE;
-    let solve = graph_bytes.saturating_sub(2 * e) + m * SOLVE_BYTES_PER_STATE;
+    // Beyond 2³² entries the offsets stay 8 bytes wide: 4 more per marking.
+    let wide = if e > u64::from(u32::MAX) { 4 * m } else { 0 };
+    let compile = graph_bytes + e * COMPILE_BYTES_PER_EDGE + m * COMPILE_BYTES_PER_STATE + wide;
+    let solve = graph_bytes.saturating_sub(2 * e) + m * SOLVE_BYTES_PER_STATE + wide;
     compile.max(solve)
 }
 

@@ -62,10 +62,89 @@ impl Ids {
     }
 }
 
+/// Where each row starts (and, last, the number of entries): 4 bytes per
+/// row when the entries number at most `u32::MAX`, 8 otherwise.
+#[derive(Debug, Clone)]
+pub(crate) enum Offsets {
+    /// At most `u32::MAX` entries.
+    U32(Vec<u32>),
+    /// More.
+    U64(Vec<u64>),
+}
+
+/// An integer type of [`Offsets`].
+pub(crate) trait Offset: Copy {
+    const ZERO: Self;
+    fn to(self) -> usize;
+    fn of(v: usize) -> Self;
+}
+
+impl Offset for u32 {
+    const ZERO: u32 = 0;
+    #[inline]
+    fn to(self) -> usize {
+        self as usize
+    }
+    #[inline]
+    fn of(v: usize) -> u32 {
+        v as u32
+    }
+}
+
+impl Offset for u64 {
+    const ZERO: u64 = 0;
+    #[inline]
+    fn to(self) -> usize {
+        self as usize
+    }
+    #[inline]
+    fn of(v: usize) -> u64 {
+        v as u64
+    }
+}
+
+impl Offsets {
+    /// `offsets` (ascending from 0), narrowed when its last value fits.
+    pub(crate) fn new(offsets: Vec<u64>) -> Offsets {
+        if offsets.last().is_none_or(|&m| m <= u64::from(u32::MAX)) {
+            let narrow = offsets.iter().map(|&o| o as u32).collect();
+            drop(offsets);
+            Offsets::U32(narrow)
+        } else {
+            Offsets::U64(offsets)
+        }
+    }
+
+    /// Start of row `j` (`j = rows` gives the number of entries).
+    #[inline]
+    pub(crate) fn get(&self, j: usize) -> usize {
+        match self {
+            Offsets::U32(v) => v[j] as usize,
+            Offsets::U64(v) => v[j] as usize,
+        }
+    }
+
+    /// Number of offsets (rows + 1).
+    pub(crate) fn len(&self) -> usize {
+        match self {
+            Offsets::U32(v) => v.len(),
+            Offsets::U64(v) => v.len(),
+        }
+    }
+
+    /// Heap bytes.
+    pub(crate) fn bytes(&self) -> usize {
+        match self {
+            Offsets::U32(v) => v.capacity() * 4,
+            Offsets::U64(v) => v.capacity() * 8,
+        }
+    }
+}
+
 /// Rows of `(index, value id)` entries, indices sorted within each row.
 #[derive(Debug, Clone)]
 pub(crate) struct Rows {
-    pub offsets: Vec<u64>,
+    pub offsets: Offsets,
     pub index: Vec<u32>,
     pub ids: Ids,
     /// Per row, how many entries have an index below the row's own
@@ -123,7 +202,7 @@ impl Rows {
             offsets[j + 1] += offsets[j];
         }
         let mut rows = Rows {
-            offsets,
+            offsets: Offsets::new(offsets),
             index: entries.iter().map(|e| e.1).collect(),
             ids: Ids::new(entries.iter().map(|e| e.2).collect(), dictionary_len),
             below: Vec::new(),
@@ -149,7 +228,7 @@ impl Rows {
 
     #[inline]
     pub(crate) fn range(&self, j: usize) -> (usize, usize) {
-        (self.offsets[j] as usize, self.offsets[j + 1] as usize)
+        (self.offsets.get(j), self.offsets.get(j + 1))
     }
 
     #[inline]
@@ -185,7 +264,7 @@ impl Rows {
 
     /// Heap bytes.
     pub(crate) fn heap_bytes(&self) -> usize {
-        self.offsets.capacity() * 8 + self.index.capacity() * 4 + self.ids.bytes() + self.below.capacity() * 4
+        self.offsets.bytes() + self.index.capacity() * 4 + self.ids.bytes() + self.below.capacity() * 4
     }
 }
 
