@@ -83,8 +83,9 @@ impl<'a, 'c> Blocked<'a, 'c> {
     }
 
     /// Entries of row `j` (starting at `a`) with an index before the row's
-    /// block: none in the first block, a binary search among the entries
-    /// below the diagonal otherwise (rows are short).
+    /// block: none in the first block, counted from the row's start
+    /// otherwise (rows are short, and in breadth-first order few entries
+    /// of a row lie before its block: a scan beats a binary search).
     #[inline]
     fn cross(&self, j: usize, a: usize) -> usize {
         let lo = j / self.block * self.block;
@@ -92,7 +93,10 @@ impl<'a, 'c> Blocked<'a, 'c> {
             return 0;
         }
         let rows = self.chain.incoming;
-        rows.index[a..a + rows.below[j] as usize].partition_point(|&i| (i as usize) < lo)
+        rows.index[a..a + rows.below[j] as usize]
+            .iter()
+            .take_while(|&&i| (i as usize) < lo)
+            .count()
     }
 
     /// `y = A x`.
@@ -250,7 +254,9 @@ fn fused_update(
 fn normalise_into(x: &[f64], out: &mut [f64]) {
     let partial: Vec<f64> = x.par_chunks(CHUNK).map(|c| c.iter().sum::<f64>()).collect();
     let s: f64 = partial.iter().sum();
-    out.par_iter_mut().zip(x.par_iter()).for_each(|(o, v)| *o = (v / s).max(0.0));
+    out.par_iter_mut()
+        .zip(x.par_iter())
+        .for_each(|(o, v)| *o = (v / s).max(0.0));
 }
 
 /// Heap bytes of the vectors BiCGSTAB holds at once on a chain of `n`
