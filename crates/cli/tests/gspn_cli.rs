@@ -444,9 +444,16 @@ fn solve_stats_accounts_for_the_memory_in_the_table_and_in_json() {
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("kanban2.pnpro");
     let f = file.to_str().unwrap();
-    assert!(petrinav(&["gspn", "family", "kanban", "2", "-o", f]).status.success());
+    assert!(
+        petrinav(&["gspn", "family", "kanban", "2", "-o", f])
+            .status
+            .success()
+    );
     let plain = json(&["gspn", "solve", f, "--json"]);
-    assert!(plain.get("memory").is_none(), "--json without --stats stays as it was");
+    assert!(
+        plain.get("memory").is_none(),
+        "--json without --stats stays as it was"
+    );
     let v = json(&["gspn", "solve", f, "--json", "--stats"]);
     let m = &v["memory"];
     assert_eq!(m["tangible_markings"], 4600);
@@ -464,6 +471,9 @@ fn solve_stats_accounts_for_the_memory_in_the_table_and_in_json() {
     let table = petrinav(&["gspn", "solve", f, "--stats"]);
     assert!(table.status.success());
     let text = String::from_utf8_lossy(&table.stdout);
-    assert!(text.contains("B/marking") && text.contains("incoming rows: column indices"), "{text}");
+    assert!(
+        text.contains("B/marking") && text.contains("incoming rows: column indices"),
+        "{text}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

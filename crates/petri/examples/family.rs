@@ -97,7 +97,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if std::env::var("STATS").is_ok() {
         let acc = compiled.memory_account(Some(&sol));
         for p in &acc.parts {
-            println!("  {:<52} {:<10} {:>7.1} B/marking", p.component, p.stage, p.bytes_per_marking);
+            println!(
+                "  {:<52} {:<10} {:>7.1} B/marking",
+                p.component, p.stage, p.bytes_per_marking
+            );
         }
         let per = |b: u64| b as f64 / acc.tangible_markings as f64;
         println!(

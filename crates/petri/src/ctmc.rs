@@ -499,7 +499,8 @@ impl CompiledGspn {
         };
         incoming.split_diagonal();
 
-        let (components, bottoms, transient) = if let Some(outgoing) = outgoing.as_ref().filter(|_| !ergodic) {
+        let (components, bottoms, transient) = if let Some(outgoing) = outgoing.as_ref().filter(|_| !ergodic)
+        {
             let c = Components::of(outgoing);
             let bottom_ids = c.bottoms();
             let mut bottom_index = vec![NONE; c.len()];
@@ -666,9 +667,17 @@ impl CompiledGspn {
             });
         };
         add("hash index of the markings", "generation", ex.index_bytes);
-        add("graph: edges, offsets, vanishing flags", "generation", ex.edge_bytes);
+        add(
+            "graph: edges, offsets, vanishing flags",
+            "generation",
+            ex.edge_bytes,
+        );
         if self.outgoing.is_none() {
-            add("outgoing rows (released after the transpose)", "compile", self.stats.transposed_bytes);
+            add(
+                "outgoing rows (released after the transpose)",
+                "compile",
+                self.stats.transposed_bytes,
+            );
         }
         add("packed markings", "chain", self.store.heap_bytes());
         add("tangible → graph index", "chain", self.tangible_rg.capacity() * 4);
@@ -696,13 +705,24 @@ impl CompiledGspn {
             "dictionary, components",
             "chain",
             self.dictionary.capacity() * 16
-                + self.components.as_ref().map_or(0, |c| c.comp.capacity() * 4 + c.bottom.capacity())
+                + self
+                    .components
+                    .as_ref()
+                    .map_or(0, |c| c.comp.capacity() * 4 + c.bottom.capacity())
                 + self.bottoms.iter().map(|b| b.capacity() * 4).sum::<usize>()
                 + self.transient.capacity() * 4,
         );
         if let Some(sol) = solution {
-            add("exit rates and values", "solve", n * 8 + self.dictionary.len() * 8);
-            add("solver vectors (π included)", "solve", sol.info.vector_bytes as usize);
+            add(
+                "exit rates and values",
+                "solve",
+                n * 8 + self.dictionary.len() * 8,
+            );
+            add(
+                "solver vectors (π included)",
+                "solve",
+                sol.info.vector_bytes as usize,
+            );
         }
         let sum = |stages: &[&str]| -> u64 {
             parts

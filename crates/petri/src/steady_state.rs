@@ -33,15 +33,14 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-pub(crate) use crate::interrupt::SOLVING;
 use crate::interrupt::Interrupt;
+pub(crate) use crate::interrupt::SOLVING;
 use crate::krylov::{self, Stopping};
 use crate::linear;
 use crate::rows::Chain;
-pub(crate) use crate::rows::most_probable;
 #[cfg(test)]
 use crate::rows::Rows;
-
+pub(crate) use crate::rows::most_probable;
 
 /// How to solve the balance equations.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -362,7 +361,6 @@ pub(crate) fn probable_state(rows: &Chain<'_>, sweeps: usize) -> usize {
     }
     most_probable(&x)
 }
-
 
 fn solve_direct(rows: &Chain<'_>, rhs: Option<&[f64]>) -> Result<Vec<f64>> {
     let n = rows.n();

@@ -20,7 +20,10 @@ fn stages_add_up_and_the_guard_covers_the_peak() {
         assert_eq!(acc.tangible_markings, c.num_tangible());
         let stage = |s: &str| -> u64 { acc.parts.iter().filter(|p| p.stage == s).map(|p| p.bytes).sum() };
         assert_eq!(acc.solve_bytes, stage("chain") + stage("solve"), "kanban {n}");
-        assert!(acc.compile_bytes <= stage("chain") + stage("compile"), "kanban {n}");
+        assert!(
+            acc.compile_bytes <= stage("chain") + stage("compile"),
+            "kanban {n}"
+        );
         assert_eq!(
             acc.peak_bytes,
             acc.generation_bytes.max(acc.compile_bytes).max(acc.solve_bytes)
@@ -63,10 +66,8 @@ fn an_irreducible_chain_keeps_one_direction_and_still_lists_its_entries() {
             .edges(MarkingId(s as u32))
             .map(|e| (e.target.0, e.transition.0, e.coeff.to_bits()))
             .collect();
-        let mut from_chain: Vec<(u32, u32, u64)> = c
-            .entries_from(s)
-            .map(|(d, t, k)| (d, t.0, k.to_bits()))
-            .collect();
+        let mut from_chain: Vec<(u32, u32, u64)> =
+            c.entries_from(s).map(|(d, t, k)| (d, t.0, k.to_bits())).collect();
         from_graph.sort_unstable();
         from_chain.sort_unstable();
         assert_eq!(from_graph, from_chain, "state {s}");
