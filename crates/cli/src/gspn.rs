@@ -146,6 +146,12 @@ pub struct SolveArgs {
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
+    /// Also print where the memory went: bytes per tangible marking by
+    /// component (from the allocations), by stage, the memory guard's
+    /// estimate and the process's peak resident memory (a `memory` field
+    /// with --json).
+    #[arg(long)]
+    stats: bool,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -454,7 +460,13 @@ fn solve(a: &SolveArgs) -> Result<()> {
     let trans = gspn.transition_names();
     if a.json {
         let ms: Vec<(String, f64)> = a.measures.iter().cloned().zip(values.iter().copied()).collect();
-        return print_json(&steady.to_json(&ms));
+        let mut v = steady.to_json(&ms);
+        if a.stats {
+            if let Value::Object(o) = &mut v {
+                o.insert("memory".into(), serde_json::to_value(steady.memory())?);
+            }
+        }
+        return print_json(&v);
     }
     out!(
         "{}",
@@ -515,7 +527,50 @@ fn solve(a: &SolveArgs) -> Result<()> {
         }
         outln!("{}", t.render())?;
     }
+    if a.stats {
+        outln!("{}", memory_table(&steady.memory()))?;
+    }
     Ok(())
+}
+
+/// The `--stats` table: bytes per tangible marking by component and stage,
+/// the stages' totals, the guard's estimate and the peak resident memory.
+fn memory_table(m: &lab::gspn::MemoryReport) -> String {
+    let acc = &m.account;
+    let n = acc.tangible_markings.max(1) as f64;
+    let mib = |b: u64| format!("{:.1}", b as f64 / (1u64 << 20) as f64);
+    let per = |b: u64| format!("{:.1}", b as f64 / n);
+    let mut t = Table::new(["component", "stage", "MiB", "B/marking"]);
+    for p in &acc.parts {
+        t.row([
+            p.component.to_string(),
+            p.stage.to_string(),
+            mib(p.bytes),
+            format!("{:.1}", p.bytes_per_marking),
+        ]);
+    }
+    for (what, b) in [
+        ("held at the end of generation", acc.generation_bytes),
+        ("held while transposing", acc.compile_bytes),
+        ("held while solving", acc.solve_bytes),
+        ("peak of the three", acc.peak_bytes),
+        ("memory guard's estimate", acc.guard_estimate_bytes),
+    ] {
+        t.row([what.to_string(), "total".into(), mib(b), per(b)]);
+    }
+    if let Some(rss) = m.peak_rss_bytes {
+        t.row([
+            "peak resident memory (VmHWM)".into(),
+            "process".into(),
+            mib(rss),
+            per(rss),
+        ]);
+    }
+    format!(
+        "memory, {} tangible markings (heap capacities):\n{}",
+        acc.tangible_markings,
+        t.render()
+    )
 }
 
 fn select(a: &SelectArgs) -> Result<()> {

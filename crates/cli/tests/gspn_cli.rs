@@ -437,3 +437,43 @@ fn an_endless_simulation_stops_at_its_bounds() {
     let err = fails(&[&base[..], &["--max-wall", "0"]].concat());
     assert!(err.contains("max_wall_s"), "{err}");
 }
+
+#[test]
+fn solve_stats_accounts_for_the_memory_in_the_table_and_in_json() {
+    let dir = std::env::temp_dir().join(format!("petrinav-stats-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("kanban2.pnpro");
+    let f = file.to_str().unwrap();
+    assert!(
+        petrinav(&["gspn", "family", "kanban", "2", "-o", f])
+            .status
+            .success()
+    );
+    let plain = json(&["gspn", "solve", f, "--json"]);
+    assert!(
+        plain.get("memory").is_none(),
+        "--json without --stats stays as it was"
+    );
+    let v = json(&["gspn", "solve", f, "--json", "--stats"]);
+    let m = &v["memory"];
+    assert_eq!(m["tangible_markings"], 4600);
+    let parts = m["parts"].as_array().unwrap();
+    let sum = |stages: &[&str]| -> u64 {
+        parts
+            .iter()
+            .filter(|p| stages.contains(&p["stage"].as_str().unwrap()))
+            .map(|p| p["bytes"].as_u64().unwrap())
+            .sum()
+    };
+    assert_eq!(m["solve_bytes"].as_u64().unwrap(), sum(&["chain", "solve"]));
+    assert!(m["peak_bytes"].as_u64().unwrap() >= m["solve_bytes"].as_u64().unwrap());
+    assert!(m["guard_estimate_bytes"].as_u64().unwrap() > 0);
+    let table = petrinav(&["gspn", "solve", f, "--stats"]);
+    assert!(table.status.success());
+    let text = String::from_utf8_lossy(&table.stdout);
+    assert!(
+        text.contains("B/marking") && text.contains("incoming rows: column indices"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

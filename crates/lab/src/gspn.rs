@@ -195,6 +195,15 @@ impl SteadyState {
         exprs.iter().map(|m| Ok(self.measure(m)?)).collect()
     }
 
+    /// Where the memory went ([`CompiledGspn::memory_account`]) and the
+    /// process's peak resident memory (`gspn solve --stats`).
+    pub fn memory(&self) -> MemoryReport {
+        MemoryReport {
+            account: self.space.compiled.memory_account(Some(&self.solution)),
+            peak_rss_bytes: peak_rss_bytes(),
+        }
+    }
+
     /// The object `gspn solve --json` prints; `measures` pairs each measure
     /// as the user wrote it with its value.
     pub fn to_json(&self, measures: &[(String, f64)]) -> Value {
@@ -240,6 +249,39 @@ impl SteadyState {
             "measures": ms,
         })
     }
+}
+
+/// The byte account of a solve and the process's peak resident memory.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct MemoryReport {
+    /// Bytes per component, from the allocations' capacities.
+    #[serde(flatten)]
+    pub account: petri::MemoryAccount,
+    /// Peak resident memory of the process (`VmHWM`), if it can be read.
+    pub peak_rss_bytes: Option<u64>,
+}
+
+impl MemoryReport {
+    /// `peak_rss_bytes` per tangible marking.
+    pub fn peak_rss_per_marking(&self) -> Option<f64> {
+        self.peak_rss_bytes
+            .map(|b| b as f64 / self.account.tangible_markings.max(1) as f64)
+    }
+}
+
+/// Peak resident memory of this process (`VmHWM` in `/proc/self/status`),
+/// in bytes; `None` where it cannot be read (not Linux).
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kib = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse::<u64>()
+        .ok()?;
+    Some(kib * 1024)
 }
 
 /// What `gspn info` reports: the reachability graph, behavioural

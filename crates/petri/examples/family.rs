@@ -91,5 +91,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let expr = petri::Expr::parse("#Pm1 >= 1")?;
         println!("P(Pm1 >= 1) = {:.12}", compiled.measure(&sol, &expr)?);
     }
+    // Where the memory went (`STATS=1`): bytes per tangible marking by
+    // component, from the allocations (`petrinav gspn solve --stats` prints
+    // the same table).
+    if std::env::var("STATS").is_ok() {
+        let acc = compiled.memory_account(Some(&sol));
+        for p in &acc.parts {
+            println!(
+                "  {:<52} {:<10} {:>7.1} B/marking",
+                p.component, p.stage, p.bytes_per_marking
+            );
+        }
+        let per = |b: u64| b as f64 / acc.tangible_markings as f64;
+        println!(
+            "  generation {:.1}, transpose {:.1}, solve {:.1}, peak {:.1}, guard estimate {:.1} B/marking",
+            per(acc.generation_bytes),
+            per(acc.compile_bytes),
+            per(acc.solve_bytes),
+            per(acc.peak_bytes),
+            per(acc.guard_estimate_bytes)
+        );
+    }
     Ok(())
 }

@@ -38,7 +38,7 @@ use crate::interrupt::Interrupt;
 use crate::marking::MarkingStore;
 use crate::net::{Params, PlaceId, TransitionId};
 use crate::reachability::{ExploreParams, ExploreStats, ReachabilityGraph};
-use crate::rows::{Chain, Ids, Rows};
+use crate::rows::{Chain, Ids, Offset, Offsets, Rows};
 use crate::scc::{Components, Successors};
 use crate::steady_state::{self, SolveInfo, SolveParams};
 use crate::vanishing;
@@ -68,9 +68,13 @@ pub struct CompileStats {
     pub entries: usize,
     /// Distinct `(transition, coefficient)` values among them.
     pub distinct_values: usize,
-    /// Heap bytes of the generator's rows (outgoing and incoming: offsets,
-    /// 4-byte indices, 2- or 4-byte value ids).
+    /// Heap bytes of the generator's rows kept after compiling (incoming
+    /// rows, and the outgoing ones for chains that are not irreducible:
+    /// offsets, 4-byte indices, 2- or 4-byte value ids).
     pub matrix_bytes: usize,
+    /// Heap bytes of the outgoing rows while both directions existed
+    /// (released once the incoming rows are built, for irreducible chains).
+    pub transposed_bytes: usize,
     /// Heap bytes of the packed tangible and vanishing markings kept.
     pub marking_bytes: usize,
     /// Seconds spent eliminating vanishing markings and building the chain.
@@ -83,19 +87,72 @@ pub struct CompileStats {
     pub transient_states: usize,
 }
 
+/// One line of a [`MemoryAccount`]: what holds memory, when, and how much.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MemoryPart {
+    /// What the bytes hold.
+    pub component: &'static str,
+    /// When they exist: `"generation"` (freed before compiling),
+    /// `"compile"` (freed once the incoming rows are built), `"chain"`
+    /// (kept with the compiled chain) or `"solve"` (during a solve).
+    pub stage: &'static str,
+    /// Heap bytes, from the allocations' capacities.
+    pub bytes: u64,
+    /// `bytes` per tangible marking.
+    pub bytes_per_marking: f64,
+}
+
+/// Where the memory of generating, compiling and solving a chain goes,
+/// from the capacities of the actual allocations
+/// ([`CompiledGspn::memory_account`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MemoryAccount {
+    /// Tangible markings (the denominator of every "per marking").
+    pub tangible_markings: usize,
+    /// Every component, in pipeline order.
+    pub parts: Vec<MemoryPart>,
+    /// Held at the end of generation: markings, hash index, graph.
+    pub generation_bytes: u64,
+    /// Held while both directions of the generator exist: the chain's
+    /// parts but the diagonal split, plus the outgoing rows.
+    pub compile_bytes: u64,
+    /// Held during the solve: the chain's parts and the solve's.
+    pub solve_bytes: u64,
+    /// The largest of the three: the pipeline's peak heap.
+    pub peak_bytes: u64,
+    /// What the memory guard ([`crate::estimated_bytes`]) estimated for
+    /// this chain's markings and edges at the end of generation.
+    pub guard_estimate_bytes: u64,
+}
+
+impl MemoryAccount {
+    /// `peak_bytes` per tangible marking.
+    pub fn peak_per_marking(&self) -> f64 {
+        self.peak_bytes as f64 / self.tangible_markings.max(1) as f64
+    }
+}
+
 /// A GSPN compiled to a symbolic CTMC over its tangible markings.
 #[derive(Debug, Clone)]
 pub struct CompiledGspn {
     gspn: Gspn,
     stats: CompileStats,
     store: MarkingStore,
+    /// RG index of each tangible state; empty when they are the same (no
+    /// vanishing markings).
     tangible_rg: Vec<u32>,
+    num_tangible: usize,
     /// `(transition, coefficient)` of each value id.
     dictionary: Vec<(u32, f64)>,
-    /// Outgoing entries per state (index = target), self-loops kept.
-    outgoing: Rows,
+    /// Outgoing entries per state (index = target), self-loops kept: kept
+    /// only for chains that are not irreducible (their components and
+    /// absorption need them); `None` otherwise.
+    outgoing: Option<Rows>,
     /// Incoming entries per state (index = source), self-loops left out.
     incoming: Rows,
+    /// `(state, value id)` of the entries from a state to itself (left out
+    /// of `incoming`; they count in throughputs only).
+    self_loops: Vec<(u32, u32)>,
     imm: ImmediateFlows,
     initial: Vec<(u32, f64)>,
     /// Timed transitions that label an entry of the chain (the rates that
@@ -209,6 +266,54 @@ impl Dictionary {
     }
 }
 
+/// The incoming rows of the outgoing rows `(offsets, dst, ids)`, self-loops
+/// left out (and pushed on `self_loops` as `(state, value id)`), each row
+/// sorted by source. `in_offsets[d]` serves as row `d`'s fill cursor, so no
+/// other array of states is allocated; at the end it holds the row's end,
+/// i.e. the next row's start, and is shifted back. `O(entries + states)`.
+fn transpose<O: Offset>(
+    offsets: &Offsets,
+    dst: &[u32],
+    ids: &Ids,
+    dictionary_len: usize,
+    self_loops: &mut Vec<(u32, u32)>,
+) -> (Vec<O>, Vec<u32>, Ids) {
+    let n = offsets.len() - 1;
+    let mut in_offsets = vec![O::ZERO; n + 1];
+    for s in 0..n {
+        let (a, b) = (offsets.get(s), offsets.get(s + 1));
+        for (k, &d) in (a..b).zip(&dst[a..b]) {
+            if d as usize != s {
+                let c = &mut in_offsets[d as usize + 1];
+                *c = O::of(c.to() + 1);
+            } else {
+                self_loops.push((s as u32, ids.get(k) as u32));
+            }
+        }
+    }
+    for j in 0..n {
+        in_offsets[j + 1] = O::of(in_offsets[j + 1].to() + in_offsets[j].to());
+    }
+    let m = in_offsets[n].to();
+    let mut in_src = vec![0u32; m];
+    let mut in_ids = Ids::zeros(m, dictionary_len);
+    for s in 0..n {
+        let (a, b) = (offsets.get(s), offsets.get(s + 1));
+        for (k, &d) in (a..b).zip(&dst[a..b]) {
+            let d = d as usize;
+            if d != s {
+                let pos = in_offsets[d].to();
+                in_offsets[d] = O::of(pos + 1);
+                in_src[pos] = s as u32;
+                in_ids.set(pos, ids.get(k));
+            }
+        }
+    }
+    in_offsets.copy_within(0..n, 1);
+    in_offsets[0] = O::ZERO;
+    (in_offsets, in_src, in_ids)
+}
+
 /// Whether every state reaches and is reached from state 0 (one forward
 /// and one backward search; cheaper than Tarjan for the common ergodic case).
 /// When `M0` is tangible (state 0), every state is reachable from it by
@@ -267,6 +372,7 @@ impl CompiledGspn {
             }
         }
         let n = tangible_rg.len();
+        let identity = rg.stats.vanishing == 0;
         let mut dict = Dictionary::new(gspn.num_transitions());
         let mut imm = ImmediateFlows::default();
         let explore = rg.stats.clone();
@@ -340,39 +446,25 @@ impl CompiledGspn {
         };
         store.drop_index();
         drop(tangible_id);
+        if identity {
+            tangible_rg = Vec::new();
+        }
 
         // Incoming rows: the transpose without self-loops. Sources are visited
-        // in order, so each row comes out sorted.
-        let mut in_offsets = vec![0u64; n + 1];
-        for s in 0..n {
-            for &d in &dst[offsets[s] as usize..offsets[s + 1] as usize] {
-                if d as usize != s {
-                    in_offsets[d as usize + 1] += 1;
-                }
-            }
-        }
-        for j in 0..n {
-            in_offsets[j + 1] += in_offsets[j];
-        }
-        let m = in_offsets[n] as usize;
+        // in order, so each row comes out sorted. Offsets are narrowed
+        // before the value ids, while the transitions are still 4 bytes
+        // wide and the incoming rows not yet allocated (the peak is later).
         let dl = dict.pairs.len();
+        let offsets = Offsets::new(offsets);
         let ids = Ids::new(ids, dl);
-        let mut fill: Vec<u64> = in_offsets[..n].to_vec();
-        let mut in_src = vec![0u32; m];
-        let mut in_ids = Ids::zeros(m, dl);
-        for s in 0..n {
-            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
-            for (k, &d) in (a..b).zip(&dst[a..b]) {
-                let d = d as usize;
-                if d != s {
-                    let pos = fill[d] as usize;
-                    fill[d] += 1;
-                    in_src[pos] = s as u32;
-                    in_ids.set(pos, ids.get(k));
-                }
-            }
-        }
-        drop(fill);
+        let mut self_loops = Vec::new();
+        let (in_offsets, in_src, in_ids) = if dst.len() <= u32::MAX as usize {
+            let (o, s, i) = transpose::<u32>(&offsets, &dst, &ids, dl, &mut self_loops);
+            (Offsets::U32(o), s, i)
+        } else {
+            let (o, s, i) = transpose::<u64>(&offsets, &dst, &ids, dl, &mut self_loops);
+            (Offsets::U64(o), s, i)
+        };
         let mut fires = vec![false; gspn.num_transitions()];
         for k in 0..dst.len() {
             fires[dict.pairs[ids.get(k)].0 as usize] = true;
@@ -393,13 +485,23 @@ impl CompiledGspn {
             ids: in_ids,
             below: Vec::new(),
         };
+        let entries = outgoing.index.len();
+        let transposed_bytes = outgoing.heap_bytes();
+        stop.check(COMPILING)?;
+        let ergodic = irreducible(&outgoing, &incoming, initial == [(0, 1.0)]);
+        // An irreducible chain needs only the incoming rows: exit rates and
+        // throughputs are summed from them.
+        let outgoing = if ergodic {
+            drop(outgoing);
+            None
+        } else {
+            Some(outgoing)
+        };
         incoming.split_diagonal();
 
-        stop.check(COMPILING)?;
-        let (components, bottoms, transient) = if irreducible(&outgoing, &incoming, initial == [(0, 1.0)]) {
-            (None, Vec::new(), Vec::new())
-        } else {
-            let c = Components::of(&outgoing);
+        let (components, bottoms, transient) = if let Some(outgoing) = outgoing.as_ref().filter(|_| !ergodic)
+        {
+            let c = Components::of(outgoing);
             let bottom_ids = c.bottoms();
             let mut bottom_index = vec![NONE; c.len()];
             for (b, &id) in bottom_ids.iter().enumerate() {
@@ -414,12 +516,15 @@ impl CompiledGspn {
                 }
             }
             (Some(c), bottoms, transient)
+        } else {
+            (None, Vec::new(), Vec::new())
         };
         let stats = CompileStats {
             explore,
-            entries: outgoing.index.len(),
+            entries,
             distinct_values: dl,
-            matrix_bytes: outgoing.heap_bytes() + incoming.heap_bytes(),
+            matrix_bytes: outgoing.as_ref().map_or(0, Rows::heap_bytes) + incoming.heap_bytes(),
+            transposed_bytes,
             marking_bytes: store.heap_bytes(),
             compile_seconds: start.elapsed().as_secs_f64(),
             components: components.as_ref().map_or(1, |c| c.len()),
@@ -431,9 +536,11 @@ impl CompiledGspn {
             stats,
             store,
             tangible_rg,
+            num_tangible: n,
             dictionary: dict.pairs,
             outgoing,
             incoming,
+            self_loops,
             imm,
             initial,
             firing_timed,
@@ -455,25 +562,65 @@ impl CompiledGspn {
 
     /// Number of tangible markings (states of the CTMC).
     pub fn num_tangible(&self) -> usize {
-        self.tangible_rg.len()
+        self.num_tangible
+    }
+
+    /// RG index (in the marking store) of tangible state `s`.
+    #[inline]
+    fn rg_index(&self, s: usize) -> usize {
+        if self.tangible_rg.is_empty() {
+            s
+        } else {
+            self.tangible_rg[s] as usize
+        }
     }
 
     /// Token counts of tangible marking `s`.
     pub fn tangible_marking(&self, s: usize) -> Vec<u32> {
         let mut m = vec![0; self.gspn.num_places()];
-        self.store.decode(self.tangible_rg[s] as usize, &mut m);
+        self.store.decode(self.rg_index(s), &mut m);
         m
     }
 
     /// The symbolic entries leaving tangible state `s`: `(target, transition,
     /// coefficient)`, meaning rate `rate(transition) · coefficient` from `s`
     /// to `target` (targets may equal `s`: firings that come back).
+    ///
+    /// Irreducible chains keep only their incoming rows (half the memory):
+    /// for them this scans every entry, `O(entries)` per call, and lists the
+    /// entries by target, then transition — meant for drawing small chains.
     pub fn entries_from(&self, s: usize) -> impl Iterator<Item = (u32, TransitionId, f64)> + '_ {
-        let (a, b) = self.outgoing.range(s);
-        (a..b).map(move |k| {
-            let (t, c) = self.dictionary[self.outgoing.ids.get(k)];
-            (self.outgoing.index[k], TransitionId(t), c)
-        })
+        let entry = |d: u32, id: usize| {
+            let (t, c) = self.dictionary[id];
+            (d, TransitionId(t), c)
+        };
+        let list: Vec<(u32, TransitionId, f64)> = match &self.outgoing {
+            Some(out) => {
+                let (a, b) = out.range(s);
+                (a..b).map(|k| entry(out.index[k], out.ids.get(k))).collect()
+            }
+            None => {
+                let inc = &self.incoming;
+                let mut list: Vec<(u32, TransitionId, f64)> = (0..inc.len())
+                    .flat_map(|j| {
+                        let (a, b) = inc.range(j);
+                        (a..b)
+                            .filter(move |&k| inc.index[k] as usize == s)
+                            .map(move |k| (j as u32, inc.ids.get(k)))
+                    })
+                    .chain(
+                        self.self_loops
+                            .iter()
+                            .filter(|e| e.0 as usize == s)
+                            .map(|e| (e.0, e.1 as usize)),
+                    )
+                    .map(|(d, id)| entry(d, id))
+                    .collect();
+                list.sort_by_key(|e| (e.0, e.1));
+                list
+            }
+        };
+        list.into_iter()
     }
 
     /// Distribution over tangible markings reached from `M0` in zero time.
@@ -496,10 +643,111 @@ impl CompiledGspn {
     pub fn heap_bytes(&self) -> usize {
         self.store.heap_bytes()
             + self.tangible_rg.capacity() * 4
-            + self.outgoing.heap_bytes()
+            + self.outgoing.as_ref().map_or(0, Rows::heap_bytes)
             + self.incoming.heap_bytes()
+            + self.self_loops.capacity() * 8
             + self.dictionary.capacity() * 16
             + self.components.as_ref().map_or(0, |c| c.comp.capacity() * 4)
+    }
+
+    /// Where the memory goes, component by component, from the capacities
+    /// of the allocations (see [`MemoryAccount`]); the solve's part comes
+    /// from `solution` (its solver's vectors, the exit rates and the
+    /// dictionary's values), nothing without one.
+    pub fn memory_account(&self, solution: Option<&Solution>) -> MemoryAccount {
+        let n = self.num_tangible();
+        let ex = &self.stats.explore;
+        let mut parts = Vec::new();
+        let mut add = |component: &'static str, stage: &'static str, bytes: usize| {
+            parts.push(MemoryPart {
+                component,
+                stage,
+                bytes: bytes as u64,
+                bytes_per_marking: bytes as f64 / n.max(1) as f64,
+            });
+        };
+        add("hash index of the markings", "generation", ex.index_bytes);
+        add(
+            "graph: edges, offsets, vanishing flags",
+            "generation",
+            ex.edge_bytes,
+        );
+        if self.outgoing.is_none() {
+            add(
+                "outgoing rows (released after the transpose)",
+                "compile",
+                self.stats.transposed_bytes,
+            );
+        }
+        add("packed markings", "chain", self.store.heap_bytes());
+        add("tangible → graph index", "chain", self.tangible_rg.capacity() * 4);
+        let inc = &self.incoming;
+        add("incoming rows: offsets", "chain", inc.offsets.bytes());
+        add("incoming rows: column indices", "chain", inc.index.capacity() * 4);
+        add("incoming rows: value ids", "chain", inc.ids.bytes());
+        add("incoming rows: diagonal split", "chain", inc.below.capacity() * 4);
+        if let Some(out) = &self.outgoing {
+            add("outgoing rows (reducible chain)", "chain", out.heap_bytes());
+        }
+        add("self-loops", "chain", self.self_loops.capacity() * 8);
+        let imm = &self.imm;
+        add(
+            "vanishing: timed firings into them and their flows",
+            "chain",
+            imm.src.capacity() * 4
+                + imm.trans.capacity() * 4
+                + imm.coeff.capacity() * 8
+                + imm.f_start.capacity() * 8
+                + imm.f_items.capacity() * 16
+                + self.initial.capacity() * 16,
+        );
+        add(
+            "dictionary, components",
+            "chain",
+            self.dictionary.capacity() * 16
+                + self
+                    .components
+                    .as_ref()
+                    .map_or(0, |c| c.comp.capacity() * 4 + c.bottom.capacity())
+                + self.bottoms.iter().map(|b| b.capacity() * 4).sum::<usize>()
+                + self.transient.capacity() * 4,
+        );
+        if let Some(sol) = solution {
+            add(
+                "exit rates and values",
+                "solve",
+                n * 8 + self.dictionary.len() * 8,
+            );
+            add(
+                "solver vectors (π included)",
+                "solve",
+                sol.info.vector_bytes as usize,
+            );
+        }
+        let sum = |stages: &[&str]| -> u64 {
+            parts
+                .iter()
+                .filter(|p| stages.contains(&p.stage))
+                .map(|p| p.bytes)
+                .sum()
+        };
+        let generation_bytes = sum(&["generation"]) + ex.marking_bytes as u64;
+        let below = inc.below.capacity() as u64 * 4;
+        let compile_bytes = sum(&["compile", "chain"]) - below;
+        let solve_bytes = sum(&["chain", "solve"]);
+        MemoryAccount {
+            tangible_markings: n,
+            generation_bytes,
+            compile_bytes,
+            solve_bytes,
+            peak_bytes: generation_bytes.max(compile_bytes).max(solve_bytes),
+            guard_estimate_bytes: crate::reachability::estimated_bytes(
+                (ex.marking_bytes + ex.edge_bytes) as u64,
+                ex.markings,
+                ex.edges,
+            ),
+            parts,
+        }
     }
 
     /// Evaluates the rates from the net's parameters with `overrides`, and
@@ -572,7 +820,9 @@ impl CompiledGspn {
             values: &values,
             exit: &exit,
         };
-        let mut pi = vec![0.0; n];
+        // π is allocated once the solver returns (an irreducible chain's
+        // solver hands its own vector over): no extra vector during the solve.
+        let mut pi;
         let mut info;
         let mut absorption_residual = 0.0;
         let mut bottom_probabilities = Vec::new();
@@ -584,6 +834,7 @@ impl CompiledGspn {
                 bottom_probabilities.push(1.0);
             }
             Some(components) => {
+                pi = vec![0.0; n];
                 // Probability of ending in each bottom component.
                 let mut init = vec![0.0; n];
                 for &(s, p) in &self.initial {
@@ -593,8 +844,9 @@ impl CompiledGspn {
                 for (s, &p) in init.iter().enumerate() {
                     comp_prob[components.comp[s] as usize] += p;
                 }
+                let mut absorption_bytes = 0;
                 if !self.transient.is_empty() {
-                    let sub = self.sub_chain(&self.transient);
+                    let sub = self.sub_chain(&self.transient)?;
                     let sub_exit: Vec<f64> = self.transient.iter().map(|&s| exit[s as usize]).collect();
                     let sub_chain = Chain {
                         incoming: &sub,
@@ -604,25 +856,28 @@ impl CompiledGspn {
                     let b: Vec<f64> = self.transient.iter().map(|&s| init[s as usize]).collect();
                     let (x, ai) = steady_state::solve(&sub_chain, Some(&b), params, stop)?;
                     absorption_residual = ai.residual;
+                    absorption_bytes = ai.vector_bytes;
+                    let out = self.outgoing()?;
                     for (&s, &xs) in self.transient.iter().zip(&x) {
-                        let (a, b) = self.outgoing.range(s as usize);
+                        let (a, b) = out.range(s as usize);
                         for k in a..b {
-                            let c = components.comp[self.outgoing.index[k] as usize] as usize;
+                            let c = components.comp[out.index[k] as usize] as usize;
                             if components.bottom[c] {
-                                comp_prob[c] += xs * values[self.outgoing.ids.get(k)];
+                                comp_prob[c] += xs * values[out.ids.get(k)];
                             }
                         }
                     }
                 }
                 info = SolveInfo {
                     method: "trivial",
+                    vector_bytes: absorption_bytes,
                     ..SolveInfo::default()
                 };
                 let mut largest = 0;
                 for states in &self.bottoms {
                     let prob = comp_prob[components.comp[states[0] as usize] as usize];
                     bottom_probabilities.push(prob);
-                    let sub = self.sub_chain(states);
+                    let sub = self.sub_chain(states)?;
                     let sub_exit: Vec<f64> = states.iter().map(|&s| exit[s as usize]).collect();
                     let sub_chain = Chain {
                         incoming: &sub,
@@ -635,6 +890,7 @@ impl CompiledGspn {
                         info.method = i.method;
                     }
                     info.iterations += i.iterations;
+                    info.vector_bytes = info.vector_bytes.max(i.vector_bytes);
                     for (&s, &v) in states.iter().zip(&x) {
                         pi[s as usize] = prob * v;
                     }
@@ -763,53 +1019,67 @@ impl CompiledGspn {
         Ok(())
     }
 
+    /// Exit rates (self-loops excluded), summed from the incoming rows in
+    /// row order: `exit_i = Σ_j Σ_{(i, id) ∈ in(j)} values[id]`.
     fn exit_rates(&self, values: &[f64]) -> Vec<f64> {
-        let out = &self.outgoing;
-        (0..self.num_tangible())
-            .map(|s| {
-                let (a, b) = out.range(s);
-                (a..b)
-                    .filter(|&k| out.index[k] as usize != s)
-                    .map(|k| values[out.ids.get(k)])
-                    .sum()
-            })
-            .collect()
+        let inc = &self.incoming;
+        let mut exit = vec![0.0; self.num_tangible()];
+        for j in 0..inc.len() {
+            let (a, b) = inc.range(j);
+            for k in a..b {
+                exit[inc.index[k] as usize] += values[inc.ids.get(k)];
+            }
+        }
+        exit
+    }
+
+    /// The outgoing rows, which chains that are not irreducible keep.
+    fn outgoing(&self) -> Result<&Rows> {
+        self.outgoing.as_ref().ok_or_else(|| {
+            Error::Invalid("internal: the outgoing rows of an irreducible chain were released".into())
+        })
     }
 
     /// Incoming rows of the chain restricted to `states` (sorted), in local
     /// indices; value ids are shared with the whole chain.
-    fn sub_chain(&self, states: &[u32]) -> Rows {
+    fn sub_chain(&self, states: &[u32]) -> Result<Rows> {
+        let out = self.outgoing()?;
         let mut local = vec![NONE; self.num_tangible()];
         for (i, &s) in states.iter().enumerate() {
             local[s as usize] = i as u32;
         }
         let mut entries = Vec::new();
         for (i, &s) in states.iter().enumerate() {
-            let (a, b) = self.outgoing.range(s as usize);
+            let (a, b) = out.range(s as usize);
             for k in a..b {
-                let d = self.outgoing.index[k] as usize;
+                let d = out.index[k] as usize;
                 if d != s as usize && local[d] != NONE {
-                    entries.push((local[d], i as u32, self.outgoing.ids.get(k) as u32));
+                    entries.push((local[d], i as u32, out.ids.get(k) as u32));
                 }
             }
         }
-        Rows::from_entries(states.len(), entries, self.dictionary.len())
+        Ok(Rows::from_entries(states.len(), entries, self.dictionary.len()))
     }
 
     /// Throughputs from `values` (rates divided by `scale`, times their
     /// coefficients), in the rates' own time unit.
     fn throughputs(&self, pi: &[f64], rates: &[f64], values: &[f64], scale: f64) -> Vec<f64> {
         let mut x = vec![0.0; self.gspn.num_transitions()];
-        let out = &self.outgoing;
-        for (s, &p) in pi.iter().enumerate() {
-            if p == 0.0 {
-                continue;
-            }
-            let (a, b) = out.range(s);
-            for k in a..b {
-                let id = out.ids.get(k);
+        let inc = &self.incoming;
+        let mut add = |s: usize, id: usize| {
+            let p = pi[s];
+            if p != 0.0 {
                 x[self.dictionary[id].0 as usize] += p * values[id] * scale;
             }
+        };
+        for j in 0..inc.len() {
+            let (a, b) = inc.range(j);
+            for k in a..b {
+                add(inc.index[k] as usize, inc.ids.get(k));
+            }
+        }
+        for &(s, id) in &self.self_loops {
+            add(s as usize, id as usize);
         }
         let imm = &self.imm;
         for e in 0..imm.src.len() {
@@ -833,7 +1103,7 @@ impl CompiledGspn {
             if p == 0.0 {
                 continue;
             }
-            let i = self.tangible_rg[s] as usize;
+            let i = self.rg_index(s);
             for q in 0..np {
                 let k = self.store.tokens(i, q);
                 if k > 0 {
@@ -862,7 +1132,7 @@ impl CompiledGspn {
             if p == 0.0 {
                 continue;
             }
-            self.store.decode(self.tangible_rg[s] as usize, &mut m);
+            self.store.decode(self.rg_index(s), &mut m);
             let v = compiled.eval(&m, &mut stack);
             if !v.is_finite() {
                 return Err(Error::NotFinite {

@@ -32,6 +32,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::error::{Error, Result};
 
+/// What [`Error::Cancelled`] says a stopped solve was doing.
+pub(crate) const SOLVING: &str = "solving the steady state";
+
 /// A flag, raised by another thread, that stops a computation at its next
 /// checkpoint; [`Interrupt::NEVER`] for none. Cheap to copy and to check
 /// (one relaxed atomic load).

@@ -28,15 +28,30 @@
 //! order: the same input gives bit-identical output on 1 thread or 64.
 //!
 //! Cost per iteration: two preconditioned products (`O(nnz)` each, blocks in
-//! parallel) and a few vector operations. Memory: 9 vectors of `n` doubles
-//! plus 12 bytes per state.
+//! parallel) and a few vector operations. Memory: **7 vectors of `n`
+//! doubles** (`x`, `r`, `r̂`, `p`, `v`, `y`, `t`) besides the chain: `s`
+//! overwrites `r` (`s = r − αv`, then `r = s − ωt`), `z = M⁻¹s` overwrites
+//! `y` once `x += αy` has read it (inside the sweep that writes `z`: the
+//! same additions in the same order as `x + αy + ωz`, so the same bits),
+//! the normalised solution is written into `t`'s storage, and the rows'
+//! split at the block boundary and the reciprocal exit rates are computed
+//! on the fly instead of stored.
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
-use crate::rows::Chain;
-use crate::steady_state::{SolveParams, residual};
+use crate::interrupt::SOLVING;
+use crate::rows::{Chain, most_probable};
+
+/// When BiCGSTAB stops.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Stopping {
+    /// Relative residual to reach.
+    pub tolerance: f64,
+    /// Iterations before giving up.
+    pub max_iterations: usize,
+}
 
 /// Number of blocks of the preconditioner for chains of at least
 /// [`MIN_BLOCK`] states per block; fixed, so that results do not depend on
@@ -55,34 +70,33 @@ const CHUNK: usize = 1 << 14;
 struct Blocked<'a, 'c> {
     chain: &'a Chain<'c>,
     k: usize,
-    inv_exit: Vec<f64>,
-    /// Entries of each row with an index before the row's block.
-    cross: Vec<u32>,
     block: usize,
 }
 
 impl<'a, 'c> Blocked<'a, 'c> {
     fn new(chain: &'a Chain<'c>, k: usize) -> Self {
-        let n = chain.n();
-        let rows = chain.incoming;
-        let block = block_size(n);
-        let cross = (0..n)
-            .into_par_iter()
-            .with_min_len(CHUNK)
-            .map(|j| {
-                let lo = (j / block * block) as u32;
-                let (a, _) = rows.range(j);
-                rows.index[a..a + rows.below[j] as usize].partition_point(|&i| i < lo) as u32
-            })
-            .collect();
-        let inv_exit = (0..n).map(|j| 1.0 / chain.exit(j)).collect();
         Blocked {
             chain,
             k,
-            inv_exit,
-            cross,
-            block,
+            block: block_size(chain.n()),
         }
+    }
+
+    /// Entries of row `j` (starting at `a`) with an index before the row's
+    /// block: none in the first block, counted from the row's start
+    /// otherwise (rows are short, and in breadth-first order few entries
+    /// of a row lie before its block: a scan beats a binary search).
+    #[inline]
+    fn cross(&self, j: usize, a: usize) -> usize {
+        let lo = j / self.block * self.block;
+        if lo == 0 {
+            return 0;
+        }
+        let rows = self.chain.incoming;
+        rows.index[a..a + rows.below[j] as usize]
+            .iter()
+            .take_while(|&&i| (i as usize) < lo)
+            .count()
     }
 
     /// `y = A x`.
@@ -102,31 +116,47 @@ impl<'a, 'c> Blocked<'a, 'c> {
     /// The forward block Gauss–Seidel sweep `y = M⁻¹ p`, blocks in
     /// parallel, with `p_j = make(j, p_j)` computed just before row `j`
     /// needs it (and stored): the vector update that produces the input
-    /// costs no pass of its own.
-    fn sweep(&self, p: &mut [f64], y: &mut [f64], make: impl Fn(usize, f64) -> f64 + Sync) {
+    /// costs no pass of its own. With `step = Some((x, α))`, `x_j += α y_j`
+    /// is done with the old `y_j` just before it is overwritten.
+    fn sweep(
+        &self,
+        p: &mut [f64],
+        y: &mut [f64],
+        step: Option<(&mut [f64], f64)>,
+        make: impl Fn(usize, f64) -> f64 + Sync,
+    ) {
         let rows = self.chain.incoming;
         let values = self.chain.values;
+        let blocks = y.len().div_ceil(self.block);
+        let (xs, alpha): (Vec<Option<&mut [f64]>>, f64) = match step {
+            Some((x, alpha)) => (x.chunks_mut(self.block).map(Some).collect(), alpha),
+            None => ((0..blocks).map(|_| None).collect(), 0.0),
+        };
         y.par_chunks_mut(self.block)
             .zip(p.par_chunks_mut(self.block))
+            .zip(xs)
             .enumerate()
-            .for_each(|(blk, (yb, pb))| {
+            .for_each(|(blk, ((yb, pb), mut xb))| {
                 let lo = blk * self.block;
                 for jj in 0..yb.len() {
                     let j = lo + jj;
                     let pj = make(j, pb[jj]);
                     pb[jj] = pj;
+                    if let Some(xb) = xb.as_deref_mut() {
+                        xb[jj] += alpha * yb[jj];
+                    }
                     yb[jj] = if j == self.k {
                         pj
                     } else {
-                        let a = rows.offsets[j] as usize;
+                        let (a, _) = rows.range(j);
                         let inner = rows.dot_span_offset(
-                            a + self.cross[j] as usize,
+                            a + self.cross(j, a),
                             a + rows.below[j] as usize,
                             values,
                             yb,
                             lo,
                         );
-                        (pj + inner) * self.inv_exit[j]
+                        (pj + inner) / self.chain.exit(j)
                     };
                 }
             });
@@ -155,7 +185,7 @@ impl<'a, 'c> Blocked<'a, 'c> {
                         p[j]
                     } else {
                         let (a, b) = rows.range(j);
-                        let before = rows.dot_span_offset(a, a + self.cross[j] as usize, values, y, 0);
+                        let before = rows.dot_span_offset(a, a + self.cross(j, a), values, y, 0);
                         let after = rows.dot_span_offset(a + rows.below[j] as usize, b, values, y, 0);
                         p[j] - (before + after)
                     };
@@ -194,12 +224,12 @@ fn update(out: &mut [f64], f: impl Fn(usize, f64) -> f64 + Sync) {
     });
 }
 
-/// `(x_j, r_j) = f(j, x_j)` in parallel; returns the sums of the pairs
-/// `f` also yields, per chunk in order, then over the chunks in order.
+/// `(x_j, r_j) = f(j, x_j, r_j)` in parallel; returns the sums of the
+/// pairs `f` also yields, per chunk in order, then over the chunks in order.
 fn fused_update(
     x: &mut [f64],
     r: &mut [f64],
-    f: impl Fn(usize, f64) -> (f64, f64, [f64; 2]) + Sync,
+    f: impl Fn(usize, f64, f64) -> (f64, f64, [f64; 2]) + Sync,
 ) -> [f64; 2] {
     let partial: Vec<[f64; 2]> = x
         .par_chunks_mut(CHUNK)
@@ -208,7 +238,7 @@ fn fused_update(
         .map(|(c, (xc, rc))| {
             let mut sums = [0.0, 0.0];
             for (jj, (xj, rj)) in xc.iter_mut().zip(rc.iter_mut()).enumerate() {
-                let (xn, rn, [t0, t1]) = f(c * CHUNK + jj, *xj);
+                let (xn, rn, [t0, t1]) = f(c * CHUNK + jj, *xj, *rj);
                 *xj = xn;
                 *rj = rn;
                 sums[0] += t0;
@@ -220,17 +250,26 @@ fn fused_update(
     sum_pairs(&partial)
 }
 
-fn normalised(x: &[f64]) -> Vec<f64> {
+/// `out = x / Σx`, negative entries set to 0.
+fn normalise_into(x: &[f64], out: &mut [f64]) {
     let partial: Vec<f64> = x.par_chunks(CHUNK).map(|c| c.iter().sum::<f64>()).collect();
     let s: f64 = partial.iter().sum();
-    x.par_iter().map(|v| (v / s).max(0.0)).collect()
+    out.par_iter_mut()
+        .zip(x.par_iter())
+        .for_each(|(o, v)| *o = (v / s).max(0.0));
+}
+
+/// Heap bytes of the vectors BiCGSTAB holds at once on a chain of `n`
+/// states (see the module docs).
+pub(crate) fn bicgstab_bytes(n: usize) -> u64 {
+    7 * 8 * n as u64
 }
 
 /// Solves the stationary equations of an irreducible chain (`n ≥ 2`, every
 /// exit rate > 0). Returns the distribution and the iterations done.
 pub(crate) fn bicgstab(
     chain: &Chain<'_>,
-    params: &SolveParams,
+    params: Stopping,
     stop: Interrupt<'_>,
 ) -> Result<(Vec<f64>, usize)> {
     let n = chain.n();
@@ -241,7 +280,7 @@ pub(crate) fn bicgstab(
             x[j] = chain.inflow(j, &x) / chain.exit(j);
         }
     }
-    let k = crate::steady_state::most_probable(&x);
+    let k = most_probable(&x);
     let xk = x[k];
     if xk > 0.0 && xk.is_finite() {
         x.iter_mut().for_each(|v| *v /= xk);
@@ -251,8 +290,8 @@ pub(crate) fn bicgstab(
     let a = Blocked::new(chain, k);
     let b = |j: usize| if j == k { 1.0 } else { 0.0 };
 
-    let mut r = vec![0.0; n];
-    let (mut v, mut p, mut y, mut s, mut z, mut t) = (
+    // `r` also holds `s`, `y` also holds `z` (see the module docs).
+    let (mut r, mut rhat, mut v, mut p, mut y, mut t) = (
         vec![0.0; n],
         vec![0.0; n],
         vec![0.0; n],
@@ -265,32 +304,33 @@ pub(crate) fn bicgstab(
     // Check the true residual only when the cheap one says it may be met;
     // the ratio of the two is learnt on the way.
     let mut check_below = params.tolerance * 1e3;
-    let converged = |x: &[f64], cheap: f64, last: &mut f64, check_below: &mut f64| {
+    // The normalised iterate goes into `t`, free at both checks.
+    let converged = |x: &[f64], t: &mut [f64], cheap: f64, last: &mut f64, check_below: &mut f64| {
         if cheap > *check_below {
-            return None;
+            return false;
         }
-        let pi = normalised(x);
-        *last = residual(chain, &pi, None);
+        normalise_into(x, t);
+        *last = chain.residual(t, None);
         if *last <= params.tolerance {
-            return Some(pi);
+            return true;
         }
         *check_below = (cheap * params.tolerance / *last).min(params.tolerance * 1e3);
-        None
+        false
     };
     while it < params.max_iterations {
         a.matvec(&x, &mut r);
         update(&mut r, |j, ax| b(j) - ax);
-        if let Some(pi) = converged(&x, dot(&r, &r).sqrt(), &mut last, &mut check_below) {
-            return Ok((pi, it));
+        if converged(&x, &mut t, dot(&r, &r).sqrt(), &mut last, &mut check_below) {
+            return Ok((t, it));
         }
-        let rhat = r.clone();
+        rhat.copy_from_slice(&r);
         let (mut rho, mut alpha, mut omega) = (1.0, 1.0, 1.0);
         v.iter_mut().for_each(|e| *e = 0.0);
         p.iter_mut().for_each(|e| *e = 0.0);
         // `(r̂, r)` of the next iteration, computed with `r`.
         let mut rho_next = dot(&rhat, &r);
         while it < params.max_iterations {
-            stop.check(crate::steady_state::SOLVING)?;
+            stop.check(SOLVING)?;
             it += 1;
             let rho_new = rho_next;
             if rho_new == 0.0 || !rho_new.is_finite() {
@@ -299,28 +339,30 @@ pub(crate) fn bicgstab(
             let beta = (rho_new / rho) * (alpha / omega);
             rho = rho_new;
             // p = r + β (p − ω v), y = M⁻¹ p, v = A y, with (r̂, v).
-            a.sweep(&mut p, &mut y, |j, pj| r[j] + beta * (pj - omega * v[j]));
+            a.sweep(&mut p, &mut y, None, |j, pj| r[j] + beta * (pj - omega * v[j]));
             let [rv, _] = a.product(&p, &y, &mut v, |j, vj| [rhat[j] * vj, 0.0]);
             if rv == 0.0 || !rv.is_finite() {
                 break;
             }
             alpha = rho / rv;
-            // s = r − α v, z = M⁻¹ s, t = A z, with (t, t) and (t, s).
-            a.sweep(&mut s, &mut z, |j, _| r[j] - alpha * v[j]);
-            let [tt, ts] = a.product(&s, &z, &mut t, |j, tj| [tj * tj, tj * s[j]]);
+            // s = r − α v (into r), x += α y, z = M⁻¹ s (into y),
+            // t = A z, with (t, t) and (t, s).
+            a.sweep(&mut r, &mut y, Some((&mut x, alpha)), |j, rj| rj - alpha * v[j]);
+            let (s, z) = (&r, &y);
+            let [tt, ts] = a.product(s, z, &mut t, |j, tj| [tj * tj, tj * s[j]]);
             omega = if tt > 0.0 { ts / tt } else { 0.0 };
-            // x += α y + ω z, r = s − ω t, with (r, r) and (r̂, r).
-            let [rr, rhr] = fused_update(&mut x, &mut r, |j, xj| {
-                let rj = s[j] - omega * t[j];
-                (xj + alpha * y[j] + omega * z[j], rj, [rj * rj, rhat[j] * rj])
+            // x += ω z, r = s − ω t, with (r, r) and (r̂, r).
+            let [rr, rhr] = fused_update(&mut x, &mut r, |j, xj, sj| {
+                let rj = sj - omega * t[j];
+                (xj + omega * y[j], rj, [rj * rj, rhat[j] * rj])
             });
             rho_next = rhr;
             let cheap = rr.sqrt();
             if !cheap.is_finite() {
                 break;
             }
-            if let Some(pi) = converged(&x, cheap, &mut last, &mut check_below) {
-                return Ok((pi, it));
+            if converged(&x, &mut t, cheap, &mut last, &mut check_below) {
+                return Ok((t, it));
             }
             if omega == 0.0 {
                 break;

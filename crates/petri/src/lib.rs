@@ -59,7 +59,7 @@ pub mod simulation;
 pub mod steady_state;
 mod vanishing;
 
-pub use ctmc::{CompileStats, CompiledGspn, Solution};
+pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
 pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
 pub use gspn::{Gspn, MarkingKind, Timing};
@@ -75,8 +75,8 @@ pub use net::{
 };
 pub use properties::Properties;
 pub use reachability::{
-    COMPILE_BYTES_PER_EDGE, Edge, ExploreParams, ExploreStats, FALLBACK_MAX_MEMORY, MarkingId,
-    ReachabilityGraph, SOLVE_BYTES_PER_STATE, default_max_memory, estimated_bytes,
+    COMPILE_BYTES_PER_EDGE, COMPILE_BYTES_PER_STATE, Edge, ExploreParams, ExploreStats, FALLBACK_MAX_MEMORY,
+    MarkingId, ReachabilityGraph, SOLVE_BYTES_PER_STATE, default_max_memory, estimated_bytes,
 };
 pub use simulation::{Estimate, SimParams, SimProgress, SimResult, simulate, simulate_observed};
 pub use steady_state::{Method, SolveInfo, SolveParams};

@@ -74,25 +74,47 @@ pub fn default_max_memory() -> u64 {
         .map_or(FALLBACK_MAX_MEMORY, |kib| kib * 1024 / 100 * 85)
 }
 
-/// Bytes per tangible marking that compiling and solving add to the
-/// reachability graph: exit rates, the incoming rows' offsets and diagonal
-/// split, the solution and BiCGSTAB's vectors (≈ 14 doubles), the tangible
-/// index. (Kanban 7 measured ≈ 125.)
-pub const SOLVE_BYTES_PER_STATE: u64 = 150;
-/// Net bytes per edge that compiling adds to the graph's 8 (4-byte target,
-/// 4-byte transition), which become the outgoing rows with 2-byte ids: the
-/// incoming rows (4-byte index, 2-byte value id) less the 2 bytes saved.
+/// Bytes per tangible marking that solving adds to the compiled chain's
+/// incoming rows and packed markings: the rows' offsets (4, or 8 beyond
+/// 2³² entries) and diagonal split (4), the exit rates (8) and BiCGSTAB's
+/// seven vectors of doubles (56); a little more for the dictionary's values
+/// and the reductions.
+pub const SOLVE_BYTES_PER_STATE: u64 = 72;
+/// Bytes per edge that compiling adds to the graph's 8 (4-byte target,
+/// 4-byte transition) while both directions of the generator exist: the
+/// incoming rows (4-byte index, 2-byte value id) less the 2 bytes saved by
+/// narrowing the outgoing transitions to 2-byte value ids.
 pub const COMPILE_BYTES_PER_EDGE: u64 = 4;
+/// Bytes per marking that compiling adds to the graph: the incoming rows'
+/// offsets (4 bytes, or 8 beyond 2³² entries, when the outgoing ones are
+/// narrowed from 8 to 4 bytes as well), built while the outgoing rows still
+/// exist.
+pub const COMPILE_BYTES_PER_STATE: u64 = 4;
 
 /// Estimated peak bytes of generating, compiling and solving a state space
 /// whose reachability graph takes `graph_bytes` *without* the marking
 /// store's hash index (freed before compiling), with `markings` markings and
-/// `edges` edges. The peak is during the solve (the index's peak, during
-/// generation, is lower). For nets without vanishing markings; eliminating
-/// them adds working memory that this leaves out. Kanban 7: 12.5 GB
-/// estimated, 10.9 GB (10.2 GiB) measured.
+/// `edges` edges: the larger of
+///
+/// * the transposition, when both directions of the generator exist:
+///   `graph_bytes + edges·`[`COMPILE_BYTES_PER_EDGE`]` +
+///   markings·`[`COMPILE_BYTES_PER_STATE`];
+/// * the solve, once the outgoing rows (the graph's targets, transitions
+///   and offsets: 8 bytes per edge and 8 per marking) are released and the
+///   incoming ones (6 bytes per edge) kept:
+///   `graph_bytes − 2·edges + markings·`[`SOLVE_BYTES_PER_STATE`]`.
+///
+/// The generation's own peak (the hash index, 16–43 bytes per marking) is
+/// lower than both on the nets measured. For nets without vanishing
+/// markings; eliminating them adds working memory that this leaves out.
+/// `CompiledGspn::memory_account` lists what was actually allocated.
 pub fn estimated_bytes(graph_bytes: u64, markings: usize, edges: usize) -> u64 {
-    graph_bytes + edges as u64 * COMPILE_BYTES_PER_EDGE + markings as u64 * SOLVE_BYTES_PER_STATE
+    let (m, e) = (markings as u64, edges as u64);
+    // Beyond 2³² entries the offsets stay 8 bytes wide: 4 more per marking.
+    let wide = if e > u64::from(u32::MAX) { 4 * m } else { 0 };
+    let compile = graph_bytes + e * COMPILE_BYTES_PER_EDGE + m * COMPILE_BYTES_PER_STATE + wide;
+    let solve = graph_bytes.saturating_sub(2 * e) + m * SOLVE_BYTES_PER_STATE + wide;
+    compile.max(solve)
 }
 
 /// Figures about a generation run.
@@ -114,6 +136,15 @@ pub struct ExploreStats {
     pub bytes_per_marking: f64,
     /// Times the packing had to be widened.
     pub relayouts: usize,
+    /// Heap bytes of the packed markings when generation ended.
+    pub marking_bytes: usize,
+    /// Heap bytes of the hash index when generation ended (freed before
+    /// compiling).
+    pub index_bytes: usize,
+    /// Heap bytes of the graph's edges and per-marking arrays (offsets,
+    /// vanishing flags, targets, transitions, coefficients) when
+    /// generation ended.
+    pub edge_bytes: usize,
 }
 
 /// The reachability graph.
@@ -255,10 +286,7 @@ impl ReachabilityGraph {
             }
             i = end;
             let graph_bytes = store.heap_bytes() - store.index_bytes()
-                + offsets.capacity() * 8
-                + vanishing.capacity()
-                + (targets.capacity() + transitions.capacity()) * 4
-                + coeffs.as_ref().map_or(0, |c| c.capacity() * 8);
+                + edge_bytes(&offsets, &vanishing, &targets, &transitions, coeffs.as_ref());
             let estimate = estimated_bytes(graph_bytes as u64, store.len(), targets.len());
             if estimate > params.max_memory {
                 return Err(Error::MemoryLimit {
@@ -288,6 +316,9 @@ impl ReachabilityGraph {
             words_per_marking: store.layout().words(),
             bytes_per_marking: store.heap_bytes() as f64 / n as f64,
             relayouts,
+            marking_bytes: store.heap_bytes() - store.index_bytes(),
+            index_bytes: store.index_bytes(),
+            edge_bytes: edge_bytes(&offsets, &vanishing, &targets, &transitions, coeffs.as_ref()),
         };
         Ok(ReachabilityGraph {
             store,
@@ -504,6 +535,20 @@ impl Batch {
         );
         Ok(None)
     }
+}
+
+/// Heap bytes of the graph's arrays (capacities, not lengths).
+fn edge_bytes(
+    offsets: &Vec<u64>,
+    vanishing: &Vec<bool>,
+    targets: &Vec<u32>,
+    transitions: &Vec<u32>,
+    coeffs: Option<&Vec<f64>>,
+) -> usize {
+    offsets.capacity() * 8
+        + vanishing.capacity()
+        + (targets.capacity() + transitions.capacity()) * 4
+        + coeffs.map_or(0, |c| c.capacity() * 8)
 }
 
 fn state_limit(gspn: &Gspn, limit: usize, explored: usize, max_tokens: &[u32]) -> Error {

@@ -62,10 +62,89 @@ impl Ids {
     }
 }
 
+/// Where each row starts (and, last, the number of entries): 4 bytes per
+/// row when the entries number at most `u32::MAX`, 8 otherwise.
+#[derive(Debug, Clone)]
+pub(crate) enum Offsets {
+    /// At most `u32::MAX` entries.
+    U32(Vec<u32>),
+    /// More.
+    U64(Vec<u64>),
+}
+
+/// An integer type of [`Offsets`].
+pub(crate) trait Offset: Copy {
+    const ZERO: Self;
+    fn to(self) -> usize;
+    fn of(v: usize) -> Self;
+}
+
+impl Offset for u32 {
+    const ZERO: u32 = 0;
+    #[inline]
+    fn to(self) -> usize {
+        self as usize
+    }
+    #[inline]
+    fn of(v: usize) -> u32 {
+        v as u32
+    }
+}
+
+impl Offset for u64 {
+    const ZERO: u64 = 0;
+    #[inline]
+    fn to(self) -> usize {
+        self as usize
+    }
+    #[inline]
+    fn of(v: usize) -> u64 {
+        v as u64
+    }
+}
+
+impl Offsets {
+    /// `offsets` (ascending from 0), narrowed when its last value fits.
+    pub(crate) fn new(offsets: Vec<u64>) -> Offsets {
+        if offsets.last().is_none_or(|&m| m <= u64::from(u32::MAX)) {
+            let narrow = offsets.iter().map(|&o| o as u32).collect();
+            drop(offsets);
+            Offsets::U32(narrow)
+        } else {
+            Offsets::U64(offsets)
+        }
+    }
+
+    /// Start of row `j` (`j = rows` gives the number of entries).
+    #[inline]
+    pub(crate) fn get(&self, j: usize) -> usize {
+        match self {
+            Offsets::U32(v) => v[j] as usize,
+            Offsets::U64(v) => v[j] as usize,
+        }
+    }
+
+    /// Number of offsets (rows + 1).
+    pub(crate) fn len(&self) -> usize {
+        match self {
+            Offsets::U32(v) => v.len(),
+            Offsets::U64(v) => v.len(),
+        }
+    }
+
+    /// Heap bytes.
+    pub(crate) fn bytes(&self) -> usize {
+        match self {
+            Offsets::U32(v) => v.capacity() * 4,
+            Offsets::U64(v) => v.capacity() * 8,
+        }
+    }
+}
+
 /// Rows of `(index, value id)` entries, indices sorted within each row.
 #[derive(Debug, Clone)]
 pub(crate) struct Rows {
-    pub offsets: Vec<u64>,
+    pub offsets: Offsets,
     pub index: Vec<u32>,
     pub ids: Ids,
     /// Per row, how many entries have an index below the row's own
@@ -123,7 +202,7 @@ impl Rows {
             offsets[j + 1] += offsets[j];
         }
         let mut rows = Rows {
-            offsets,
+            offsets: Offsets::new(offsets),
             index: entries.iter().map(|e| e.1).collect(),
             ids: Ids::new(entries.iter().map(|e| e.2).collect(), dictionary_len),
             below: Vec::new(),
@@ -149,7 +228,7 @@ impl Rows {
 
     #[inline]
     pub(crate) fn range(&self, j: usize) -> (usize, usize) {
-        (self.offsets[j] as usize, self.offsets[j + 1] as usize)
+        (self.offsets.get(j), self.offsets.get(j + 1))
     }
 
     #[inline]
@@ -185,7 +264,7 @@ impl Rows {
 
     /// Heap bytes.
     pub(crate) fn heap_bytes(&self) -> usize {
-        self.offsets.capacity() * 8 + self.index.capacity() * 4 + self.ids.bytes() + self.below.capacity() * 4
+        self.offsets.bytes() + self.index.capacity() * 4 + self.ids.bytes() + self.below.capacity() * 4
     }
 }
 
@@ -215,6 +294,20 @@ impl Chain<'_> {
         self.incoming.dot_row(j, self.values, x)
     }
 
+    /// Relative residual of `x`: `‖x Q (+ b)‖₁ / Σ_j exit_j x_j`, the total
+    /// flow imbalance over the total flow; `rhs` is `b`, or none for the
+    /// stationary equations.
+    pub(crate) fn residual(&self, x: &[f64], rhs: Option<&[f64]>) -> f64 {
+        let (mut imbalance, mut flow) = (0.0, 0.0);
+        for j in 0..self.n() {
+            let b = rhs.map_or(0.0, |b| b[j]);
+            let out = self.exit(j) * x[j];
+            imbalance += (self.inflow(j, x) + b - out).abs();
+            flow += out.abs();
+        }
+        if flow > 0.0 { imbalance / flow } else { imbalance }
+    }
+
     /// Calls `f(i, q_ij)` for the incoming entries of `j`.
     pub(crate) fn for_each_in(&self, j: usize, f: &mut dyn FnMut(usize, f64)) {
         let (a, b) = self.incoming.range(j);
@@ -225,4 +318,12 @@ impl Chain<'_> {
             );
         }
     }
+}
+
+/// Index of the largest finite positive entry (0 if none).
+pub(crate) fn most_probable(x: &[f64]) -> usize {
+    (0..x.len())
+        .max_by(|&a, &b| x[a].total_cmp(&x[b]))
+        .filter(|&k| x[k] > 0.0 && x[k].is_finite())
+        .unwrap_or(0)
 }
