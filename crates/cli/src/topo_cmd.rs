@@ -1,5 +1,5 @@
 //! `petrinav topo …`: topological maps as fuzzy Petri nets (spec
-//! `topo-fpn.md`; library `nav::topo`): plan a route on a map file, convert
+//! `topo-fpn.md`; library `topo`): plan a route on a map file, convert
 //! it for other tools, generate random office-like maps.
 //!
 //! Layout, so that more subcommands (`explore`, `go`: the robot building a
@@ -20,11 +20,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use nav::topo::{
+use serde_json::{Value, json};
+use topo::{
     FuzzyPetriNet, PlaceId, Plan, PlanError, PlanMode, Planner, TransitionId, random_office_like, to_dot,
     to_pnml,
 };
-use serde_json::{Value, json};
 
 use crate::output::{Table, fields, num};
 use crate::{out, outln};

@@ -4,10 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
+use ::topo::{FuzzyPetriNet, NavigateParams, TopoParams};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use lab::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
-use nav::topo::{FuzzyPetriNet, NavigateParams, TopoParams};
 use robot::Pose;
 use serde_json::json;
 use sim::{TraceParams, World};

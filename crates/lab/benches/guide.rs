@@ -25,9 +25,9 @@
 //! `cargo bench -p lab --bench guide`.
 
 use divan::Bencher;
+use guide::supervisor::Behaviour;
+use guide::{GuideController, GuideParams, Policy};
 use lab::mission::{self, MissionSetup};
-use nav::guide::{GuideController, GuideParams, Policy};
-use nav::supervisor::Behaviour;
 use robot::{Controller, Notes, Perception, Pose};
 use sim::{Places, RobotParams, RunParams, Simulation, Task, World};
 

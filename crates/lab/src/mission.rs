@@ -41,9 +41,9 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use nav::guide::{GuideController, GuideError, GuideMap, GuideParams, GuideStats, GuideSummary, Policy};
-use nav::supervisor::Behaviour;
-use nav::supervisor::log::{CalibrationRun, Entry, MissionRecord};
+use guide::supervisor::Behaviour;
+use guide::supervisor::log::{CalibrationRun, Entry, MissionRecord};
+use guide::{GuideController, GuideError, GuideMap, GuideParams, GuideStats, GuideSummary, Policy};
 use robot::{Controller, Event, Notes, Perception, Pose, Request, Step, Vec2};
 use sim::render::{MarkerKind, Picture};
 use sim::{OccupancyGrid, Outcome, RobotParams, RunParams, Simulation, Task, TraceParams, World};
@@ -295,8 +295,8 @@ impl Controller for Watch<'_> {
 
 /// The label of the state the controller is in.
 fn label(c: &GuideController, asking: bool) -> &'static str {
-    use nav::localization::LocalizationStatus::Warning;
-    use nav::supervisor::Behaviour::{AutoMove, Contour};
+    use guide::supervisor::Behaviour::{AutoMove, Contour};
+    use localization::LocalizationStatus::Warning;
     let warning = c.status() == Warning;
     match (c.active(), warning, asking) {
         (AutoMove, _, true) => "automove / asking",
@@ -446,7 +446,7 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
             period,
             error,
             heading_error,
-            watch.inner.status() == nav::localization::LocalizationStatus::Warning,
+            watch.inner.status() == localization::LocalizationStatus::Warning,
         );
         trace.times.push(time_s);
         trace.poses.push(truth);
@@ -461,7 +461,7 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
                     .notes
                     .clouds
                     .iter()
-                    .find(|(n, _)| *n == nav::guide::PARTICLES_CLOUD)
+                    .find(|(n, _)| *n == guide::PARTICLES_CLOUD)
             {
                 trace.clouds.push(Cloud {
                     time_s: e.time_s,
@@ -720,7 +720,7 @@ impl LegTrace {
     /// and the events of that tick; with the simulator's trace of the leg
     /// (`sim`), also the command and the controller's notes of the tick
     /// (`notes`: name → value, e.g. MCL's `effective_sample_size`, contour
-    /// tracking's `contour_mode`; [`nav::guide::GuideController`]).
+    /// tracking's `contour_mode`; [`guide::GuideController`]).
     pub fn write_json_lines(&self, sim: Option<&sim::Trace>, mut out: impl std::io::Write) -> Result<()> {
         let mut events = self.events.iter().peekable();
         let mut ticks = sim.map(|s| s.ticks.iter().peekable());

@@ -37,15 +37,15 @@ use std::cmp::Reverse;
 use std::collections::{BTreeMap, BinaryHeap};
 
 use anyhow::{Context, Result, bail};
-use nav::topo::{
-    Action, Executor, Explorer, FuzzyPetriNet, NavState, NavStats, NavigateParams, PlaceId, Plan, PlanMode,
-    Progress, Ring, RouteFollower, Strategy, StrategyParams, TopoParams, Turn, Visit, plan,
-};
 use robot::{Command, Controller, Notes, Perception, Pose, Step, Vec2, wrap_angle};
 use sim::render::{MarkerKind, Picture};
 use sim::{
     DistanceField, OccupancyGrid, RobotParams, RunParams, RunResult, Simulation, Task, Trace, TraceParams,
     World,
+};
+use topo::{
+    Action, Executor, Explorer, FuzzyPetriNet, NavState, NavStats, NavigateParams, PlaceId, Plan, PlanMode,
+    Progress, Ring, RouteFollower, Strategy, StrategyParams, TopoParams, Turn, Visit, plan,
 };
 
 /// Two stops are at the same place when their true positions are this

@@ -15,7 +15,7 @@
 //! contour legs reached of 33, building_31 / levine at 0 / 20 / 60
 //! people): cascading 28 13 12 / 32 31 22; with the operator 30 25 20 /
 //! 32 31 29; with the operator and the concave-corner rule of
-//! `nav::guide::contour` 31 26 20 / 33 31 27. AutoMove 33 31 27 / 33 33 29
+//! `guide::contour` 31 26 20 / 33 31 27. AutoMove 33 31 27 / 33 33 29
 //! → 33 32 25 / 33 33 27: the legs after its time-outs now start elsewhere,
 //! so they meet other crowds; the two fewer among 60 people were not
 //! examined further. Since 2026-12-04 a collision is followed the same way
@@ -43,8 +43,8 @@ use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
 use anyhow::{Context, Result, bail};
-use nav::guide::Policy;
-use nav::supervisor::Behaviour;
+use guide::Policy;
+use guide::supervisor::Behaviour;
 use robot::Vec2;
 use sim::{CrowdParams, Places, TraceParams, World};
 

@@ -68,8 +68,8 @@ mod report;
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
+use ::topo::{FuzzyPetriNet, NavigateParams, PlaceId, TopoParams};
 use anyhow::{Context, Result, bail};
-use nav::topo::{FuzzyPetriNet, NavigateParams, PlaceId, TopoParams};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use robot::{Event, Pose};

@@ -7,8 +7,8 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+use ::topo::{FuzzyPetriNet, PlaceId, PlanMode, plan};
 use anyhow::Result;
-use nav::topo::{FuzzyPetriNet, PlaceId, PlanMode, plan};
 use robot::Pose;
 
 use super::{Explored, METHODS, ROUTES, TopoSuite, WORLDS, metric};

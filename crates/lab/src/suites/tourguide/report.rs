@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
-use nav::supervisor::log::{Entry, Line};
+use guide::supervisor::log::{Entry, Line};
 use robot::Event;
 use sim::TraceParams;
 
@@ -842,7 +842,7 @@ fn why(runs: &Runs, condition: &str, d: usize, cells: &BTreeMap<(usize, usize), 
         }
     }
     let mut ctx_parts = Vec::new();
-    for name in nav::supervisor::credit_learning::CONTEXT_NAMES {
+    for name in guide::supervisor::credit_learning::CONTEXT_NAMES {
         let n = decisions
             .iter()
             .filter(|e| e.text("context") == Some(name))
