@@ -27,7 +27,7 @@
 use divan::Bencher;
 use guide::supervisor::Behaviour;
 use guide::{GuideController, GuideParams, Policy};
-use lab::mission::{self, MissionSetup};
+use lab::runs::mission::{self, MissionSetup};
 use robot::{Controller, Notes, Perception, Pose};
 use sim::{Places, RobotParams, RunParams, Simulation, Task, World};
 

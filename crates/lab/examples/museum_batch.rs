@@ -15,7 +15,7 @@
 use anyhow::{Context, Result, bail};
 use guide::Policy;
 use guide::supervisor::Behaviour;
-use lab::mission::{self, LegOutcome, LegSpec, MissionSetup, PeoplePlan, Stop};
+use lab::runs::mission::{self, LegOutcome, LegSpec, MissionSetup, PeoplePlan, Stop};
 use lab::suites::tourguide::{EXHIBITS, GOAL, MISSION_TIME_LIMIT_S, START, museum};
 use sim::TraceParams;
 

@@ -17,7 +17,7 @@
 use anyhow::{Context, Result};
 use guide::Policy;
 use guide::supervisor::Behaviour;
-use lab::mission::{self, LegSpec, MissionSetup, PeoplePlan};
+use lab::runs::mission::{self, LegSpec, MissionSetup, PeoplePlan};
 use lab::suites::tourguide::{EXHIBITS, GOAL, MISSION_TIME_LIMIT_S, START, museum};
 use localization::{ConsistencyTolerances, LikelihoodField};
 use rand::{RngExt, SeedableRng};

@@ -32,7 +32,7 @@ use robot::{Pose, Vec2};
 use serde_json::{Value, json};
 use sim::{CrowdParams, OccupancyGrid, Places, World};
 
-use crate::mission::{self, LegOutcome, LegRun, MissionSetup, PeoplePlan, Stop};
+use crate::runs::mission::{self, LegOutcome, LegRun, MissionSetup, PeoplePlan, Stop};
 use crate::tables::num;
 
 /// The navigation behaviour of a guide run (`--behaviour`).

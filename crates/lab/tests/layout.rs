@@ -1,5 +1,6 @@
 //! The lab's layout holds: the modules of `src/` form no cycle, the generic
-//! core uses nothing of `suites`, and no suite is named outside the
+//! core uses nothing of `suites` nor of the middle layer `runs`, `runs` uses
+//! no suite and no command module, and no suite is named outside the
 //! registry's folder.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -31,6 +32,8 @@ fn node_of(rel: &Path) -> String {
         [m] => m.clone(),
         [s, m] if s == "suites" && m == "mod" => "suites".into(),
         [s, m, ..] if s == "suites" => format!("suites::{m}"),
+        [r, m] if r == "runs" && m == "mod" => "runs".into(),
+        [r, m, ..] if r == "runs" => format!("runs::{m}"),
         [m, ..] => m.clone(),
         [] => unreachable!(),
     }
@@ -43,10 +46,15 @@ fn node_of_path(segments: &[&str]) -> Option<String> {
             // `crate::suites::REGISTRY` is the registry itself.
             Some(format!("suites::{next}"))
         }
+        ["runs", next, ..] => Some(format!("runs::{next}")),
         [first, ..] => Some(first.to_string()),
         [] => None,
     }
 }
+
+/// The modules behind the commands, shared by `cli` and `py`: the only
+/// core modules that may use the middle layer `runs`.
+const COMMANDS: [&str; 4] = ["batch", "gspn", "map_file", "tours"];
 
 /// Paths used after `crate::` in a file (`use crate::{a, b::c}` expanded).
 fn crate_paths(text: &str) -> Vec<Vec<String>> {
@@ -160,6 +168,13 @@ fn the_core_uses_no_suite_and_names_none() {
         if node.starts_with("suites") || node == "crate" {
             continue;
         }
+        if !node.starts_with("runs") && !COMMANDS.contains(&node.as_str()) {
+            let into_runs: Vec<&String> = targets.iter().filter(|t| t.starts_with("runs")).collect();
+            assert!(
+                into_runs.is_empty(),
+                "core module `{node}` uses the middle layer: {into_runs:?}"
+            );
+        }
         let into_suites: Vec<&String> = targets.iter().filter(|t| t.starts_with("suites")).collect();
         assert!(
             into_suites.is_empty(),
@@ -182,6 +197,29 @@ fn the_core_uses_no_suite_and_names_none() {
 }
 
 #[test]
+fn the_middle_layer_uses_no_suite_and_no_command() {
+    let (edges, _) = graph();
+    assert!(edges.contains_key("runs::mission") && edges.contains_key("runs::topo"));
+    for (node, targets) in edges.iter().filter(|(n, _)| n.starts_with("runs")) {
+        let bad: Vec<&String> = targets
+            .iter()
+            .filter(|t| t.starts_with("suites") || COMMANDS.contains(&t.as_str()))
+            .collect();
+        assert!(bad.is_empty(), "`{node}` (middle layer) uses {bad:?}");
+    }
+    // Its users: suites and commands.
+    let users: BTreeSet<&str> = edges
+        .iter()
+        .filter(|(n, t)| !n.starts_with("runs") && t.iter().any(|t| t.starts_with("runs")))
+        .map(|(n, _)| n.as_str())
+        .collect();
+    assert!(
+        users.contains("tours") && users.contains("suites::topo"),
+        "{users:?}"
+    );
+}
+
+#[test]
 fn the_scanner_sees_grouped_and_nested_paths() {
     let paths = crate_paths("use crate::{page::Block, tables};\nlet x = crate::suites::voting::FIELDS;");
     assert_eq!(
@@ -197,4 +235,10 @@ fn the_scanner_sees_grouped_and_nested_paths() {
         "suites::voting"
     );
     assert_eq!(node_of(Path::new("suites/mod.rs")), "suites");
+    assert_eq!(node_of(Path::new("runs/topo.rs")), "runs::topo");
+    assert_eq!(
+        node_of_path(&["runs", "mission", "LegRun"]),
+        Some("runs::mission".into())
+    );
 }
+

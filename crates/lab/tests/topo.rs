@@ -3,9 +3,9 @@
 //! map and by wall following, and the suite's campaigns.
 
 use ::topo::{NavigateParams, TopoParams};
+use lab::runs::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
 use lab::suite::Suite;
 use lab::suites::topo::{self as suite, ROUTES, TopoSuite};
-use lab::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
 use sim::TraceParams;
 
 fn spec(seed: u64, time_s: f64) -> ExploreSpec {

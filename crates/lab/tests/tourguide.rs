@@ -12,7 +12,7 @@ use guide::supervisor::log::{CalibrationRun, Entry};
 use guide::supervisor::reference::Reference;
 use guide::supervisor::{Rates, Supervisor};
 use guide::{CreditPlan, Policy, SupervisorPlan};
-use lab::mission::{self, LegSpec, MissionSetup, PeoplePlan};
+use lab::runs::mission::{self, LegSpec, MissionSetup, PeoplePlan};
 use lab::suites::tourguide::{
     EXHIBITS, GOAL, LOST_AFTER_S, START, disturbances, museum, museum_with_patches, source_guide,
 };

@@ -15,11 +15,11 @@ use super::{Explored, METHODS, ROUTES, TopoSuite, WORLDS, metric};
 use crate::charts::{self, Series};
 use crate::page::{Block, Figure};
 use crate::record::{RunRecord, Runs};
+use crate::runs::topo;
 use crate::stats::{Mean, Proportion, median};
 use crate::suite::{ReportContext, Suite, SuiteReport};
 use crate::summary::CONFIDENCE;
 use crate::tables::{self, MetricColumn};
-use crate::topo;
 
 fn records<'a>(runs: &'a Runs, scenario: &str) -> Vec<(u32, &'a RunRecord)> {
     runs.get(scenario)

@@ -64,10 +64,10 @@ use robot::{Event, Pose, Vec2};
 use sim::shapes::WorldSpec;
 use sim::{CrowdParams, DisturbanceKind, DisturbanceParams, SlipPatch, TraceParams, World};
 
-use crate::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan};
 use crate::pictures::{EventMarker, MarkerPlace, Replay};
 use crate::record::RunRecord;
 use crate::runner::{Campaign, Job, derive_seed};
+use crate::runs::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan};
 use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, SuiteReport};
 
 /// The suite in the registry.

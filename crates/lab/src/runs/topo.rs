@@ -39,6 +39,7 @@ use std::collections::{BTreeMap, BinaryHeap};
 use anyhow::{Context, Result, bail};
 use robot::{Command, Controller, Notes, Perception, Pose, Step, Vec2, wrap_angle};
 use sim::render::{MarkerKind, Picture};
+use sim::shapes::WorldSpec;
 use sim::{
     DistanceField, OccupancyGrid, RobotParams, RunParams, RunResult, Simulation, Task, Trace, TraceParams,
     World,
@@ -58,6 +59,60 @@ pub const ARRIVE_M: f64 = 0.5;
 
 /// Heading tolerance of "the same place", radians.
 const SAME_HEADING_RAD: f64 = std::f64::consts::FRAC_PI_4;
+
+/// The 50 m² office, as shipped.
+pub const OFFICE: &str = include_str!("office.toml");
+
+/// The worlds: name, exploration time (s), start of the exploration.
+/// `office_slips` is the office with the simulator's default odometry
+/// (large slips: [`slipping_robot`]), the stress case.
+pub const WORLDS: [(&str, f64, Pose); 3] = [
+    (
+        "office",
+        600.0,
+        Pose {
+            x_m: 1.0,
+            y_m: 0.75,
+            theta_rad: 0.0,
+        },
+    ),
+    (
+        "floor",
+        1800.0,
+        Pose {
+            x_m: 1.0,
+            y_m: 6.0,
+            theta_rad: 0.0,
+        },
+    ),
+    (
+        "office_slips",
+        600.0,
+        Pose {
+            x_m: 1.0,
+            y_m: 0.75,
+            theta_rad: 0.0,
+        },
+    ),
+];
+
+/// The generated floor: 20 m × 18 m at 0.05 m
+/// ([`sim::generators::office`]: corridors 2 m wide along y = 6 m and
+/// y = 12 m, rooms in 4 m slots with 1 m doors and a 1.2 m × 0.6 m table
+/// in each, an open hall between the corridors in the middle slot).
+pub fn floor() -> Result<World> {
+    Ok(World::new(sim::generators::office(400, 360, 0.05)?))
+}
+
+/// The office of `office.toml`.
+pub fn office() -> Result<World> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        world: WorldSpec,
+    }
+    let file: File = toml::from_str(OFFICE).context("office.toml")?;
+    Ok(World::new(file.world.rasterise()?))
+}
 
 /// The robot of the topological layer: the 16-sonar ring, with calibrated
 /// odometry (module docs).

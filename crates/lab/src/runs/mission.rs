@@ -48,6 +48,9 @@ use robot::{Controller, Event, Notes, Perception, Pose, Request, Step, Vec2};
 use sim::render::{MarkerKind, Picture};
 use sim::{OccupancyGrid, Outcome, RobotParams, RunParams, Simulation, Task, TraceParams, World};
 
+use crate::pictures::{EventMarker, MarkerPlace, Replay};
+use crate::record::RunRecord;
+
 /// How a leg ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -961,6 +964,86 @@ pub fn picture(grid: &OccupancyGrid, legs: &[LegRun], stops: &[Stop], path: &std
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
+
+/// The metric names of a leg's record ([`leg_record`]).
+pub mod metric {
+    /// Mean true position error of the localizer over a leg, metres.
+    pub const LOC_MEAN: &str = "loc_mean_error_m";
+    /// Largest true position error over a leg, metres.
+    pub const LOC_MAX: &str = "loc_max_error_m";
+    /// Warnings of the localizer in a leg.
+    pub const WARNINGS: &str = "warnings";
+    /// Time in Warning in a leg, seconds.
+    pub const WARNING_S: &str = "time_in_warning_s";
+    /// AutoMove's abnormal episodes in a leg.
+    pub const ABNORMAL: &str = "abnormal_episodes";
+    /// Time Abnormal in a leg, seconds.
+    pub const ABNORMAL_S: &str = "time_abnormal_s";
+    /// Time truly lost (error over 0.5 m or 20°), seconds.
+    pub const LOST_S: &str = "time_lost_s";
+    /// Time in Warning while truly lost, seconds.
+    pub const WARNING_LOST_S: &str = "time_warning_lost_s";
+    /// Time with the true error under 0.2 m, seconds.
+    pub const FINE_S: &str = "time_fine_s";
+    /// Time in Warning with the true error under 0.2 m, seconds.
+    pub const WARNING_FINE_S: &str = "time_warning_fine_s";
+    /// Pushes.
+    pub const PUSHES: &str = "pushes";
+    /// Groups closing round the robot.
+    pub const SURROUNDS: &str = "surrounds";
+}
+
+/// A leg's record, as the `maps` suite keeps it (without the suite's state): the
+/// outcome, time, path, clearance, ticks per behaviour and the
+/// localization and planner measures.
+pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
+    let r = &leg.result;
+    let mut record = leg_base_record(leg);
+    let l = &r.localization;
+    record.set_metric(metric::LOC_MEAN, l.mean_error_m)?;
+    record.set_metric(metric::LOC_MAX, l.max_error_m)?;
+    record.set_metric(metric::WARNINGS, f64::from(l.warnings))?;
+    record.set_metric(metric::WARNING_S, l.time_in_warning_s)?;
+    record.set_metric(metric::ABNORMAL, f64::from(r.planner.abnormal_episodes))?;
+    record.set_metric(metric::ABNORMAL_S, r.planner.time_abnormal_s)?;
+    record.set_metric(metric::LOST_S, l.lost_s)?;
+    record.set_metric(metric::WARNING_LOST_S, l.warning_lost_s)?;
+    record.set_metric(metric::FINE_S, l.fine_s)?;
+    record.set_metric(metric::WARNING_FINE_S, l.warning_fine_s)?;
+    let count = |kind: &str| leg.disturbances.iter().filter(|d| d.kind.name() == kind).count() as f64;
+    record.set_metric(metric::PUSHES, count("push"))?;
+    record.set_metric(metric::SURROUNDS, count("surround"))?;
+    Ok(record)
+}
+
+/// A leg run with a simulator trace ([`mission::LegSpec::trace`]) as a
+/// replay to draw, watch or export (`nav go --html`): its `record` (e.g.
+/// [`leg_record`]), the trace taken out of the leg, the setup it ran in
+/// (map, robot) and the goal.
+pub fn leg_replay(record: RunRecord, setup: &MissionSetup, leg: &mut LegRun, goal: Vec2) -> Result<Replay> {
+    Ok(Replay {
+        record,
+        trace: leg
+            .sim
+            .as_mut()
+            .and_then(|s| s.trace.take())
+            .context("the leg was run without a simulator trace")?,
+        grid: setup.world.grid().clone(),
+        goal: Some(goal),
+        robot_radius_m: setup.robot.drive.radius_m,
+        // `mission::run_leg` runs at the simulator's default period.
+        control_period_s: sim::RunParams::default().control_period_s,
+    })
+}
+
+/// The events drawn on pictures and viewer pages of legs beyond the
+/// trajectory's colours: the localizer's warnings.
+pub const MARKERS: [EventMarker; 1] = [EventMarker {
+    kind: "warning",
+    marker: sim::render::MarkerKind::Ring([0, 160, 160]),
+    place: MarkerPlace::Event,
+    single_run_only: false,
+}];
 
 #[cfg(test)]
 mod tests {
