@@ -1,7 +1,8 @@
 //! The lab's layout holds: the modules of `src/` form no cycle, the generic
 //! core uses nothing of `suites` nor of the middle layer `runs`, `runs` uses
 //! no suite and no command module, and no suite is named outside the
-//! registry's folder.
+//! registry's folder. And across the workspace: the top-level modules of
+//! every crate form no cycle either.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -242,3 +243,168 @@ fn the_scanner_sees_grouped_and_nested_paths() {
     );
 }
 
+/// Names a crate root re-exports (`pub use m::{A, B}`, `pub use m::A`),
+/// with the module each comes from: `crate::A` elsewhere depends on `m`.
+fn reexports(lib: &str) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    for stmt in lib.split(';') {
+        let Some(rest) = stmt.trim().strip_prefix("pub use ") else {
+            continue;
+        };
+        let Some((module, items)) = rest.split_once("::") else {
+            continue;
+        };
+        let items = items.trim().trim_start_matches('{').trim_end_matches('}');
+        for item in items.split(',') {
+            let last = item.rsplit("::").next().unwrap_or("");
+            let name = last
+                .split(" as ")
+                .last()
+                .unwrap_or("")
+                .trim_matches(|c: char| c == '{' || c == '}' || c.is_whitespace());
+            if !name.is_empty() {
+                out.insert(name.to_string(), module.trim().to_string());
+            }
+        }
+    }
+    out
+}
+
+/// The top-level module graph of the crate in `src`: a node per file or
+/// folder under `src/` (lib.rs and main.rs excluded), an edge for every
+/// `crate::` path, a name the root re-exports counted as its module.
+fn top_level_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
+    let root = ["lib.rs", "main.rs"]
+        .iter()
+        .filter_map(|f| std::fs::read_to_string(src.join(f)).ok())
+        .collect::<String>();
+    let names = reexports(&root);
+    let mut files = Vec::new();
+    sources(src, &mut files);
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for f in files {
+        let rel = f.strip_prefix(src).unwrap();
+        let node = rel
+            .iter()
+            .next()
+            .unwrap()
+            .to_string_lossy()
+            .trim_end_matches(".rs")
+            .to_string();
+        if node == "lib" || node == "main" {
+            continue;
+        }
+        let text = std::fs::read_to_string(&f).unwrap();
+        let code: String = text
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let targets = edges.entry(node.clone()).or_default();
+        for path in crate_paths(&code) {
+            if let Some(first) = path.first() {
+                targets.insert(names.get(first).cloned().unwrap_or_else(|| first.clone()));
+            }
+        }
+        targets.remove(&node);
+    }
+    edges
+}
+
+/// A cycle in `edges`, as the path round it, if there is one.
+fn find_cycle(edges: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
+    fn visit(
+        n: &str,
+        edges: &BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<String, u8>,
+        stack: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        state.insert(n.to_string(), 1);
+        stack.push(n.to_string());
+        for t in edges
+            .get(n)
+            .into_iter()
+            .flatten()
+            .filter(|t| edges.contains_key(t.as_str()))
+        {
+            match state.get(t.as_str()) {
+                Some(1) => {
+                    let from = stack.iter().position(|s| s == t).unwrap();
+                    let mut cycle = stack[from..].to_vec();
+                    cycle.push(t.clone());
+                    return Some(cycle);
+                }
+                Some(_) => {}
+                None => {
+                    if let Some(c) = visit(t, edges, state, stack) {
+                        return Some(c);
+                    }
+                }
+            }
+        }
+        stack.pop();
+        state.insert(n.to_string(), 2);
+        None
+    }
+    let mut state = BTreeMap::new();
+    for n in edges.keys() {
+        if !state.contains_key(n.as_str()) {
+            if let Some(c) = visit(n, edges, &mut state, &mut Vec::new()) {
+                return Some(c);
+            }
+        }
+    }
+    None
+}
+
+/// Module circles known and being removed elsewhere (issue 40): `petri`'s
+/// `krylov` ↔ `steady_state`, on the engine's branch. The edge named here
+/// is left out of the graph; once the circle is gone, delete the entry.
+const KNOWN_CIRCLES: [(&str, &str, &str); 1] = [("petri", "krylov", "steady_state")];
+
+#[test]
+fn no_crate_of_the_workspace_has_a_module_cycle() {
+    let crates = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut checked = Vec::new();
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(&crates)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    dirs.sort();
+    for dir in dirs {
+        let src = dir.join("src");
+        if !src.is_dir() {
+            continue;
+        }
+        let name = dir.file_name().unwrap().to_string_lossy().into_owned();
+        let mut edges = top_level_graph(&src);
+        for (krate, from, to) in KNOWN_CIRCLES {
+            if krate == name {
+                edges.entry(from.to_string()).or_default().remove(to);
+            }
+        }
+        if let Some(cycle) = find_cycle(&edges) {
+            panic!("module cycle in crates/{name}: {}", cycle.join(" → "));
+        }
+        checked.push(name);
+    }
+    for expected in ["lab", "sim", "petri", "cli", "guide", "topo"] {
+        assert!(checked.iter().any(|c| c == expected), "{checked:?}");
+    }
+}
+
+#[test]
+fn the_cycle_finder_finds_one() {
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    edges.entry("a".into()).or_default().insert("b".into());
+    edges.entry("b".into()).or_default().insert("c".into());
+    edges.entry("c".into()).or_default().insert("a".into());
+    assert_eq!(find_cycle(&edges).unwrap(), ["a", "b", "c", "a"]);
+    edges.get_mut("c").unwrap().clear();
+    assert_eq!(find_cycle(&edges), None);
+    let names =
+        reexports("pub use people::{Crowd, CrowdParams};\npub use world::World;\npub use a::b::{C as D};");
+    assert_eq!(names["Crowd"], "people");
+    assert_eq!(names["World"], "world");
+    assert_eq!(names["D"], "a");
+}
