@@ -5,7 +5,7 @@
 #  - the real files of the repository: GreatSPN and MCC nets of
 #    crates/petri/tests/data (third-party, kept there with their
 #    provenance and licences), the maps and places of maps/, the suites'
-#    scenarios, the topological map of crates/nav/tests/data;
+#    scenarios, the topological map of crates/topo/tests/data;
 #  - /work/shared/models and /work/shared/maps when present (the same
 #    third-party files as read by the tests; copied into the corpus only,
 #    never committed: see README.md).
@@ -36,7 +36,7 @@ put map_yaml "$repo"/maps/*/*.yaml "$shared"/maps/*/*.yaml
 put map_image "$repo"/maps/building_31/*.png
 put scenario "$repo"/crates/lab/src/suites/*/scenarios/*.toml "$repo"/crates/lab/src/suites/*/*.toml
 put places "$repo"/maps/*/places.yaml
-put fpn_map "$repo"/crates/nav/tests/data/*.json
+put fpn_map "$repo"/crates/topo/tests/data/*.json
 # Expressions: the rates, weights and markings written in the model files.
 mkdir -p corpus/expr
 grep -ohE '(delay|weight|marking|mult|value)="[^"]+"' \

@@ -185,21 +185,21 @@ pub fn places(data: &[u8]) {
 /// rates learnt from it and the supervisor's decision on them — which must
 /// be taken on finite numbers.
 pub fn mission_log(data: &[u8]) {
-    static SUPERVISOR: OnceLock<nav::supervisor::Supervisor> = OnceLock::new();
+    static SUPERVISOR: OnceLock<guide::supervisor::Supervisor> = OnceLock::new();
     static PATH: OnceLock<PathBuf> = OnceLock::new();
     let supervisor =
-        SUPERVISOR.get_or_init(|| nav::supervisor::Supervisor::new().expect("the shipped net compiles"));
+        SUPERVISOR.get_or_init(|| guide::supervisor::Supervisor::new().expect("the shipped net compiles"));
     let path = PATH.get_or_init(|| {
         std::env::temp_dir().join(format!("petrinav-fuzz-mission-log-{}.jsonl", std::process::id()))
     });
     if std::fs::write(path, data).is_err() {
         return;
     }
-    let Ok(log) = nav::supervisor::log::MissionLog::read(path, supervisor.net_id()) else {
+    let Ok(log) = guide::supervisor::log::MissionLog::read(path, supervisor.net_id()) else {
         return;
     };
     let _ = log.missions();
-    let Ok(learned) = nav::supervisor::learning::learn_or_prior(log.entries()) else {
+    let Ok(learned) = guide::supervisor::learning::learn_or_prior(log.entries()) else {
         return;
     };
     if let Ok(d) = supervisor.decide(&learned.rates) {
@@ -213,7 +213,7 @@ pub fn mission_log(data: &[u8]) {
 /// read again, exported, and a route planned in both modes from the first
 /// place to the last.
 pub fn fpn_map(data: &[u8]) {
-    use nav::topo::{FuzzyPetriNet, PlaceId, PlanMode};
+    use topo::{FuzzyPetriNet, PlaceId, PlanMode};
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
@@ -223,12 +223,12 @@ pub fn fpn_map(data: &[u8]) {
     let written = net.to_json();
     let again = FuzzyPetriNet::from_json(&written);
     assert!(again.is_ok(), "a map written back does not read: {again:?}");
-    let _ = nav::topo::to_dot(&net, None);
+    let _ = topo::to_dot(&net, None);
     if net.num_places() > 0 {
         let last = PlaceId(net.num_places() as u32 - 1);
         for mode in [PlanMode::Optimal, PlanMode::Paper] {
-            if let Ok(plan) = nav::topo::plan(&net, PlaceId(0), &[last], mode) {
-                let _ = nav::topo::to_dot(&net, Some(&plan));
+            if let Ok(plan) = topo::plan(&net, PlaceId(0), &[last], mode) {
+                let _ = topo::to_dot(&net, Some(&plan));
             }
         }
     }

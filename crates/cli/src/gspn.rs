@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
+use guide::supervisor::Behaviour;
 use lab::gspn::{SimOptions, SolveOptions};
-use nav::supervisor::Behaviour;
 use petri::io::Format;
 use petri::{
     CompiledGspn, ExploreParams, Gspn, Interrupt, Method, Net, Params, ReachabilityGraph, SolveParams,

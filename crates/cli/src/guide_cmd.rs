@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Subcommand;
-use nav::supervisor::Supervisor;
-use nav::supervisor::learning::{self, Learned};
-use nav::supervisor::log::{Entry, MissionLog, StateName};
+use guide::supervisor::Supervisor;
+use guide::supervisor::learning::{self, Learned};
+use guide::supervisor::log::{Entry, MissionLog, StateName};
 
 use crate::outln;
 use crate::output::{Table, num};
@@ -84,9 +84,9 @@ enum Kind {
 }
 
 fn check(path: Option<&Path>, json: bool) -> Result<()> {
-    use nav::supervisor::check::check_net;
-    use nav::supervisor::credit::{CREDIT_MODEL, credit_variants};
-    use nav::supervisor::{MODEL, source_variants};
+    use guide::supervisor::check::check_net;
+    use guide::supervisor::credit::{CREDIT_MODEL, credit_variants};
+    use guide::supervisor::{MODEL, source_variants};
     let nets: Vec<(String, petri::Net)> = match path {
         Some(p) => vec![(
             p.display().to_string(),
@@ -201,7 +201,7 @@ fn read_any(path: &Path) -> Result<(Vec<Entry>, Kind)> {
         anyhow::bail!("{}: no such mission log", path.display());
     }
     let source = Supervisor::new()?.net_id().to_string();
-    let credit = nav::supervisor::credit::CreditSupervisor::new()?
+    let credit = guide::supervisor::credit::CreditSupervisor::new()?
         .net_id()
         .to_string();
     let first_net = std::fs::read_to_string(path)
@@ -232,7 +232,7 @@ fn read_any(path: &Path) -> Result<(Vec<Entry>, Kind)> {
 /// The crediting supervisor's rates per crowd context, at the whole
 /// reference's length.
 fn credit_text(entries: &[Entry]) -> Result<String> {
-    use nav::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel};
+    use guide::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel};
     let m = CreditModel::learn(entries)?;
     let length = m.reference.length_m();
     let mut t = Table::new(["rate", "quiet", "busy", "crowded", "meaning"]);
@@ -268,7 +268,7 @@ fn credit_text(entries: &[Entry]) -> Result<String> {
     ))
 }
 
-fn sojourn_total(s: &[nav::supervisor::log::Sojourn], state: StateName) -> (usize, f64) {
+fn sojourn_total(s: &[guide::supervisor::log::Sojourn], state: StateName) -> (usize, f64) {
     let of: Vec<_> = s.iter().filter(|x| x.state == state).collect();
     (
         of.iter().filter(|x| x.ended).count(),
@@ -338,7 +338,7 @@ fn show(path: &Path, json: bool) -> Result<()> {
         for e in &entries {
             outln!("{}", serde_json::to_string(e)?)?;
         }
-        let m = nav::supervisor::credit_learning::CreditModel::learn(&entries);
+        let m = guide::supervisor::credit_learning::CreditModel::learn(&entries);
         match &m {
             Ok(m) => outln!("{}", serde_json::json!({ "learned": m }))?,
             Err(e) => outln!(
@@ -398,7 +398,7 @@ fn show(path: &Path, json: bool) -> Result<()> {
                 let auto = m
                     .decisions
                     .iter()
-                    .filter(|d| d.choice == nav::supervisor::Behaviour::AutoMove)
+                    .filter(|d| d.choice == guide::supervisor::Behaviour::AutoMove)
                     .count();
                 let first = m
                     .decisions
@@ -447,7 +447,7 @@ fn learn(path: &Path, json: bool) -> Result<()> {
     let (entries, kind) = read_any(path)?;
     if kind == Kind::Credit {
         if json {
-            let m = nav::supervisor::credit_learning::CreditModel::learn(&entries)
+            let m = guide::supervisor::credit_learning::CreditModel::learn(&entries)
                 .with_context(|| format!("learning from {}", path.display()))?;
             outln!("{}", serde_json::to_string_pretty(&m)?)?;
         } else {

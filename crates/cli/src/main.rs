@@ -10,6 +10,7 @@ mod nav_cmd;
 mod output;
 mod sim_cmd;
 mod topo_cmd;
+mod topo_map;
 mod topo_run;
 
 use std::process::ExitCode;

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand, ValueEnum};
-use lab::mission::{self, LegOutcome, LegRun, LegSpec};
+use lab::runs::mission::{self, LegOutcome, LegRun, LegSpec};
 use lab::tours::{self, BehaviourChoice, GuideOptions, NetChoice};
 use robot::Vec2;
 
@@ -270,10 +270,10 @@ fn go(a: &GoArgs) -> Result<()> {
     tours::log_legs(&o, std::slice::from_ref(&leg), &policy)?;
     print_legs(std::slice::from_ref(&leg), c.json)?;
     if let Some(path) = &a.html {
-        let record = lab::suites::maps::leg_record(&leg)?;
-        let replay = lab::suites::maps::leg_replay(record, &setup, &mut leg, to.pose.position())?;
+        let record = lab::runs::mission::leg_record(&leg)?;
+        let replay = lab::runs::mission::leg_replay(record, &setup, &mut leg, to.pose.position())?;
         let key = format!("{} → {} (seed {})", from.name, to.name, c.seed);
-        lab::viewer::write_page(&replay, &lab::suites::maps::MARKERS, "nav go", &key, path)?;
+        lab::viewer::write_page(&replay, &lab::runs::mission::MARKERS, "nav go", &key, path)?;
     }
     exit_status(&[leg])
 }

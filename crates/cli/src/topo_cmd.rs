@@ -1,5 +1,5 @@
 //! `petrinav topo …`: topological maps as fuzzy Petri nets (spec
-//! `docs/topo-fpn.md`; library `nav::topo`): plan a route on a map file, convert
+//! `docs/topo-fpn.md`; library `topo`): plan a route on a map file, convert
 //! it for other tools, generate random office-like maps.
 //!
 //! Layout, so that more subcommands (`explore`, `go`: the robot building a
@@ -7,7 +7,9 @@
 //! [`TopoCommand`] with its `…Args`, a line in [`run`] and their function:
 //! what the subcommands share is kept apart from them —
 //!
-//! * [`load_map`]: a map file read and checked, errors naming the file;
+//! * [`load_map`]: a map file read and checked, errors naming the file
+//!   (in `topo_map.rs`, with [`find_place`] and [`ModeArg`], which
+//!   `topo_run.rs` uses too);
 //! * [`RouteArgs`] (`--from`, `--to` …, `--mode`), flattened into a
 //!   subcommand's args, and [`Route`], the same request as plain data (from
 //!   `RouteArgs`, or from the optional options of `convert`), planned by
@@ -19,14 +21,15 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
-use clap::{Args, Subcommand, ValueEnum};
-use nav::topo::{
+use clap::{Args, Subcommand};
+use serde_json::{Value, json};
+use topo::{
     FuzzyPetriNet, PlaceId, Plan, PlanError, PlanMode, Planner, TransitionId, random_office_like, to_dot,
     to_pnml,
 };
-use serde_json::{Value, json};
 
 use crate::output::{Table, fields, num};
+use crate::topo_map::{ModeArg, find_place, load_map};
 use crate::{out, outln};
 
 #[derive(Subcommand, Debug)]
@@ -101,25 +104,6 @@ pub enum TopoCommand {
     ///
     ///   petrinav topo go office office.fpn.json --from p3 --to p9 --save-map learnt.fpn.json --json
     Go(crate::topo_run::GoArgs),
-}
-
-/// The stopping rule of the propagation.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ModeArg {
-    /// To the fixed point: the cheapest route.
-    #[default]
-    Optimal,
-    /// The source's rule: stop as soon as the start has a value (after the fewest transitions).
-    Paper,
-}
-
-impl From<ModeArg> for PlanMode {
-    fn from(m: ModeArg) -> PlanMode {
-        match m {
-            ModeArg::Optimal => PlanMode::Optimal,
-            ModeArg::Paper => PlanMode::Paper,
-        }
-    }
 }
 
 /// The route options of a subcommand that always plans.
@@ -228,48 +212,6 @@ pub fn run(cmd: TopoCommand) -> Result<()> {
 // ---------------------------------------------------------------------------
 // Shared by the subcommands.
 // ---------------------------------------------------------------------------
-
-/// Reads and checks a map file; errors name the file and what is wrong.
-pub fn load_map(path: &Path) -> Result<FuzzyPetriNet> {
-    // The library's errors name the file already.
-    FuzzyPetriNet::load(path).map_err(|e| anyhow!("{e}"))
-}
-
-/// The place named `name`, or an error naming the option, the map and the
-/// places it has.
-pub fn find_place(net: &FuzzyPetriNet, name: &str, option: &str, map: &Path) -> Result<PlaceId> {
-    if let Some(p) = net.place_id(name) {
-        return Ok(p);
-    }
-    let names: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
-    let similar: Vec<&str> = names
-        .iter()
-        .copied()
-        .filter(|n| n.eq_ignore_ascii_case(name) || n.trim() == name.trim())
-        .collect();
-    let hint = if let Some(s) = similar.first() {
-        format!(" (did you mean `{s}`?)")
-    } else {
-        String::new()
-    };
-    const SHOWN: usize = 12;
-    let listed = if names.is_empty() {
-        "it has no places".to_string()
-    } else if names.len() <= SHOWN {
-        format!("its places are {}", names.join(", "))
-    } else {
-        format!(
-            "its {} places are {} and {} more",
-            names.len(),
-            names[..SHOWN - 2].join(", "),
-            names.len() - (SHOWN - 2)
-        )
-    };
-    bail!(
-        "{option}: no place named `{name}` in {}{hint}; {listed}",
-        map.display()
-    )
-}
 
 /// Plans `route` on `net` (the map read from `map`): place names checked,
 /// and a missing route explained (whether one exists when thresholds are

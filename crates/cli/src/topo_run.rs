@@ -1,33 +1,33 @@
 //! `petrinav topo explore` and `petrinav topo go`: the 16-sonar ring robot
 //! building a topological map in the simulator, and following a route on
-//! one (`lab::topo` does the work; this is argument handling and output).
+//! one (`lab::runs::topo` does the work; this is argument handling and output).
 
 use std::path::{Path, PathBuf};
 
+use ::topo::{FuzzyPetriNet, NavigateParams, TopoParams};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use lab::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
-use nav::topo::{FuzzyPetriNet, NavigateParams, TopoParams};
+use lab::runs::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
 use robot::Pose;
 use serde_json::json;
 use sim::{TraceParams, World};
 
 use crate::output::{fields, num};
-use crate::topo_cmd::{ModeArg, find_place, load_map};
+use crate::topo_map::{ModeArg, find_place, load_map};
 use crate::{out, outln};
 
 /// The world of a command: `office` or `floor` (the topological suite's),
 /// or a map_server `.yaml` map or a `.toml` world of shapes; and the
 /// default start of an exploration in it, if it has one.
 fn world(name: &Path) -> Result<(World, Option<Pose>)> {
-    let shipped = lab::suites::topo::WORLDS
+    let shipped = lab::runs::topo::WORLDS
         .iter()
         .find(|(n, _, _)| Path::new(n) == name);
     if let Some(&(n, _, start)) = shipped {
         let w = if n == "office" {
-            lab::suites::topo::office()?
+            lab::runs::topo::office()?
         } else {
-            lab::suites::topo::floor()?
+            lab::runs::topo::floor()?
         };
         return Ok((w, Some(start)));
     }

@@ -6,7 +6,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use nav::supervisor::{Behaviour, Rates, Supervisor};
+use guide::supervisor::{Behaviour, Rates, Supervisor};
 
 fn petrinav(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_petrinav"))
@@ -240,7 +240,7 @@ fn guide_check_accepts_the_shipped_nets_and_refuses_a_broken_one_naming_the_prop
     // missions are dead ends.
     let dir = fresh("check");
     let net = dir.join("broken.toml");
-    let text = nav::supervisor::credit::CREDIT_MODEL;
+    let text = guide::supervisor::credit::CREDIT_MODEL;
     let start = text.find("[[transition]]\nname = \"t14\"").unwrap();
     let end = start + text[start..].find("\n\n").unwrap();
     std::fs::write(&net, format!("{}{}", &text[..start], &text[end..])).unwrap();

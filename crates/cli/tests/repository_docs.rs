@@ -98,7 +98,7 @@ fn package_dir(root: &Path, file: &Path) -> PathBuf {
 /// docs cite. A cited name resolves relative to (a) the citing file's
 /// folder, (b) the citing file's crate or package (the folder of its
 /// `Cargo.toml` or `pyproject.toml`: a crate's `BENCHMARKS.md`), or (c) the
-/// repository root (`docs/tour-guide.md`, `crates/nav/EXPERIMENTS.md`).
+/// repository root (`docs/tour-guide.md`, `crates/guide/EXPERIMENTS.md`).
 /// A bare design-document name (`tour-guide.md`) is not looked up in
 /// `docs/`: cite it as `docs/tour-guide.md`.
 #[test]

@@ -1,5 +1,5 @@
 //! `petrinav topo`, run as a user would: routes planned on the hand-made
-//! small office (`crates/nav/tests/data/small_office.fpn.json`) with their
+//! small office (`crates/topo/tests/data/small_office.fpn.json`) with their
 //! tables and JSON, paper against optimal mode, several goals, thresholds
 //! rejecting transitions; conversions (PNML read back by petri's reader,
 //! DOT with the route, the map file rewritten byte for byte); generated maps;
@@ -35,7 +35,7 @@ fn stderr(o: &Output) -> String {
 
 const OFFICE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../nav/tests/data/small_office.fpn.json"
+    "/../topo/tests/data/small_office.fpn.json"
 );
 
 fn office_text() -> String {
@@ -677,7 +677,7 @@ fn generate_is_deterministic_and_its_maps_plan() {
         ta,
         "standard output"
     );
-    let map = nav::topo::FuzzyPetriNet::from_json(&tc).unwrap();
+    let map = topo::FuzzyPetriNet::from_json(&tc).unwrap();
     assert_eq!((map.num_places(), map.num_transitions()), (60, 300));
     let v: Value = serde_json::from_str(&ok(&[
         "topo",

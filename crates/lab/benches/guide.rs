@@ -25,9 +25,9 @@
 //! `cargo bench -p lab --bench guide`.
 
 use divan::Bencher;
-use lab::mission::{self, MissionSetup};
-use nav::guide::{GuideController, GuideParams, Policy};
-use nav::supervisor::Behaviour;
+use guide::supervisor::Behaviour;
+use guide::{GuideController, GuideParams, Policy};
+use lab::runs::mission::{self, MissionSetup};
 use robot::{Controller, Notes, Perception, Pose};
 use sim::{Places, RobotParams, RunParams, Simulation, Task, World};
 

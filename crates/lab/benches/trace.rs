@@ -18,17 +18,17 @@
 
 use std::cell::Cell as SeedCell;
 
+use activity::{PriorityController, PriorityParams};
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use lab::traps::{TrapKind, TrapSpec};
-use nav::activity::{PriorityController, PriorityParams};
-use nav::voting::trace_layer::TracedVoting;
-use nav::voting::{VotingController, VotingParams};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use robot::{Controller, Notes, Perception, Pose, Vec2};
 use sim::shapes::WorldSpec;
 use sim::{RobotParams, RunParams, Simulation, Task, World};
+use voting::trace_layer::TracedVoting;
+use voting::{VotingController, VotingParams};
 
 fn main() {
     divan::main();

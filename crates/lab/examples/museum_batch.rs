@@ -13,10 +13,10 @@
 //! one line per mission and the success rate.
 
 use anyhow::{Context, Result, bail};
-use lab::mission::{self, LegOutcome, LegSpec, MissionSetup, PeoplePlan, Stop};
+use guide::Policy;
+use guide::supervisor::Behaviour;
+use lab::runs::mission::{self, LegOutcome, LegSpec, MissionSetup, PeoplePlan, Stop};
 use lab::suites::tourguide::{EXHIBITS, GOAL, MISSION_TIME_LIMIT_S, START, museum};
-use nav::guide::Policy;
-use nav::supervisor::Behaviour;
 use sim::TraceParams;
 
 fn main() -> Result<()> {

@@ -1,4 +1,4 @@
-//! How well the scan-consistency score ([`nav::localization::consistency`])
+//! How well the scan-consistency score ([`localization::consistency`])
 //! tells a wrong pose from a right one among museum visitors:
 //!
 //! ```text
@@ -15,11 +15,11 @@
 //! evidence beams, and how often the contradiction exceeds each threshold.
 
 use anyhow::{Context, Result};
-use lab::mission::{self, LegSpec, MissionSetup, PeoplePlan};
+use guide::Policy;
+use guide::supervisor::Behaviour;
+use lab::runs::mission::{self, LegSpec, MissionSetup, PeoplePlan};
 use lab::suites::tourguide::{EXHIBITS, GOAL, MISSION_TIME_LIMIT_S, START, museum};
-use nav::guide::Policy;
-use nav::localization::{ConsistencyTolerances, LikelihoodField};
-use nav::supervisor::Behaviour;
+use localization::{ConsistencyTolerances, LikelihoodField};
 use rand::{RngExt, SeedableRng};
 use robot::Pose;
 use sim::TraceParams;
@@ -49,7 +49,7 @@ fn main() -> Result<()> {
     let mut setup = MissionSetup::new(museum()?, MISSION_TIME_LIMIT_S);
     // The localizer tracks without judging by contradiction (the source's
     // rule, no recovery), so its estimates are those of plain tracking.
-    setup.guide.mcl.status = nav::localization::StatusParams::explained();
+    setup.guide.mcl.status = localization::StatusParams::explained();
     setup.prepare()?;
     if people > 0 {
         setup.people = Some(PeoplePlan {

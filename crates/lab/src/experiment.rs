@@ -7,14 +7,14 @@
 
 use std::collections::BTreeMap;
 
+use activity::PriorityController;
 use anyhow::{Context, Result};
-use nav::activity::PriorityController;
-use nav::voting::VotingController;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use robot::{Controller, Event, Notes, Perception, Pose, Step, Vec2};
 use sim::shapes::WorldSpec;
 use sim::{CrowdParams, CrowdSize, OccupancyGrid, RunParams, Simulation, Task, Trace, TraceParams, World};
+use voting::VotingController;
 
 use crate::record::RunRecord;
 use crate::scenario::{ControllerKind, Scenario};
@@ -143,7 +143,7 @@ impl Prepared {
             ControllerKind::Voting => {
                 let v = VotingController::new(c.voting.clone()).map_err(|e| anyhow::anyhow!(e))?;
                 if c.trace_layer.enabled {
-                    Box::new(nav::voting::trace_layer::TracedVoting::new(v, c.priority))
+                    Box::new(voting::trace_layer::TracedVoting::new(v, c.priority))
                 } else {
                     Box::new(v)
                 }

@@ -23,7 +23,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use nav::supervisor::{Decision, Rates, Supervisor};
+use guide::supervisor::{Decision, Rates, Supervisor};
 use petri::{
     CompiledGspn, ExploreParams, Expr, FarkasParams, Gspn, Interrupt, Invariants, Net, Params, Properties,
     ReachabilityGraph, SimParams, SimProgress, SimResult, Solution, SolveParams,

@@ -11,7 +11,10 @@
 //! Foxglove.
 //!
 //! The suites themselves live in [`suites`], one folder each, listed in
-//! [`suites::REGISTRY`]; nothing outside that module names one.
+//! [`suites::REGISTRY`]; nothing outside that module names one. Robot runs
+//! that more than one suite, or a suite and a command, share (guide
+//! missions, topological explorations and routes) live in [`runs`], between
+//! the core and the suites.
 //!
 //! The work behind the command line's commands, shared with the Python
 //! package (`crates/py`) so that both say and print the same: [`gspn`]
@@ -28,12 +31,12 @@ pub mod experiment;
 pub mod foxglove;
 pub mod gspn;
 pub mod map_file;
-pub mod mission;
 pub mod page;
 pub mod pictures;
 pub mod record;
 pub mod report;
 pub mod runner;
+pub mod runs;
 pub mod scenario;
 pub mod scenario_suite;
 pub mod stats;
@@ -43,7 +46,6 @@ pub mod summary;
 pub mod tables;
 #[cfg(test)]
 mod test_replays;
-pub mod topo;
 pub mod tours;
 pub mod traps;
 pub mod viewer;

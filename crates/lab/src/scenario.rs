@@ -35,18 +35,18 @@
 //! | `[people] count, density` | people walking about (count, or per 100 m² of free space) | none |
 //! | `[trap]` | a dead-end trap drawn per run on the course ([`crate::traps::TrapSpec`]) | none |
 //! | `[controller] kind` | `voting` or `priority` | `voting` |
-//! | `[controller.voting]` | [`nav::voting::VotingParams`] | defaults |
-//! | `[controller.priority]` | [`nav::activity::PriorityParams`] | defaults |
+//! | `[controller.voting]` | [`voting::VotingParams`] | defaults |
+//! | `[controller.priority]` | [`activity::PriorityParams`] | defaults |
 //! | `[controller.trace_layer]` | activity-trace layer on the voting controller | off |
 //!
 //! Unknown keys are errors naming the key and its line.
 
 use std::path::{Path, PathBuf};
 
+use activity::PriorityParams;
 use anyhow::{Context, Result, bail};
-use nav::activity::PriorityParams;
-use nav::voting::VotingParams;
 use sim::shapes::WorldSpec;
+use voting::VotingParams;
 
 /// Where the robot starts, and how much that varies between runs.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]

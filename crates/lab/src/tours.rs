@@ -23,16 +23,16 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use anyhow::{Context, Result, bail};
-use nav::guide::{CreditPlan, Policy, SupervisorPlan};
-use nav::supervisor::credit::CreditSupervisor;
-use nav::supervisor::credit_learning::CreditModel;
-use nav::supervisor::log::{Entry, MissionLog};
-use nav::supervisor::{Behaviour, Supervisor, learning};
+use guide::supervisor::credit::CreditSupervisor;
+use guide::supervisor::credit_learning::CreditModel;
+use guide::supervisor::log::{Entry, MissionLog};
+use guide::supervisor::{Behaviour, Supervisor, learning};
+use guide::{CreditPlan, Policy, SupervisorPlan};
 use robot::{Pose, Vec2};
 use serde_json::{Value, json};
 use sim::{CrowdParams, OccupancyGrid, Places, World};
 
-use crate::mission::{self, LegOutcome, LegRun, MissionSetup, PeoplePlan, Stop};
+use crate::runs::mission::{self, LegOutcome, LegRun, MissionSetup, PeoplePlan, Stop};
 use crate::tables::num;
 
 /// The navigation behaviour of a guide run (`--behaviour`).
@@ -284,7 +284,7 @@ pub fn setup(
     let mut setup = MissionSetup::new(world, c.time_limit_s);
     setup.people = people;
     if c.explained_warning {
-        setup.guide.mcl.status = nav::localization::StatusParams::explained();
+        setup.guide.mcl.status = localization::StatusParams::explained();
     }
     Ok(setup)
 }

@@ -2,10 +2,10 @@
 //! office, place recognition judged against the true poses, routes by the
 //! map and by wall following, and the suite's campaigns.
 
+use ::topo::{NavigateParams, TopoParams};
+use lab::runs::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
 use lab::suite::Suite;
 use lab::suites::topo::{self as suite, ROUTES, TopoSuite};
-use lab::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
-use nav::topo::{NavigateParams, TopoParams};
 use sim::TraceParams;
 
 fn spec(seed: u64, time_s: f64) -> ExploreSpec {
@@ -109,7 +109,7 @@ fn routes_are_judged_against_where_the_goal_truly_is() {
         map: &e.map,
         truth: &e.truth,
         from,
-        to: nav::topo::PlaceId(e.map.num_places() as u32),
+        to: ::topo::PlaceId(e.map.num_places() as u32),
         method: RouteMethod::Map(NavigateParams::default()),
         time_limit_s: 10.0,
         seed: 1,

@@ -5,17 +5,17 @@
 //! the source's localizer, whose Warnings people raise); the crediting
 //! supervisor decides at the start, at every Warning and at every return.
 
-use lab::mission::{self, LegSpec, MissionSetup, PeoplePlan};
+use guide::supervisor::Behaviour;
+use guide::supervisor::credit::CreditSupervisor;
+use guide::supervisor::credit_learning::CreditModel;
+use guide::supervisor::log::{CalibrationRun, Entry};
+use guide::supervisor::reference::Reference;
+use guide::supervisor::{Rates, Supervisor};
+use guide::{CreditPlan, Policy, SupervisorPlan};
+use lab::runs::mission::{self, LegSpec, MissionSetup, PeoplePlan};
 use lab::suites::tourguide::{
     EXHIBITS, GOAL, LOST_AFTER_S, START, disturbances, museum, museum_with_patches, source_guide,
 };
-use nav::guide::{CreditPlan, Policy, SupervisorPlan};
-use nav::supervisor::Behaviour;
-use nav::supervisor::credit::CreditSupervisor;
-use nav::supervisor::credit_learning::CreditModel;
-use nav::supervisor::log::{CalibrationRun, Entry};
-use nav::supervisor::reference::Reference;
-use nav::supervisor::{Rates, Supervisor};
 use robot::{Event, Vec2};
 use sim::TraceParams;
 
@@ -178,7 +178,7 @@ fn a_prepared_map_runs_the_same_mission() {
     let raw = setup(25);
     let mut prepared = setup(25);
     prepared.prepare().unwrap();
-    for policy in [Policy::Rule, Policy::Fixed(nav::supervisor::Behaviour::Contour)] {
+    for policy in [Policy::Rule, Policy::Fixed(guide::supervisor::Behaviour::Contour)] {
         let a = mission::run_leg(&raw, &spec(policy.clone())).unwrap();
         let b = mission::run_leg(&prepared, &spec(policy)).unwrap();
         assert_eq!(a.trace.poses, b.trace.poses);
@@ -191,10 +191,14 @@ fn a_prepared_map_runs_the_same_mission() {
     changed.guide.automove.local.cost.inscribed_radius_m += 0.05;
     let mut fresh = raw.clone();
     fresh.guide = changed.guide.clone();
-    let a = mission::run_leg(&fresh, &spec(Policy::Fixed(nav::supervisor::Behaviour::AutoMove))).unwrap();
+    let a = mission::run_leg(
+        &fresh,
+        &spec(Policy::Fixed(guide::supervisor::Behaviour::AutoMove)),
+    )
+    .unwrap();
     let b = mission::run_leg(
         &changed,
-        &spec(Policy::Fixed(nav::supervisor::Behaviour::AutoMove)),
+        &spec(Policy::Fixed(guide::supervisor::Behaviour::AutoMove)),
     )
     .unwrap();
     assert_eq!(a.trace.poses, b.trace.poses);

@@ -64,7 +64,7 @@ pub(crate) fn tour<'py>(
             ..options
         })?;
         if let Some(path) = &output {
-            lab::mission::picture(tour.setup.world.grid(), &tour.legs, &tour.stops, path)?;
+            lab::runs::mission::picture(tour.setup.world.grid(), &tour.legs, &tour.stops, path)?;
         }
         Ok((tour.legs_json()?, tour.summary_json()))
     })?;

@@ -15,7 +15,7 @@
 //! transform on the window of radius `2 · CAP` around it (`O(CAP²)` too, but
 //! up to 66,000 cells in a serial chain: well under a millisecond).
 
-use crate::grid::Cell;
+use robot::Cell;
 
 /// Largest clearance stored, in cells. Larger values skip more free space per
 /// step but make a change of one cell ([`crate::OccupancyGrid::set`]) cost more.

@@ -87,6 +87,7 @@
 #![warn(missing_docs)]
 
 pub mod clearance;
+pub mod crowd_params;
 pub mod distance_field;
 pub mod disturbance;
 pub mod error;
@@ -113,6 +114,7 @@ pub mod trace;
 mod validate;
 pub mod world;
 
+pub use crowd_params::{CrowdParams, CrowdSize};
 pub use distance_field::{DistanceField, NearestObstacle};
 pub use disturbance::{
     DisturbanceCounts, DisturbanceEvent, DisturbanceKind, DisturbanceParams, PushParams, SlipParams,
@@ -122,7 +124,7 @@ pub use error::{Error, Result};
 pub use grid::{Cell, CellCounts, CellIndex, OccupancyGrid};
 pub use kinematics::DriveParams;
 pub use noise::RandomStream;
-pub use people::{Activity, Asked, Crowd, CrowdParams, CrowdSize, Person};
+pub use people::{Activity, Asked, Crowd, Person};
 pub use places::{Place, PlaceProblem, Places};
 pub use raycast::{cast, cast_many, cast_traversal};
 pub use robot_params::RobotParams;

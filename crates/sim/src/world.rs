@@ -5,10 +5,10 @@ use std::sync::Arc;
 
 use robot::Vec2;
 
+use crate::crowd_params::CrowdParams;
 use crate::distance_field::DistanceField;
 use crate::error::Result;
 use crate::grid::OccupancyGrid;
-use crate::people::CrowdParams;
 use crate::routes::Routes;
 
 /// The static part of every run in one place: the occupancy grid, its

@@ -12,7 +12,7 @@ use crate::scenario_suite::RUNS_PER_PICTURE;
 use crate::tables::MetricColumn;
 
 /// The metric: dead-locks detected in the run (`deadlock` events of
-/// `nav::activity` and `nav::voting::trace_layer`).
+/// `activity` and `voting::trace_layer`).
 pub const DEADLOCKS: &str = "deadlocks";
 
 /// The dead-lock column of the generic table: mean per run.

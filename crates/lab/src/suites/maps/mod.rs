@@ -10,7 +10,7 @@
 //!
 //! After a leg that ends without arriving (collision, time-out, lost, no route), the
 //! next starts at the place it was heading for, the robot put there by its
-//! operator ([`crate::mission`]'s decision), so that one failure does not
+//! operator ([`crate::runs::mission`]'s decision), so that one failure does not
 //! cascade through the rest of the tour (figures before and after:
 //! `crates/lab/EXPERIMENTS.md`).
 //!
@@ -33,19 +33,22 @@ use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
 use anyhow::{Context, Result, bail};
-use nav::guide::Policy;
-use nav::supervisor::Behaviour;
-use robot::Vec2;
+use guide::Policy;
+use guide::supervisor::Behaviour;
 use sim::{CrowdParams, Places, TraceParams, World};
 
-use crate::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop, Whereabouts};
 use crate::page::{Block, Figure, RunLink};
-use crate::pictures::{EventMarker, MarkerPlace, Replay};
+use crate::pictures::{EventMarker, Replay};
 use crate::record::RunRecord;
 use crate::runner::{Campaign, Job, derive_seed};
+use crate::runs::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan, Stop, Whereabouts};
 use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, SuiteReport};
 use crate::tables::{self, MetricColumn};
 use crate::viewer::PageRun;
+
+/// A leg's record and replay, its metric names and markers: shared with
+/// `petrinav nav go` (in [`crate::runs::mission`]).
+pub use crate::runs::mission::{MARKERS, leg_record, leg_replay, metric};
 
 /// The suite in the registry.
 pub const REGISTRATION: Registration = Registration {
@@ -87,34 +90,6 @@ pub const SEED: u64 = 11;
 
 /// Time limit of a leg, seconds.
 pub const LEG_TIME_LIMIT_S: f64 = 300.0;
-
-/// The metric names.
-pub mod metric {
-    /// Mean true position error of the localizer over a leg, metres.
-    pub const LOC_MEAN: &str = "loc_mean_error_m";
-    /// Largest true position error over a leg, metres.
-    pub const LOC_MAX: &str = "loc_max_error_m";
-    /// Warnings of the localizer in a leg.
-    pub const WARNINGS: &str = "warnings";
-    /// Time in Warning in a leg, seconds.
-    pub const WARNING_S: &str = "time_in_warning_s";
-    /// AutoMove's abnormal episodes in a leg.
-    pub const ABNORMAL: &str = "abnormal_episodes";
-    /// Time Abnormal in a leg, seconds.
-    pub const ABNORMAL_S: &str = "time_abnormal_s";
-    /// Time truly lost (error over 0.5 m or 20°), seconds.
-    pub const LOST_S: &str = "time_lost_s";
-    /// Time in Warning while truly lost, seconds.
-    pub const WARNING_LOST_S: &str = "time_warning_lost_s";
-    /// Time with the true error under 0.2 m, seconds.
-    pub const FINE_S: &str = "time_fine_s";
-    /// Time in Warning with the true error under 0.2 m, seconds.
-    pub const WARNING_FINE_S: &str = "time_warning_fine_s";
-    /// Pushes.
-    pub const PUSHES: &str = "pushes";
-    /// Groups closing round the robot.
-    pub const SURROUNDS: &str = "surrounds";
-}
 
 /// One map: its world (with the crowd's waypoints), places, and a leg's
 /// setup without people, the map prepared for the guide controller once.
@@ -284,49 +259,6 @@ impl MapsSuite {
     }
 }
 
-/// A leg's record, as the suite keeps it (without the suite's state): the
-/// outcome, time, path, clearance, ticks per behaviour and the
-/// localization and planner measures.
-pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
-    let r = &leg.result;
-    let mut record = mission::leg_base_record(leg);
-    let l = &r.localization;
-    record.set_metric(metric::LOC_MEAN, l.mean_error_m)?;
-    record.set_metric(metric::LOC_MAX, l.max_error_m)?;
-    record.set_metric(metric::WARNINGS, f64::from(l.warnings))?;
-    record.set_metric(metric::WARNING_S, l.time_in_warning_s)?;
-    record.set_metric(metric::ABNORMAL, f64::from(r.planner.abnormal_episodes))?;
-    record.set_metric(metric::ABNORMAL_S, r.planner.time_abnormal_s)?;
-    record.set_metric(metric::LOST_S, l.lost_s)?;
-    record.set_metric(metric::WARNING_LOST_S, l.warning_lost_s)?;
-    record.set_metric(metric::FINE_S, l.fine_s)?;
-    record.set_metric(metric::WARNING_FINE_S, l.warning_fine_s)?;
-    let count = |kind: &str| leg.disturbances.iter().filter(|d| d.kind.name() == kind).count() as f64;
-    record.set_metric(metric::PUSHES, count("push"))?;
-    record.set_metric(metric::SURROUNDS, count("surround"))?;
-    Ok(record)
-}
-
-/// A leg run with a simulator trace ([`mission::LegSpec::trace`]) as a
-/// replay to draw, watch or export (`nav go --html`): its `record` (e.g.
-/// [`leg_record`]), the trace taken out of the leg, the setup it ran in
-/// (map, robot) and the goal.
-pub fn leg_replay(record: RunRecord, setup: &MissionSetup, leg: &mut LegRun, goal: Vec2) -> Result<Replay> {
-    Ok(Replay {
-        record,
-        trace: leg
-            .sim
-            .as_mut()
-            .and_then(|s| s.trace.take())
-            .context("the leg was run without a simulator trace")?,
-        grid: setup.world.grid().clone(),
-        goal: Some(goal),
-        robot_radius_m: setup.robot.drive.radius_m,
-        // `mission::run_leg` runs at the simulator's default period.
-        control_period_s: sim::RunParams::default().control_period_s,
-    })
-}
-
 impl Suite for MapsSuite {
     fn info(&self) -> &SuiteInfo {
         &self.info
@@ -455,15 +387,6 @@ impl Suite for MapsSuite {
         })
     }
 }
-
-/// The events drawn on pictures and viewer pages of legs beyond the
-/// trajectory's colours: the localizer's warnings.
-pub const MARKERS: [EventMarker; 1] = [EventMarker {
-    kind: "warning",
-    marker: sim::render::MarkerKind::Ring([0, 160, 160]),
-    place: MarkerPlace::Event,
-    single_run_only: false,
-}];
 
 /// A leg's replay: its number in the tour (from 1), its key, the replay.
 type LegReplay = (usize, String, Replay);

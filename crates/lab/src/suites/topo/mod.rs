@@ -21,7 +21,7 @@
 //! `WORLD/wall_following` drives the same pair by right-hand wall
 //! following. Both start at the true pose where the start place was
 //! recorded and meet the same simulator noise (common random numbers).
-//! The judging is [`crate::topo`]'s: recognition against true poses,
+//! The judging is [`crate::runs::topo`]'s: recognition against true poses,
 //! arrival within 0.5 m of where the goal place was recorded, and every
 //! leg of a route by the map against where the planned place truly is
 //! (a `leg` event per leg in the route's record: the places, the true
@@ -38,7 +38,7 @@
 //! **Decision — connectivity, reported both ways.** A net is *connected*
 //! when its graph, arcs taken either way, is in one piece, and *strongly
 //! connected* when every place can reach every other (Murata 1989's two
-//! notions; [`crate::topo::connectivity`]). The report gives both, and the
+//! notions; [`crate::runs::topo::connectivity`]). The report gives both, and the
 //! share of the places in the largest strongly connected part, because
 //! neither alone says what the map is worth: an exploration is one walk,
 //! so its net is connected unless a leg failed (the robot then starts
@@ -49,7 +49,7 @@
 //! notion (figures: `crates/lab/EXPERIMENTS.md`).
 //!
 //! **Decision — the odometry** is calibrated (slips of σ 1 % per wheel and
-//! step, no large slips; [`crate::topo`]'s docs), as in the dead-lock
+//! step, no large slips; [`crate::runs::topo`]'s docs), as in the dead-lock
 //! suite's main rows; `office_slips` repeats the office with the
 //! simulator's default odometry, whose large slips drift the robot by a
 //! metre over one corridor — the reason for the source's concave places.
@@ -59,19 +59,21 @@ mod report;
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
+use ::topo::{FuzzyPetriNet, NavigateParams, PlaceId, TopoParams};
 use anyhow::{Context, Result, bail};
-use nav::topo::{FuzzyPetriNet, NavigateParams, PlaceId, TopoParams};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use robot::{Event, Pose};
-use sim::shapes::WorldSpec;
 use sim::{TraceParams, World};
 
 use crate::pictures::{EventMarker, Replay};
 use crate::record::RunRecord;
 use crate::runner::{Campaign, Job, derive_seed};
+use crate::runs::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
 use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, SuiteReport};
-use crate::topo::{self, ExploreSpec, RouteMethod, RouteOutcome, RouteSpec};
+
+/// The worlds, shared with `petrinav topo explore / go` (in [`crate::runs::topo`]).
+pub use crate::runs::topo::{OFFICE, WORLDS, floor, office};
 
 /// The suite in the registry.
 pub const REGISTRATION: Registration = Registration {
@@ -79,42 +81,6 @@ pub const REGISTRATION: Registration = Registration {
     about: "topological maps as fuzzy Petri nets: a sonar-ring robot explores two offices, then drives routes between known places with its map, against wall following and the grid's shortest path",
     build,
 };
-
-/// The 50 m² office, as shipped.
-pub const OFFICE: &str = include_str!("office.toml");
-
-/// The worlds: name, exploration time (s), start of the exploration.
-/// `office_slips` is the office with the simulator's default odometry
-/// (large slips: [`topo::slipping_robot`]), the stress case.
-pub const WORLDS: [(&str, f64, Pose); 3] = [
-    (
-        "office",
-        600.0,
-        Pose {
-            x_m: 1.0,
-            y_m: 0.75,
-            theta_rad: 0.0,
-        },
-    ),
-    (
-        "floor",
-        1800.0,
-        Pose {
-            x_m: 1.0,
-            y_m: 6.0,
-            theta_rad: 0.0,
-        },
-    ),
-    (
-        "office_slips",
-        600.0,
-        Pose {
-            x_m: 1.0,
-            y_m: 0.75,
-            theta_rad: 0.0,
-        },
-    ),
-];
 
 /// The robot of world `w`.
 fn robot_of(w: usize) -> sim::RobotParams {
@@ -182,24 +148,6 @@ pub mod metric {
     pub const FROM: &str = "from_place";
     /// The goal place's id.
     pub const TO: &str = "to_place";
-}
-
-/// The generated floor: 20 m × 18 m at 0.05 m
-/// ([`sim::generators::office`]: corridors 2 m wide along y = 6 m and
-/// y = 12 m, rooms in 4 m slots with 1 m doors and a 1.2 m × 0.6 m table
-/// in each, an open hall between the corridors in the middle slot).
-pub fn floor() -> Result<World> {
-    Ok(World::new(sim::generators::office(400, 360, 0.05)?))
-}
-
-/// The office of `office.toml`.
-pub fn office() -> Result<World> {
-    #[derive(serde::Deserialize)]
-    struct File {
-        world: WorldSpec,
-    }
-    let file: File = toml::from_str(OFFICE).context("office.toml")?;
-    Ok(World::new(file.world.rasterise()?))
 }
 
 /// What a campaign's later runs need from its exploration.

@@ -7,19 +7,19 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+use ::topo::{FuzzyPetriNet, PlaceId, PlanMode, plan};
 use anyhow::Result;
-use nav::topo::{FuzzyPetriNet, PlaceId, PlanMode, plan};
 use robot::Pose;
 
 use super::{Explored, METHODS, ROUTES, TopoSuite, WORLDS, metric};
 use crate::charts::{self, Series};
 use crate::page::{Block, Figure};
 use crate::record::{RunRecord, Runs};
+use crate::runs::topo;
 use crate::stats::{Mean, Proportion, median};
 use crate::suite::{ReportContext, Suite, SuiteReport};
 use crate::summary::CONFIDENCE;
 use crate::tables::{self, MetricColumn};
-use crate::topo;
 
 fn records<'a>(runs: &'a Runs, scenario: &str) -> Vec<(u32, &'a RunRecord)> {
     runs.get(scenario)

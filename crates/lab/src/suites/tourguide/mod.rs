@@ -9,11 +9,11 @@
 //! | `automove_then_contour` | AutoMove, and contour tracking from the localizer's first Warning on |
 //! | `contour` | contour tracking only |
 //! | `rule` | the rule alone: contour tracking while the localizer warns, AutoMove while it succeeds |
-//! | `supervisor` | the crediting GSPN supervisor ([`nav::supervisor::credit`]): the net decides at the start, at every Warning and at every return to Success, with failure rates credited to each behaviour and learnt per crowd context from the campaign's log |
+//! | `supervisor` | the crediting GSPN supervisor ([`guide::supervisor::credit`]): the net decides at the start, at every Warning and at every return to Success, with failure rates credited to each behaviour and learnt per crowd context from the campaign's log |
 //! | `supervisor_source` | the source's supervisor and localizer: the rule, and `f_auto` against `f_cont` at the start and on returns to Success, the localizer warning by the explained fraction |
 //!
 //! All but `supervisor_source` run the localizer whose Warning means lost
-//! (the contradiction rule, `nav::localization::status`).
+//! (the contradiction rule, `localization::status`).
 //!
 //! **Conditions.** Three crowd densities and a museum day: `empty` (nobody),
 //! `moderate` (25 visitors), `packed` (60), and `day`, whose 24 missions
@@ -54,20 +54,20 @@ use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
 use anyhow::{Context, Result, bail};
-use nav::guide::{CreditPlan, GuideParams, Policy, SupervisorPlan};
-use nav::localization::StatusParams;
-use nav::supervisor::credit::CreditSupervisor;
-use nav::supervisor::credit_learning::CreditModel;
-use nav::supervisor::log::Entry;
-use nav::supervisor::{Behaviour, Supervisor, learning};
+use guide::supervisor::credit::CreditSupervisor;
+use guide::supervisor::credit_learning::CreditModel;
+use guide::supervisor::log::Entry;
+use guide::supervisor::{Behaviour, Supervisor, learning};
+use guide::{CreditPlan, GuideParams, Policy, SupervisorPlan};
+use localization::StatusParams;
 use robot::{Event, Pose, Vec2};
 use sim::shapes::WorldSpec;
 use sim::{CrowdParams, DisturbanceKind, DisturbanceParams, SlipPatch, TraceParams, World};
 
-use crate::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan};
 use crate::pictures::{EventMarker, MarkerPlace, Replay};
 use crate::record::RunRecord;
 use crate::runner::{Campaign, Job, derive_seed};
+use crate::runs::mission::{self, LegRun, LegSpec, MissionSetup, PeoplePlan};
 use crate::suite::{Registration, ReportContext, Suite, SuiteArgs, SuiteInfo, SuiteReport};
 
 /// The suite in the registry.
@@ -541,7 +541,7 @@ impl TourGuideSuite {
             }
             // The source's log as the source keeps it: no segments.
             (Kind::Mission(_, m), _) if source => match mission::mission_entry(&leg, m + 1) {
-                Entry::Mission(r) => Entry::Mission(nav::supervisor::log::MissionRecord {
+                Entry::Mission(r) => Entry::Mission(guide::supervisor::log::MissionRecord {
                     segments: Vec::new(),
                     ..r
                 }),

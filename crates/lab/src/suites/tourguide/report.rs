@@ -10,7 +10,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
-use nav::supervisor::log::{Entry, Line};
+use guide::supervisor::log::{Entry, Line};
 use robot::Event;
 use sim::TraceParams;
 
@@ -424,9 +424,9 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     }
     blocks.push(Block::Text(format!(
         "Visitors push or turn the robot while it stands braked (0.3–2 m, up to 90°, unseen by the odometry; {} per visitor-second within reach), the wheels slip on the polished threshold between the galleries (up to {} % per wheel, every crossing), and groups of 6–10 visitors close round the robot for 20–60 s ({} per visitor-second), hiding every wall. A robot is *truly lost* while its estimate is more than 0.5 m or 20° off. All strategies meet the same draws, mission by mission; how often a push strikes depends on where and how long the robot stands.\n\n",
-        crate::mission::PUSH_RATE_PER_PERSON_S,
+        crate::runs::mission::PUSH_RATE_PER_PERSON_S,
         100.0 * super::SLIP_MAX,
-        crate::mission::SURROUND_RATE_PER_VISITOR_S,
+        crate::runs::mission::SURROUND_RATE_PER_VISITOR_S,
     )));
     blocks.push(Block::Table(md));
 
@@ -913,7 +913,7 @@ fn why(runs: &Runs, condition: &str, d: usize, cells: &BTreeMap<(usize, usize), 
         }
     }
     let mut ctx_parts = Vec::new();
-    for name in nav::supervisor::credit_learning::CONTEXT_NAMES {
+    for name in guide::supervisor::credit_learning::CONTEXT_NAMES {
         let n = decisions
             .iter()
             .filter(|e| e.text("context") == Some(name))

@@ -138,7 +138,7 @@ fn straight_line_s(f: u32) -> f64 {
         .find(|(n, _)| *n == name)
         .and_then(|(n, text)| Scenario::parse(text, n, None).ok())
         .map_or(f64::NAN, |s| {
-            let cruise = nav::voting::actions::ActionSet::default().cruise_mps;
+            let cruise = voting::actions::ActionSet::default().cruise_mps;
             (s.goal.x - s.start.x).hypot(s.goal.y - s.start.y) / cruise
         })
 }
@@ -469,7 +469,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     );
     out.push_str(
         "IR beam width (sensor model, `sim::sensors::ir`). Each IR detector was a single ray; it now has a 10° beam sampled by three rays, as a lensed IR proximity detector has. The 20° between neighbouring beams stay blind, so edges still slip between them — now occasionally: with single rays, the IR-only robot met the front corner of a 0.5 m box between two rays in a quarter to a half of the runs of fields 2–5.\n\n\
-         Sonar echo memory (vote model, `nav::voting::VotingParams::sonar_memory_m`). Three 25° cones at 0°, ±30° cover ±42.5°; what is beside the robot is in none. A corner the robot passes is heard while ahead and lost as it comes abeam — just when the goal's pull turns the robot into it; sonar alone hit the inner corner of the bent corridor (field 7) in every run and the edge of the opening in the narrow passages. `b_sonar` now keeps the echoes it heard, carried along by odometry, until it has driven D_max (1 m) past them.\n\n\
+         Sonar echo memory (vote model, `voting::VotingParams::sonar_memory_m`). Three 25° cones at 0°, ±30° cover ±42.5°; what is beside the robot is in none. A corner the robot passes is heard while ahead and lost as it comes abeam — just when the goal's pull turns the robot into it; sonar alone hit the inner corner of the bent corridor (field 7) in every run and the edge of the opening in the narrow passages. `b_sonar` now keeps the echoes it heard, carried along by odometry, until it has driven D_max (1 m) past them.\n\n\
          The fields (`crates/lab/src/suites/voting/scenarios/`, design rules in each file's header). Scaled so that field 1 takes the source's 10 s (3 m at 0.3 m/s). Simple fields hold only solid obstacles 0.5 m or more across with gaps of at least 1.2 m (a corridor's width): 5 cm poles, wedges and thin walls seen edge-on, and gaps narrower than a corridor, made fields 2–5 adversarial. Narrow passages are openings 1.0 m off the line to the goal in a wall across the field, from 1.0 m down to 0.7 m (at 0.6 m the IR+sonar team hesitates in front of the slot until the time limit); with the opening on the line, every combination drove straight through. Every goal stands at least 1.4 m from the wall beyond it, so the robot arrives before that wall makes it turn away. The traps are 2.0 m wide inside, room for three tightest turning circles (narrower Us, tried, make every combination collide while turning); the trap among obstacles has no gap narrower than a corridor (with 0.8 m gaps, planning's detour collided).\n\n",
     );
 

@@ -37,7 +37,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
-use nav::voting::Teams;
+use voting::Teams;
 
 use super::shared;
 use crate::experiment::Prepared;
