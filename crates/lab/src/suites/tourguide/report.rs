@@ -778,7 +778,7 @@ fn day_why(runs: &Runs) -> String {
         lost_to.len()
     );
     let needs = [
-        "began in contour tracking among visitors — contour tracking had been seen only in emptier halls, and the net can only weigh what the log holds: it would need the crowd's effect on contour tracking before its first crowded mission (the learning assumes the crowd acts on both behaviours alike until their own data say otherwise)",
+        "began in contour tracking among visitors — chosen on little data of contour tracking in crowds (its speed is learnt only while localized, the calibration met the day's first, empty hall, and the learning assumes the crowd acts on both behaviours alike until their own data say otherwise): the net would need that data before the first crowded mission",
         "kept AutoMove at a Warning — λ12 is one exponential rate for every Warning, a short one that clears by itself and a kidnap alike: the net would need the Warning's cause or age (a Warning state per cause, or a phase-type sojourn) to tell them apart",
         "chose contour tracking at a Warning and still failed — the choice the rule makes; no decision of the net would have saved these",
         "met no Warning before failing — a true loss the localizer did not flag, or a collision while localized: the net had nothing to decide on; it would need the loss to be seen (sensing the push itself, e.g. an IMU)",
