@@ -92,6 +92,15 @@ fn crate_paths(text: &str) -> Vec<Vec<String>> {
     out
 }
 
+/// The lines of a source file that are code: doc links and comments name
+/// modules without depending on them.
+fn code_only(text: &str) -> String {
+    text.lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .map(|l| format!("{l}\n"))
+        .collect()
+}
+
 fn graph() -> (BTreeMap<String, BTreeSet<String>>, BTreeMap<String, String>) {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
@@ -102,12 +111,7 @@ fn graph() -> (BTreeMap<String, BTreeSet<String>>, BTreeMap<String, String>) {
         let rel = f.strip_prefix(&src).unwrap().to_path_buf();
         let node = node_of(&rel);
         let text = std::fs::read_to_string(&f).unwrap();
-        // Code only: doc links name modules without depending on them.
-        let code: String = text
-            .lines()
-            .filter(|l| !l.trim_start().starts_with("//"))
-            .map(|l| format!("{l}\n"))
-            .collect();
+        let code = code_only(&text);
         let targets = edges.entry(node.clone()).or_default();
         for path in crate_paths(&code) {
             let segs: Vec<&str> = path.iter().map(String::as_str).collect();
@@ -295,11 +299,7 @@ fn top_level_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
             continue;
         }
         let text = std::fs::read_to_string(&f).unwrap();
-        let code: String = text
-            .lines()
-            .filter(|l| !l.trim_start().starts_with("//"))
-            .map(|l| format!("{l}\n"))
-            .collect();
+        let code = code_only(&text);
         let targets = edges.entry(node.clone()).or_default();
         for path in crate_paths(&code) {
             if let Some(first) = path.first() {

@@ -29,7 +29,7 @@
 //! position of a place is its odometry position at 50 px per metre, y
 //! pointing down as on screens. Everything else goes, exactly, into
 //! `<toolspecific tool="petrinav" version="1">` elements, which
-//! [`petri`]'s reader and other tools skip:
+//! `petri`'s reader and other tools skip:
 //!
 //! ```xml
 //! <place id="pl0">

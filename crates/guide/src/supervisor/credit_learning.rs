@@ -67,7 +67,7 @@ use robot::Vec2;
 use super::Behaviour;
 use super::credit::{CreditRates, FAILURE_COST_S};
 use super::learning::LearnError;
-use super::log::{CalibrationRun, Entry, MissionRecord};
+use super::log::Entry;
 use super::reference::{MIN_REMAINING_S, Reference};
 
 /// Unmapped objects per scan separating the crowd contexts: quiet below
@@ -297,20 +297,7 @@ impl CreditModel {
     }
 
     fn learn_with(entries: &[Entry], lenient: bool) -> Result<CreditModel, LearnError> {
-        let calibration: Vec<&CalibrationRun> = entries
-            .iter()
-            .filter_map(|e| match e {
-                Entry::Calibration(c) => Some(c),
-                Entry::Mission(_) => None,
-            })
-            .collect();
-        let missions: Vec<&MissionRecord> = entries
-            .iter()
-            .filter_map(|e| match e {
-                Entry::Mission(m) => Some(m),
-                Entry::Calibration(_) => None,
-            })
-            .collect();
+        let (calibration, missions) = super::log::split_entries(entries);
         let reference = match super::learning::reference_of(&calibration, Behaviour::AutoMove) {
             Ok(r) => r,
             Err(LearnError::NoCalibration(b)) if lenient => {
@@ -523,6 +510,7 @@ pub fn remaining_m(reference: &Reference, at: Vec2) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::supervisor::log::{CalibrationRun, MissionRecord};
 
     fn seg(b: Behaviour, localized: bool, context: usize, d: f64, progress: f64, end: SegmentEnd) -> Segment {
         Segment {

@@ -32,7 +32,7 @@
 
 use robot::Vec2;
 
-use super::log::{CalibrationRun, Entry, MissionRecord, StateName};
+use super::log::{CalibrationRun, Entry, StateName};
 use super::reference::Reference;
 use super::{Behaviour, NUM_RATES, Rates};
 
@@ -152,20 +152,7 @@ pub fn learn_or_prior(entries: &[Entry]) -> Result<Learned, LearnError> {
 
 fn learn_with(entries: &[Entry], lenient: bool) -> Result<Learned, LearnError> {
     let prior = Rates::initial();
-    let calibration: Vec<&CalibrationRun> = entries
-        .iter()
-        .filter_map(|e| match e {
-            Entry::Calibration(c) => Some(c),
-            Entry::Mission(_) => None,
-        })
-        .collect();
-    let missions: Vec<&MissionRecord> = entries
-        .iter()
-        .filter_map(|e| match e {
-            Entry::Mission(m) => Some(m),
-            Entry::Calibration(_) => None,
-        })
-        .collect();
+    let (calibration, missions) = super::log::split_entries(entries);
     let with_prior = |b: Behaviour, rate: f64| match reference_of(&calibration, b) {
         Err(LearnError::NoCalibration(_)) if lenient => Ok(Reference::prior(1.0 / rate)),
         other => other,
@@ -225,7 +212,7 @@ fn learn_with(entries: &[Entry], lenient: bool) -> Result<Learned, LearnError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::supervisor::log::Sojourn;
+    use crate::supervisor::log::{MissionRecord, Sojourn};
 
     fn calibration(b: Behaviour, t: f64, len: f64) -> Entry {
         Entry::Calibration(CalibrationRun {

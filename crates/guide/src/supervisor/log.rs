@@ -129,6 +129,19 @@ pub enum Entry {
     Mission(MissionRecord),
 }
 
+/// A log's calibration runs and missions, each in log order.
+pub fn split_entries(entries: &[Entry]) -> (Vec<&CalibrationRun>, Vec<&MissionRecord>) {
+    let mut calibration = Vec::new();
+    let mut missions = Vec::new();
+    for e in entries {
+        match e {
+            Entry::Calibration(c) => calibration.push(c),
+            Entry::Mission(m) => missions.push(m),
+        }
+    }
+    (calibration, missions)
+}
+
 /// A line as written: the net it belongs to, and the entry.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Line {

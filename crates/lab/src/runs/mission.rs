@@ -1010,7 +1010,7 @@ pub fn leg_record(leg: &LegRun) -> Result<RunRecord> {
     Ok(record)
 }
 
-/// A leg run with a simulator trace ([`mission::LegSpec::trace`]) as a
+/// A leg run with a simulator trace ([`LegSpec::trace`]) as a
 /// replay to draw, watch or export (`nav go --html`): its `record` (e.g.
 /// [`leg_record`]), the trace taken out of the leg, the setup it ran in
 /// (map, robot) and the goal.
