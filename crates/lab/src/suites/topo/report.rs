@@ -145,6 +145,39 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
     blocks.push(Block::Table(table));
 
     // 1. Explorations.
+    blocks.extend(exploration_blocks(suite, ctx, &mut files)?);
+
+    // 2. One route as the source tabulates it.
+    if let Some(table) = route_table(runs) {
+        blocks.push(Block::Heading(
+            "A planned route, as the source tabulates it".into(),
+        ));
+        blocks.extend(table);
+    }
+
+    // 3. Routes.
+    blocks.extend(route_blocks(runs));
+    Ok(SuiteReport {
+        text,
+        intro: Some(format!(
+            "{} explorations per world, each followed by {ROUTES} routes between random pairs of the places it found (pairs with a planned route), driven with the map and by wall following; base seed {}. Any run replays from its seed: `petrinav lab replay out/topo 'office/map#K' -o route.png --trace route.jsonl`.",
+            suite.info().runs,
+            suite.info().seed
+        )),
+        blocks,
+        files,
+    })
+}
+
+/// The explorations: their table and explanation, the map's growth over
+/// the first exploration of each world, and the nets explored.
+fn exploration_blocks(
+    suite: &TopoSuite,
+    ctx: &ReportContext<'_>,
+    files: &mut Vec<std::path::PathBuf>,
+) -> Result<Vec<Block>> {
+    let runs = ctx.runs;
+    let mut blocks = Vec::new();
     blocks.push(Block::Heading("Exploring: the nets the robot built".into()));
     let mut md = String::from(
         "| world | explorations | connected | strongly connected | largest strongly connected part | places | transitions | stops | recognition precision | recall | recalibrations | odometry drift at the end (m) |\n|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
@@ -157,99 +190,16 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
         if ex.is_empty() {
             continue;
         }
-        let connected = Proportion::new(ex.iter().filter(|(_, r)| r.success).count(), ex.len(), CONFIDENCE);
-        let weakly = Proportion::new(
-            ex.iter()
-                .filter(|(_, r)| r.metric(metric::CONNECTED).is_some_and(|v| v > 0.5))
-                .count(),
-            ex.len(),
-            CONFIDENCE,
-        );
-        let share = mean_metric(&ex, metric::STRONG_SHARE);
-        let (tp, fp, fn_) = (
-            metric_sum(&ex, metric::TP),
-            metric_sum(&ex, metric::FP),
-            metric_sum(&ex, metric::FN),
-        );
-        let precision = if tp + fp > 0.0 { tp / (tp + fp) } else { f64::NAN };
-        let recall = if tp + fn_ > 0.0 { tp / (tp + fn_) } else { f64::NAN };
-        let drift: Vec<f64> = ex.iter().map(|(_, r)| r.odometry_error_m).collect();
-        let drift = Mean::new(&drift, CONFIDENCE);
-        let _ = writeln!(
-            md,
-            "| {world} | {} | {} | {} | {:.0} % of the places | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
-            ex.len(),
-            percent(&weakly),
-            percent(&connected),
-            100.0 * share.mean,
-            one_decimal(&mean_metric(&ex, metric::PLACES)),
-            one_decimal(&mean_metric(&ex, metric::TRANSITIONS)),
-            one_decimal(&mean_metric(&ex, metric::STOPS)),
-            precision,
-            recall,
-            one_decimal(&mean_metric(&ex, metric::RECALIBRATIONS)),
-            one_decimal(&drift),
-        );
-        let _ = write!(
-            explanation,
-            "**{world}.** {} of {} explorations built a connected net (its graph in one piece) and {} a strongly connected one; on average the largest strongly connected part held {:.0} % of the places (the rest: places the robot left and never came back to, such as the first ones, found from where it happened to start, and the last ones, found just before the time ran out); {:.1} legs per exploration found no place, and after each the robot starts again from nowhere known, so the net falls into pieces unless it recognises the next place it stops at. Over all their stops the robot recognised a place it truly stood at {tp:.0} times, took a place for another {fp:.0} times and failed to recognise one it knew {fn_:.0} times: precision {precision:.2}, recall {recall:.2} (a stop is at a known place when the true pose is within {} m of where that place was recorded and the robot faces the same way within 45°). ",
-            weakly.successes,
-            connected.n,
-            connected.successes,
-            100.0 * share.mean,
-            mean_metric(&ex, metric::FAILED_LEGS).mean,
-            topo::SAME_PLACE_M
-        );
-        let _ = writeln!(
-            explanation,
-            "The dead-reckoned position ended {:.2} m from the truth on average, after {:.1} recalibrations at concave places per exploration: without them the map positions would drift further.\n",
-            drift.mean,
-            mean_metric(&ex, metric::RECALIBRATIONS).mean,
-        );
+        let (row, text) = exploration_row(world, &ex);
+        md.push_str(&row);
+        explanation.push_str(&text);
         // The size of the first exploration's map over time.
         if let Some((first, r)) = ex.first() {
-            let points: Vec<(f64, f64)> = r
-                .events
-                .iter()
-                .filter(|e| e.kind == "stop")
-                .filter_map(|e| Some((e.time_s, e.number("places")?)))
-                .collect();
-            growth_series.push(Series {
-                name: format!("{world}: places"),
-                points: points.clone(),
-            });
-            let tpoints: Vec<(f64, f64)> = r
-                .events
-                .iter()
-                .filter(|e| e.kind == "stop")
-                .filter_map(|e| Some((e.time_s, e.number("transitions")?)))
-                .collect();
-            growth_series.push(Series {
-                name: format!("{world}: transitions"),
-                points: tpoints,
-            });
+            growth_series.extend(growth(world, r));
             if ctx.pictures
-                && let Some((map, truth)) = explored(r)
+                && let Some(figure) = net_figure(suite, ctx, world, *first, r, files)?
             {
-                let (path, src) = ctx.picture_path(&format!("{world}-net.png"))?;
-                topo::picture(suite.world_grid(world)?, &map, Some(&truth), None, &path)?;
-                files.push(path);
-                // The exploration itself in the viewer (first in its
-                // campaign: no earlier runs).
-                let key = format!("{world}/explore#{first}");
-                let (job, _) = crate::suite::find_job(suite, &key)?;
-                let replay = suite.replay(&job, &[], sim::TraceParams::full())?;
-                let (page, link) = ctx.viewer_page(&replay, suite.markers(), &key, "the exploration")?;
-                files.push(page);
-                figures.push(Figure {
-                    title: format!(
-                        "{world}: the net of exploration 0 ({} places, {} transitions)",
-                        map.num_places(),
-                        map.num_transitions()
-                    ),
-                    src,
-                    runs: vec![link],
-                });
+                figures.push(figure);
             }
         }
     }
@@ -284,143 +234,257 @@ pub fn report(suite: &TopoSuite, ctx: &ReportContext<'_>) -> Result<SuiteReport>
             figures,
         });
     }
+    Ok(blocks)
+}
 
-    // 2. One route as the source tabulates it.
-    if let Some(table) = route_table(runs) {
-        blocks.push(Block::Heading(
-            "A planned route, as the source tabulates it".into(),
-        ));
-        blocks.extend(table);
-    }
+/// A world's row of the explorations' table and its paragraph.
+fn exploration_row(world: &str, ex: &[(u32, &RunRecord)]) -> (String, String) {
+    let mut md = String::new();
+    let mut explanation = String::new();
+    let connected = Proportion::new(ex.iter().filter(|(_, r)| r.success).count(), ex.len(), CONFIDENCE);
+    let weakly = Proportion::new(
+        ex.iter()
+            .filter(|(_, r)| r.metric(metric::CONNECTED).is_some_and(|v| v > 0.5))
+            .count(),
+        ex.len(),
+        CONFIDENCE,
+    );
+    let share = mean_metric(ex, metric::STRONG_SHARE);
+    let (tp, fp, fn_) = (
+        metric_sum(ex, metric::TP),
+        metric_sum(ex, metric::FP),
+        metric_sum(ex, metric::FN),
+    );
+    let precision = if tp + fp > 0.0 { tp / (tp + fp) } else { f64::NAN };
+    let recall = if tp + fn_ > 0.0 { tp / (tp + fn_) } else { f64::NAN };
+    let drift: Vec<f64> = ex.iter().map(|(_, r)| r.odometry_error_m).collect();
+    let drift = Mean::new(&drift, CONFIDENCE);
+    let _ = writeln!(
+        md,
+        "| {world} | {} | {} | {} | {:.0} % of the places | {} | {} | {} | {:.2} | {:.2} | {} | {} |",
+        ex.len(),
+        percent(&weakly),
+        percent(&connected),
+        100.0 * share.mean,
+        one_decimal(&mean_metric(ex, metric::PLACES)),
+        one_decimal(&mean_metric(ex, metric::TRANSITIONS)),
+        one_decimal(&mean_metric(ex, metric::STOPS)),
+        precision,
+        recall,
+        one_decimal(&mean_metric(ex, metric::RECALIBRATIONS)),
+        one_decimal(&drift),
+    );
+    let _ = write!(
+        explanation,
+        "**{world}.** {} of {} explorations built a connected net (its graph in one piece) and {} a strongly connected one; on average the largest strongly connected part held {:.0} % of the places (the rest: places the robot left and never came back to, such as the first ones, found from where it happened to start, and the last ones, found just before the time ran out); {:.1} legs per exploration found no place, and after each the robot starts again from nowhere known, so the net falls into pieces unless it recognises the next place it stops at. Over all their stops the robot recognised a place it truly stood at {tp:.0} times, took a place for another {fp:.0} times and failed to recognise one it knew {fn_:.0} times: precision {precision:.2}, recall {recall:.2} (a stop is at a known place when the true pose is within {} m of where that place was recorded and the robot faces the same way within 45°). ",
+        weakly.successes,
+        connected.n,
+        connected.successes,
+        100.0 * share.mean,
+        mean_metric(ex, metric::FAILED_LEGS).mean,
+        topo::SAME_PLACE_M
+    );
+    let _ = writeln!(
+        explanation,
+        "The dead-reckoned position ended {:.2} m from the truth on average, after {:.1} recalibrations at concave places per exploration: without them the map positions would drift further.\n",
+        drift.mean,
+        mean_metric(ex, metric::RECALIBRATIONS).mean,
+    );
+    (md, explanation)
+}
 
-    // 3. Routes.
+/// Places and transitions after every stop of an exploration.
+fn growth(world: &str, r: &RunRecord) -> [Series; 2] {
+    let count = |key: &str| -> Vec<(f64, f64)> {
+        r.events
+            .iter()
+            .filter(|e| e.kind == "stop")
+            .filter_map(|e| Some((e.time_s, e.number(key)?)))
+            .collect()
+    };
+    [
+        Series {
+            name: format!("{world}: places"),
+            points: count("places"),
+        },
+        Series {
+            name: format!("{world}: transitions"),
+            points: count("transitions"),
+        },
+    ]
+}
+
+/// The picture of an exploration's net, with the exploration in the viewer.
+fn net_figure(
+    suite: &TopoSuite,
+    ctx: &ReportContext<'_>,
+    world: &str,
+    first: u32,
+    r: &RunRecord,
+    files: &mut Vec<std::path::PathBuf>,
+) -> Result<Option<Figure>> {
+    let Some((map, truth)) = explored(r) else {
+        return Ok(None);
+    };
+    let (path, src) = ctx.picture_path(&format!("{world}-net.png"))?;
+    topo::picture(suite.world_grid(world)?, &map, Some(&truth), None, &path)?;
+    files.push(path);
+    // The exploration itself in the viewer (first in its
+    // campaign: no earlier runs).
+    let key = format!("{world}/explore#{first}");
+    let (job, _) = crate::suite::find_job(suite, &key)?;
+    let replay = suite.replay(&job, &[], sim::TraceParams::full())?;
+    let (page, link) = ctx.viewer_page(&replay, suite.markers(), &key, "the exploration")?;
+    files.push(page);
+    Ok(Some(Figure {
+        title: format!(
+            "{world}: the net of exploration 0 ({} places, {} transitions)",
+            map.num_places(),
+            map.num_transitions()
+        ),
+        src,
+        runs: vec![link],
+    }))
+}
+
+/// The routes: by map and by wall following, and what the numbers say.
+fn route_blocks(runs: &Runs) -> Vec<Block> {
+    let mut blocks = Vec::new();
     blocks.push(Block::Heading("Routes between known places".into()));
     let mut md = String::from(
         "| world | method | routes | arrived (95 % CI) | time (s) | shortest path (s) | wrong place | time limits | gave up | replans/route |\n|---|---|---:|---|---:|---:|---:|---:|---:|---:|\n",
     );
     let mut why = String::new();
     for (world, _, _) in WORLDS {
-        let mut rates: BTreeMap<&str, Proportion> = BTreeMap::new();
-        for m in METHODS {
-            let rs = records(runs, &format!("{world}/{m}"));
-            if rs.is_empty() {
-                continue;
-            }
-            let ok: Vec<(u32, &RunRecord)> = rs.iter().copied().filter(|(_, r)| r.success).collect();
-            let p = Proportion::new(ok.len(), rs.len(), CONFIDENCE);
-            let time = Mean::new(&ok.iter().map(|(_, r)| r.time_s).collect::<Vec<_>>(), CONFIDENCE);
-            let bound = mean_metric(&ok, metric::BOUND_S);
-            let count = |o: &str| rs.iter().filter(|(_, r)| r.outcome == o).count();
-            let _ = writeln!(
-                md,
-                "| {world} | {m} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                rs.len(),
-                percent(&p),
-                one_decimal(&time),
-                one_decimal(&bound),
-                count("lost"),
-                count("time_limit"),
-                count("gave_up"),
-                if m == "map" {
-                    format!("{:.2}", mean_metric(&rs, metric::REPLANS).mean)
-                } else {
-                    "-".into()
-                },
-            );
-            rates.insert(m, p);
-        }
-        // Paired: the same routes by both methods.
-        let map_runs: BTreeMap<u32, &RunRecord> =
-            records(runs, &format!("{world}/map")).into_iter().collect();
-        let wall_runs: BTreeMap<u32, &RunRecord> = records(runs, &format!("{world}/wall_following"))
-            .into_iter()
-            .collect();
-        let (mut only_map, mut only_wall, mut ratios, mut over_bound) = (0, 0, Vec::new(), Vec::new());
-        for (k, a) in &map_runs {
-            let Some(b) = wall_runs.get(k) else { continue };
-            match (a.success, b.success) {
-                (true, false) => only_map += 1,
-                (false, true) => only_wall += 1,
-                (true, true) => ratios.push(a.time_s / b.time_s),
-                _ => {}
-            }
-            if a.success
-                && let Some(bound) = a.metric(metric::BOUND_S)
-                && bound > 0.0
-            {
-                over_bound.push(a.time_s / bound);
-            }
-        }
-        if let Some(p) = rates.get("map") {
-            let lost = map_runs.values().filter(|r| r.outcome == "lost").count();
-            let timeouts = map_runs.values().filter(|r| r.outcome == "time_limit").count();
-            let gave_up = map_runs.values().filter(|r| r.outcome == "gave_up").count();
-            let replans = map_runs
-                .values()
-                .filter_map(|r| r.metric(metric::REPLANS))
-                .sum::<f64>();
-            let failed_with_replans = map_runs
-                .values()
-                .filter(|r| !r.success && r.metric(metric::REPLANS).unwrap_or(0.0) > 0.0)
-                .count();
-            let _ = write!(
-                why,
-                "**{world}.** With its map the robot arrived on {} of the routes. Of the {} failures, {lost} declared arrival at a place that was not the goal (a place recognised wrongly), {timeouts} ran out of time and {gave_up} gave up; {failed_with_replans} of the failed routes had arrived somewhere the plan did not say at least once (a strategy that did not lead where it had led while exploring: a door passed or missed, a wall's end seen or not), {replans:.0} such surprises over all routes. ",
-                percent(p),
-                map_runs.values().filter(|r| !r.success).count(),
-            );
-            let legs = LegCauses::of(map_runs.values().copied());
-            if legs.planned > 0 {
-                let _ = write!(
-                    why,
-                    "Judged against the true poses, {} of the {} planned legs ended elsewhere than planned: {} truly elsewhere (the driving: more than {} m or 45° from where the planned place was recorded), {} truly at the planned place but not recognised as it, {} at a place added after the exploration (no true pose to judge by). Of the failed routes, {} played a transition that had already ended elsewhere on the same route again and ended elsewhere again (a replay that reproduces the wrong outcome), and {} spent at least half of their legs at places without a route to the goal (off the net, playing untried actions). ",
-                    legs.surprises,
-                    legs.planned,
-                    legs.truly_elsewhere,
-                    topo::SAME_PLACE_M,
-                    legs.truly_there,
-                    legs.unjudged,
-                    legs.failed_repeating,
-                    legs.failed_off_net,
-                );
-            }
-            if let Some(w) = rates.get("wall_following") {
-                let _ = write!(
-                    why,
-                    "Wall following alone, judged by an oracle that stops it the moment it passes the goal, arrived on {}; on the same routes the map arrived where wall following did not {only_map} times and the other way round {only_wall} times. ",
-                    percent(w)
-                );
-            }
-            if !ratios.is_empty() {
-                let _ = write!(
-                    why,
-                    "Where both arrived, the map's route took {:.2}× wall following's time (median of the ratios). ",
-                    median(ratios)
-                );
-            }
-            if !over_bound.is_empty() {
-                let _ = write!(
-                    why,
-                    "Against the true grid's shortest path at cruise speed the map's successful routes took {:.1}× as long (median): the strategies follow walls and stop at every reference place, and the exit turns cost time.",
-                    median(over_bound)
-                );
-            }
-            why.push_str("\n\n");
-        }
+        let (rows, rates) = route_rows(runs, world);
+        md.push_str(&rows);
+        why.push_str(&route_why(runs, world, &rates));
     }
     blocks.push(Block::Table(md));
     blocks.push(Block::Heading("What the numbers say".into()));
     blocks.push(Block::Text(why));
-    Ok(SuiteReport {
-        text,
-        intro: Some(format!(
-            "{} explorations per world, each followed by {ROUTES} routes between random pairs of the places it found (pairs with a planned route), driven with the map and by wall following; base seed {}. Any run replays from its seed: `petrinav lab replay out/topo 'office/map#K' -o route.png --trace route.jsonl`.",
-            suite.info().runs,
-            suite.info().seed
-        )),
-        blocks,
-        files,
-    })
+    blocks
+}
+
+/// A world's rows of the routes' table, and the share of routes each
+/// method arrived on.
+fn route_rows(runs: &Runs, world: &str) -> (String, BTreeMap<&'static str, Proportion>) {
+    let mut md = String::new();
+    let mut rates: BTreeMap<&str, Proportion> = BTreeMap::new();
+    for m in METHODS {
+        let rs = records(runs, &format!("{world}/{m}"));
+        if rs.is_empty() {
+            continue;
+        }
+        let ok: Vec<(u32, &RunRecord)> = rs.iter().copied().filter(|(_, r)| r.success).collect();
+        let p = Proportion::new(ok.len(), rs.len(), CONFIDENCE);
+        let time = Mean::new(&ok.iter().map(|(_, r)| r.time_s).collect::<Vec<_>>(), CONFIDENCE);
+        let bound = mean_metric(&ok, metric::BOUND_S);
+        let count = |o: &str| rs.iter().filter(|(_, r)| r.outcome == o).count();
+        let _ = writeln!(
+            md,
+            "| {world} | {m} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            rs.len(),
+            percent(&p),
+            one_decimal(&time),
+            one_decimal(&bound),
+            count("lost"),
+            count("time_limit"),
+            count("gave_up"),
+            if m == "map" {
+                format!("{:.2}", mean_metric(&rs, metric::REPLANS).mean)
+            } else {
+                "-".into()
+            },
+        );
+        rates.insert(m, p);
+    }
+    (md, rates)
+}
+
+/// A world's paragraph on the routes: the map's failures and their
+/// causes, against wall following on the same routes.
+fn route_why(runs: &Runs, world: &str, rates: &BTreeMap<&str, Proportion>) -> String {
+    let mut why = String::new();
+    // Paired: the same routes by both methods.
+    let map_runs: BTreeMap<u32, &RunRecord> = records(runs, &format!("{world}/map")).into_iter().collect();
+    let wall_runs: BTreeMap<u32, &RunRecord> = records(runs, &format!("{world}/wall_following"))
+        .into_iter()
+        .collect();
+    let (mut only_map, mut only_wall, mut ratios, mut over_bound) = (0, 0, Vec::new(), Vec::new());
+    for (k, a) in &map_runs {
+        let Some(b) = wall_runs.get(k) else { continue };
+        match (a.success, b.success) {
+            (true, false) => only_map += 1,
+            (false, true) => only_wall += 1,
+            (true, true) => ratios.push(a.time_s / b.time_s),
+            _ => {}
+        }
+        if a.success
+            && let Some(bound) = a.metric(metric::BOUND_S)
+            && bound > 0.0
+        {
+            over_bound.push(a.time_s / bound);
+        }
+    }
+    let Some(p) = rates.get("map") else {
+        return why;
+    };
+    let lost = map_runs.values().filter(|r| r.outcome == "lost").count();
+    let timeouts = map_runs.values().filter(|r| r.outcome == "time_limit").count();
+    let gave_up = map_runs.values().filter(|r| r.outcome == "gave_up").count();
+    let replans = map_runs
+        .values()
+        .filter_map(|r| r.metric(metric::REPLANS))
+        .sum::<f64>();
+    let failed_with_replans = map_runs
+        .values()
+        .filter(|r| !r.success && r.metric(metric::REPLANS).unwrap_or(0.0) > 0.0)
+        .count();
+    let _ = write!(
+        why,
+        "**{world}.** With its map the robot arrived on {} of the routes. Of the {} failures, {lost} declared arrival at a place that was not the goal (a place recognised wrongly), {timeouts} ran out of time and {gave_up} gave up; {failed_with_replans} of the failed routes had arrived somewhere the plan did not say at least once (a strategy that did not lead where it had led while exploring: a door passed or missed, a wall's end seen or not), {replans:.0} such surprises over all routes. ",
+        percent(p),
+        map_runs.values().filter(|r| !r.success).count(),
+    );
+    let legs = LegCauses::of(map_runs.values().copied());
+    if legs.planned > 0 {
+        let _ = write!(
+            why,
+            "Judged against the true poses, {} of the {} planned legs ended elsewhere than planned: {} truly elsewhere (the driving: more than {} m or 45° from where the planned place was recorded), {} truly at the planned place but not recognised as it, {} at a place added after the exploration (no true pose to judge by). Of the failed routes, {} played a transition that had already ended elsewhere on the same route again and ended elsewhere again (a replay that reproduces the wrong outcome), and {} spent at least half of their legs at places without a route to the goal (off the net, playing untried actions). ",
+            legs.surprises,
+            legs.planned,
+            legs.truly_elsewhere,
+            topo::SAME_PLACE_M,
+            legs.truly_there,
+            legs.unjudged,
+            legs.failed_repeating,
+            legs.failed_off_net,
+        );
+    }
+    if let Some(w) = rates.get("wall_following") {
+        let _ = write!(
+            why,
+            "Wall following alone, judged by an oracle that stops it the moment it passes the goal, arrived on {}; on the same routes the map arrived where wall following did not {only_map} times and the other way round {only_wall} times. ",
+            percent(w)
+        );
+    }
+    if !ratios.is_empty() {
+        let _ = write!(
+            why,
+            "Where both arrived, the map's route took {:.2}× wall following's time (median of the ratios). ",
+            median(ratios)
+        );
+    }
+    if !over_bound.is_empty() {
+        let _ = write!(
+            why,
+            "Against the true grid's shortest path at cruise speed the map's successful routes took {:.1}× as long (median): the strategies follow walls and stop at every reference place, and the exit turns cost time.",
+            median(over_bound)
+        );
+    }
+    why.push_str("\n\n");
+    why
 }
 
 /// The longest planned route of the first campaign of the first world,

@@ -146,6 +146,9 @@ struct Cell {
     missions: usize,
 }
 
+/// The comparison's cells, by (condition, strategy) index.
+type Cells = BTreeMap<(usize, usize), Cell>;
+
 fn cell(rs: &[&RunRecord]) -> Cell {
     let ok: Vec<&RunRecord> = rs.iter().copied().filter(|r| r.success).collect();
     let drive: f64 = rs
@@ -245,7 +248,50 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     let mut blocks = Vec::new();
     let mut files = Vec::new();
     // The table of all scenarios.
-    let columns = [
+    let (table_text, all) = tables::generic_table(ctx.summaries, &scenario_columns());
+
+    // 1. The source's experiment.
+    blocks.extend(source_blocks(suite, ctx, &mut files)?);
+
+    // 2. The disturbances.
+    blocks.extend(loss_blocks(runs));
+
+    // 3. The comparison.
+    let (comparison, cells) = comparison_blocks(suite, ctx, &mut files)?;
+    blocks.extend(comparison);
+
+    // 4. The supervisor's targets.
+    blocks.extend(target_blocks(&cells));
+
+    // 5. The museum day, mission by mission.
+    blocks.extend(day_blocks(runs));
+
+    // 6. The Warning against true losses.
+    blocks.extend(warning_blocks(runs));
+
+    // 7. Why.
+    blocks.extend(why_blocks(runs, &cells));
+    blocks.push(Block::Heading("All scenarios".into()));
+    blocks.push(Block::Table(all));
+
+    // The campaigns' mission logs, as a robot would have kept them.
+    write_logs(suite, ctx, &mut files)?;
+    Ok(SuiteReport {
+        text: table_text,
+        intro: Some(format!(
+            "{} campaigns per condition and strategy, {MISSIONS} missions each (each supervisor's after {} calibration runs), base seed {}; and the source's experiment (`source/…`). The rows count missions (and calibration runs). The supervisors' mission logs are in `logs/` (`petrinav guide log show logs/moderate-supervisor-campaign0.jsonl`).",
+            suite.info().runs,
+            2 * CALIBRATION_RUNS,
+            suite.info().seed
+        )),
+        blocks,
+        files,
+    })
+}
+
+/// The columns of the table of all scenarios.
+fn scenario_columns() -> [MetricColumn; 4] {
+    [
         MetricColumn {
             metric: metric::WARNING_S,
             heading: "in Warning (s)",
@@ -270,14 +316,42 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
             short: "err(m)",
             decimals: 2,
         },
-    ];
-    let (table_text, all) = tables::generic_table(ctx.summaries, &columns);
+    ]
+}
 
-    // 1. The source's experiment.
-    let (source_md, source) = source_table(runs);
+/// The source's experiment: its table, the decisions over the missions
+/// and, with pictures, one mission.
+fn source_blocks(
+    suite: &TourGuideSuite,
+    ctx: &ReportContext<'_>,
+    files: &mut Vec<std::path::PathBuf>,
+) -> Result<Vec<Block>> {
+    let mut blocks = Vec::new();
+    let (source_md, source) = source_table(ctx.runs);
     blocks.push(Block::Heading(
         "The source's experiment: 24 missions at moderate density".into(),
     ));
+    blocks.push(Block::Text(source_text(&source)));
+    blocks.push(Block::Table(source_md));
+
+    // Charts of the decisions over the missions.
+    blocks.push(decision_charts(ctx, &source, files)?);
+
+    // One mission's trajectory, with its switches.
+    if ctx.pictures
+        && let Some(figure) = mission_picture(suite, ctx, &source, files)?
+    {
+        blocks.push(Block::Charts {
+            heading: "One mission".into(),
+            caption: "The first mission of the source's experiment in which the behaviour switched, re-simulated from its seed: the true trajectory coloured by the behaviour driving, the robot every 2 s, the localizer's warnings (orange squares) and the supervisor's decisions (purple rings). `petrinav lab replay out/tourguide 'source/supervisor_source#K' --trace t.jsonl` gives every event.".into(),
+            figures: vec![figure],
+        });
+    }
+    Ok(blocks)
+}
+
+/// The paragraph on the source's experiment.
+fn source_text(source: &[&RunRecord]) -> String {
     let reached = source.iter().filter(|r| r.success).count();
     let auto_choices = source
         .iter()
@@ -294,7 +368,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     };
     let (fc_lo, fc_hi) = spread(&f_cont);
     let (fa_lo, fa_hi) = spread(&f_auto);
-    blocks.push(Block::Text(format!(
+    format!(
         "The source's supervisor and localizer (`supervisor_source`) among 25 visitors, without the disturbances (the source reports none), on the seeds the moderate campaign 0 has always had: {} calibration runs (each behaviour alone, {} times), then {} missions from (8.1, 6.4) to (8.5, 27.5), each deciding with the rates learnt from the log of all runs before it (the source ran 24 missions; 20 reached the goal). Here {reached} of {} reached the goal; at the start of the missions the supervisor chose AutoMove {auto_choices} times. Over the missions `f_cont` stayed within {fc_lo:.5}–{fc_hi:.5} while `f_auto` moved within {fa_lo:.5}–{fa_hi:.5}: {}.\n\n",
         2 * CALIBRATION_RUNS,
         CALIBRATION_RUNS,
@@ -305,10 +379,16 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         } else {
             "NOT as in the source: f_cont moves as much as f_auto"
         },
-    )));
-    blocks.push(Block::Table(source_md));
+    )
+}
 
-    // Charts of the decisions over the missions.
+/// The charts of the decisions over the source's missions.
+fn decision_charts(
+    ctx: &ReportContext<'_>,
+    source: &[&RunRecord],
+    files: &mut Vec<std::path::PathBuf>,
+) -> Result<Block> {
+    let runs = ctx.runs;
     let mut figures = Vec::new();
     let per = |key: &str| -> Vec<(f64, f64)> {
         source
@@ -341,7 +421,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         "f_over_missions.svg",
         "f_auto and f_cont over the missions",
         &svg,
-        &mut files,
+        files,
     )?);
     let svg = charts::lines(
         "Learnt rates at the start of each mission (the source's experiment)",
@@ -361,7 +441,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         "rates_over_missions.svg",
         "the learnt rates λ3…λ6",
         &svg,
-        &mut files,
+        files,
     )?);
     let svg = charts::lines(
         "The localizer's states in the chosen hypothesis",
@@ -379,26 +459,18 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         "ploc_over_missions.svg",
         "P_loc,succ and P_loc,warn",
         &svg,
-        &mut files,
+        files,
     )?);
-    blocks.push(Block::Charts {
+    Ok(Block::Charts {
         heading: "Decisions over the missions".into(),
         caption: "At the start of every mission the supervisor solves the net under both hypotheses with the rates learnt so far: λ3, λ4 from the localizer's sojourns, λ5, λ6 from the planner's, λ7, λ8 from the calibration runs, λ9, λ10 from failures and successes.".into(),
         figures,
-    });
+    })
+}
 
-    // One mission's trajectory, with its switches.
-    if ctx.pictures
-        && let Some(figure) = mission_picture(suite, ctx, &source, &mut files)?
-    {
-        blocks.push(Block::Charts {
-            heading: "One mission".into(),
-            caption: "The first mission of the source's experiment in which the behaviour switched, re-simulated from its seed: the true trajectory coloured by the behaviour driving, the robot every 2 s, the localizer's warnings (orange squares) and the supervisor's decisions (purple rings). `petrinav lab replay out/tourguide 'source/supervisor_source#K' --trace t.jsonl` gives every event.".into(),
-            figures: vec![figure],
-        });
-    }
-
-    // 2. The disturbances.
+/// The true losses and what caused them, per condition.
+fn loss_blocks(runs: &Runs) -> Vec<Block> {
+    let mut blocks = Vec::new();
     blocks.push(Block::Heading("True losses and what caused them".into()));
     let mut md = String::from(
         "| condition | visitors | pushes / mission | slip crossings / mission | groups / mission | time truly lost / mission (s) | missions ending lost |\n|---|---|---:|---:|---:|---:|---:|\n",
@@ -429,8 +501,18 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         crate::runs::mission::SURROUND_RATE_PER_VISITOR_S,
     )));
     blocks.push(Block::Table(md));
+    blocks
+}
 
-    // 3. The comparison.
+/// The comparison of the strategies per condition, with its charts; and
+/// its cells, for the sections after it.
+fn comparison_blocks(
+    suite: &TourGuideSuite,
+    ctx: &ReportContext<'_>,
+    files: &mut Vec<std::path::PathBuf>,
+) -> Result<(Vec<Block>, Cells)> {
+    let runs = ctx.runs;
+    let mut blocks = Vec::new();
     blocks.push(Block::Heading("The comparison the source never made".into()));
     let mut md = String::from(
         "| condition | strategy | missions | success (95 % CI) | time to goal (s) | in Warning (s) | contour share | truly lost (s) | ended lost | collisions | time limits |\n|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|\n",
@@ -495,7 +577,7 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
             &success_bars,
             (860, 400),
         )?,
-        &mut files,
+        files,
     )?];
     figures.push(save_svg(
         ctx,
@@ -509,33 +591,49 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
             &time_bars,
             (860, 400),
         )?,
-        &mut files,
+        files,
     )?);
     blocks.push(Block::Charts {
         heading: "The comparison, charted".into(),
         caption: "Bars: the value; whiskers: its 95 % interval.".into(),
         figures,
     });
+    Ok((blocks, cells))
+}
 
-    // 4. The supervisor's targets.
+/// Is the supervisor worth using: its targets.
+fn target_blocks(cells: &Cells) -> Vec<Block> {
+    let mut blocks = Vec::new();
     blocks.push(Block::Heading("Is the supervisor worth using?".into()));
-    let (targets_md, targets_text) = targets(&cells);
+    let (targets_md, targets_text) = targets(cells);
     blocks.push(Block::Text(targets_text));
     blocks.push(Block::Table(targets_md));
+    blocks
+}
 
-    // 5. The museum day, mission by mission.
-    blocks.push(Block::Heading("The museum day, mission by mission".into()));
-    blocks.push(Block::Text(day_text(runs)));
-    blocks.push(Block::Table(day_table(runs)));
-    blocks.push(Block::Text(day_why(runs)));
+/// The museum day, mission by mission.
+fn day_blocks(runs: &Runs) -> Vec<Block> {
+    vec![
+        Block::Heading("The museum day, mission by mission".into()),
+        Block::Text(day_text(runs)),
+        Block::Table(day_table(runs)),
+        Block::Text(day_why(runs)),
+    ]
+}
 
-    // 6. The Warning against true losses.
+/// What a Warning means: the Warning against true losses.
+fn warning_blocks(runs: &Runs) -> Vec<Block> {
+    let mut blocks = Vec::new();
     blocks.push(Block::Heading("What a Warning means".into()));
     let (warn_md, warn_text) = warning_table(runs);
     blocks.push(Block::Text(warn_text));
     blocks.push(Block::Table(warn_md));
+    blocks
+}
 
-    // 7. Why.
+/// What the supervisor decided, and why, per condition.
+fn why_blocks(runs: &Runs, cells: &Cells) -> Vec<Block> {
+    let mut blocks = Vec::new();
     blocks.push(Block::Heading("What the supervisor decided, and why".into()));
     let mut text = String::new();
     for (d, cond) in CONDITIONS.iter().enumerate() {
@@ -570,29 +668,14 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
             "**{}.** Mission by mission against the supervisor: {}.\n\n{}\n",
             cond.name,
             v.join("; "),
-            why(runs, cond.name, d, &cells)
+            why(runs, cond.name, d, cells)
         );
     }
     text.push_str(
         "“+a −b” counts the missions (same campaign, same visitors and draws) that only the supervisor reached (a) and that only the other strategy reached (b); the time difference is the supervisor's minus the other's on the missions both reached. Any mission can be replayed with its decisions, switches, pushes and the rates it used: `petrinav lab replay out/tourguide 'CONDITION/supervisor#K' --trace t.jsonl`.\n",
     );
     blocks.push(Block::Text(text));
-    blocks.push(Block::Heading("All scenarios".into()));
-    blocks.push(Block::Table(all));
-
-    // The campaigns' mission logs, as a robot would have kept them.
-    write_logs(suite, ctx, &mut files)?;
-    Ok(SuiteReport {
-        text: table_text,
-        intro: Some(format!(
-            "{} campaigns per condition and strategy, {MISSIONS} missions each (each supervisor's after {} calibration runs), base seed {}; and the source's experiment (`source/…`). The rows count missions (and calibration runs). The supervisors' mission logs are in `logs/` (`petrinav guide log show logs/moderate-supervisor-campaign0.jsonl`).",
-            suite.info().runs,
-            2 * CALIBRATION_RUNS,
-            suite.info().seed
-        )),
-        blocks,
-        files,
-    })
+    blocks
 }
 
 /// The behaviour driving when a mission ended: the last switch's target,

@@ -183,6 +183,22 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         "Each observation of the source (docs/voting.md, \"What the source observed\") is tested on the numbers above; the thresholds are the words' plain reading: *reliably* is I_R ≥ {RELIABLE}, *sufficient, with only a few failures* is I_R ≥ {SUFFICIENT} on every field, *rarely* is a mean I_R ≤ {RARELY} over the traps, *several-fold* is at least {SEVERAL}×; comparisons of groups of fields use the mean over the group's fields.\n"
     );
 
+    out.push_str(&simple_fields(&v));
+    out.push_str(&narrow_passages(&v));
+    out.push_str(&traps_without_planning(&v));
+    out.push_str(&planning(&v));
+    out.push_str(&times(&v));
+    out.push_str(&causes(&v));
+    out.push_str(&activity_trace(&v, runs));
+    out.push_str(
+        "Where a check does not hold, the simulator disagrees with the publication; the fields were designed from the robot's geometry and not tuned until they agree. The numbers per field, the trajectories below, `petrinav lab replay DIR RUN` for any single run, and `results.jsonl` (one record per run, reproducible from its seed) show where and how.\n",
+    );
+    out
+}
+
+/// The checks on the simple fields (observations 1 and 2).
+fn simple_fields(v: &View<'_>) -> String {
+    let mut out = String::new();
     // 1. Field 1.
     let f1s: Vec<f64> = (1..=4).map(|e| v.ir(e, 1, 1)).collect();
     let ok = f1s.iter().all(|&x| x >= RELIABLE);
@@ -235,6 +251,12 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         }
     );
 
+    out
+}
+
+/// The checks in the narrow passages (observations 3 to 5).
+fn narrow_passages(v: &View<'_>) -> String {
+    let mut out = String::new();
     // 3–5. Narrow passages.
     let n: Vec<f64> = (1..=3).map(|e| v.ir(e, 8, 11)).collect();
     let it1 = v.it_common(1, 8, 11, &[1, 2]);
@@ -306,6 +328,12 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         }
     );
 
+    out
+}
+
+/// The check on the traps without planning (observation 6).
+fn traps_without_planning(v: &View<'_>) -> String {
+    let mut out = String::new();
     // 6–8. Traps.
     let traps: Vec<f64> = (1..=4).map(|e| v.ir(e, 12, 14)).collect();
     let esc: Vec<(usize, usize)> = (1..=3).map(|e| v.successes(e, 12, 14)).collect();
@@ -351,6 +379,13 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             )
         }
     );
+    out
+}
+
+/// The checks on planning (observations 7 to 9).
+fn planning(v: &View<'_>) -> String {
+    let mut out = String::new();
+    let traps: Vec<f64> = (1..=4).map(|e| v.ir(e, 12, 14)).collect();
     let base = mean(&traps[..3]);
     let best = traps[..3].iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let fold = |x: f64| {
@@ -447,9 +482,15 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         }
     );
 
+    out
+}
+
+/// The check on the times across the kinds of field (observation 10).
+fn times(v: &View<'_>) -> String {
+    let mut out = String::new();
     // Times across the kinds of field.
-    let simple_t = detour_factor(&v, &[1, 2, 3], 2, 5);
-    let narrow_t = detour_factor(&v, &[1, 2, 3], 8, 11);
+    let simple_t = detour_factor(v, &[1, 2, 3], 2, 5);
+    let narrow_t = detour_factor(v, &[1, 2, 3], 8, 11);
     let _ = writeln!(
         out,
         "10. *Narrow passages take longer than the simple fields* (the issue's reading of the source). {} I_T over the straight-line time at 0.3 m/s, mean over e1–e3: {:.2} on fields 2–5, {:.2} on fields 8–11 (the fields differ in length, 5.0 m and 3.2 m, so times are compared as detour factors).\n",
@@ -458,6 +499,12 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
         narrow_t
     );
 
+    out
+}
+
+/// Why: the causes found and fixed.
+fn causes(v: &View<'_>) -> String {
+    let mut out = String::new();
     // Why: the causes found and fixed.
     out.push_str("## Why the simulator behaves like this: causes found and fixed\n\n");
     let lost_all: usize = (1..=4).map(|e| v.failures(e, 1, 14).2).sum();
@@ -473,6 +520,12 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
          The fields (`crates/lab/src/suites/voting/scenarios/`, design rules in each file's header). Scaled so that field 1 takes the source's 10 s (3 m at 0.3 m/s). Simple fields hold only solid obstacles 0.5 m or more across with gaps of at least 1.2 m (a corridor's width): 5 cm poles, wedges and thin walls seen edge-on, and gaps narrower than a corridor, made fields 2–5 adversarial. Narrow passages are openings 1.0 m off the line to the goal in a wall across the field, from 1.0 m down to 0.7 m (at 0.6 m the IR+sonar team hesitates in front of the slot until the time limit); with the opening on the line, every combination drove straight through. Every goal stands at least 1.4 m from the wall beyond it, so the robot arrives before that wall makes it turn away. The traps are 2.0 m wide inside, room for three tightest turning circles (narrower Us, tried, make every combination collide while turning); the trap among obstacles has no gap narrower than a corridor (with 0.8 m gaps, planning's detour collided).\n\n",
     );
 
+    out
+}
+
+/// The activity-trace layer (e5) against planning alone (e4).
+fn activity_trace(v: &View<'_>, runs: &Runs) -> String {
+    let mut out = String::new();
     // e5.
     let (t4, t5) = (v.ir(4, 12, 14), v.ir(5, 12, 14));
     let (r4, r5) = (v.ir(4, 1, 11), v.ir(5, 1, 11));
@@ -526,8 +579,5 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
             }
         );
     }
-    out.push_str(
-        "Where a check does not hold, the simulator disagrees with the publication; the fields were designed from the robot's geometry and not tuned until they agree. The numbers per field, the trajectories below, `petrinav lab replay DIR RUN` for any single run, and `results.jsonl` (one record per run, reproducible from its seed) show where and how.\n",
-    );
     out
 }
