@@ -59,14 +59,14 @@ use super::{Behaviour, FAST_SWITCH, SLOW_SWITCH, SupervisorError};
 /// `models/supervisor_credit.toml`.
 pub const CREDIT_MODEL: &str = include_str!("../../../../models/supervisor_credit.toml");
 
-/// Number of rates λ1…λ14.
+/// Number of rates λ1…λ15.
 pub const NUM_CREDIT_RATES: usize = 15;
 
 /// What a failed mission costs by default, seconds (λ15 = its inverse):
 /// the tour-guide mission's time limit.
 pub const FAILURE_COST_S: f64 = 300.0;
 
-/// The rates λ1…λ14 of the crediting net.
+/// The rates λ1…λ15 of the crediting net.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CreditRates {
     lambda: [f64; NUM_CREDIT_RATES],
@@ -104,7 +104,7 @@ impl CreditRates {
         self.lambda[i - 1]
     }
 
-    /// Sets λ`i`, checking the index (1…14) and the value (finite, > 0).
+    /// Sets λ`i`, checking the index (1…15) and the value (finite, > 0).
     pub fn try_set(&mut self, i: usize, value: f64) -> Result<(), SupervisorError> {
         if !((1..=NUM_CREDIT_RATES).contains(&i) && value.is_finite() && value > 0.0) {
             return Err(SupervisorError::BadRate { index: i, value });
@@ -113,7 +113,7 @@ impl CreditRates {
         Ok(())
     }
 
-    /// All fourteen, λ1 first.
+    /// All fifteen, λ1 first.
     pub fn as_array(&self) -> [f64; NUM_CREDIT_RATES] {
         self.lambda
     }

@@ -65,7 +65,7 @@
 use robot::Vec2;
 
 use super::Behaviour;
-use super::credit::{CreditRates, FAILURE_COST_S};
+use super::credit::CreditRates;
 use super::learning::LearnError;
 use super::log::Entry;
 use super::reference::{MIN_REMAINING_S, Reference};
@@ -351,7 +351,8 @@ impl CreditModel {
     /// metres from the goal (along the reference).
     pub fn rates(&self, context: usize, remaining_m: f64) -> CreditRates {
         let prior = CreditRates::initial();
-        let c = &self.contexts[context.min(CONTEXTS - 1)];
+        let ctx = context.min(CONTEXTS - 1);
+        let c = &self.contexts[ctx];
         let p = &self.pooled;
         let shrunk = |ctx: &Exposure, pool: &Exposure, prior_rate: f64| ctx.rate(pool.rate(prior_rate));
         let mut r = prior;
@@ -364,7 +365,6 @@ impl CreditModel {
         set(4, shrunk(&c.warning, &p.warning, prior.get(4)));
         set(5, shrunk(&c.normal, &p.normal, prior.get(5)));
         set(6, shrunk(&c.abnormal, &p.abnormal, prior.get(6)));
-        let ctx = context.min(CONTEXTS - 1);
         set(
             9,
             shrunk(
@@ -407,7 +407,7 @@ impl CreditModel {
             let v = ((cm + mu[k][ctx] * SPEED_PRIOR_S) / (ct + SPEED_PRIOR_S)).max(1e-3);
             set(i, 1.0 / (remaining / v).max(MIN_REMAINING_S));
         }
-        set(15, 1.0 / FAILURE_COST_S);
+        // λ15 (the failure cost) stays the model's.
         r
     }
 }
