@@ -6,7 +6,7 @@
 //! the true losses, and an explanation — every figure from the batch's
 //! records.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
@@ -824,41 +824,40 @@ fn day_why(runs: &Runs) -> String {
             contour == (e.text("reason") == Some("warning"))
         })
         .count();
+    if decisions.is_empty() {
+        return String::new();
+    }
     // Causes, in this order: began in contour tracking, kept AutoMove at a
     // Warning, chose contour tracking at a Warning, no Warning at all.
     let mut causes = [0usize; 4];
-    let mut lost_to = BTreeSet::new();
-    for other in FIXED {
-        let oth = by_run(runs, &format!("day/{other}"));
-        for (k, r) in &sup {
-            if r.success || !oth.get(k).is_some_and(|o| o.success) || !lost_to.insert(*k) {
-                continue;
-            }
-            let at_warning: Vec<Option<&str>> = r
-                .events
-                .iter()
-                .filter(|e| e.kind == "decision" && e.text("reason") == Some("warning"))
-                .map(|e| e.text("choice"))
-                .collect();
-            let cause = if start_decision(r).and_then(|e| e.text("choice")) == Some("contour") {
-                0
-            } else if at_warning.contains(&Some("automove")) {
-                1
-            } else if !at_warning.is_empty() {
-                2
-            } else {
-                3
-            };
-            causes[cause] += 1;
+    let others: Vec<_> = FIXED.iter().map(|o| by_run(runs, &format!("day/{o}"))).collect();
+    let mut lost = 0;
+    for (k, r) in &sup {
+        if r.success || !others.iter().any(|o| o.get(k).is_some_and(|o| o.success)) {
+            continue;
         }
-    }
-    if decisions.is_empty() {
-        return String::new();
+        lost += 1;
+        let at_warning: Vec<Option<&str>> = r
+            .events
+            .iter()
+            .filter(|e| e.kind == "decision" && e.text("reason") == Some("warning"))
+            .map(|e| e.text("choice"))
+            .collect();
+        let cause = if start_decision(r).and_then(|e| e.text("choice")) == Some("contour") {
+            0
+        } else if at_warning.contains(&Some("automove")) {
+            1
+        } else if !at_warning.is_empty() {
+            2
+        } else {
+            3
+        };
+        causes[cause] += 1;
     }
     let mut out = format!(
         "The supervisor chose as the rule does (AutoMove at the start and on recovery, contour tracking at a Warning) at {as_rule} of its {} decisions. Of the {} missions that some fixed strategy reached and the supervisor did not:",
         decisions.len(),
-        lost_to.len()
+        lost
     );
     let needs = [
         "began in contour tracking among visitors — chosen on little data of contour tracking in crowds (its speed is learnt only while localized, the calibration met the day's first, empty hall, and the learning assumes the crowd acts on both behaviours alike until their own data say otherwise): the net would need that data before the first crowded mission",
