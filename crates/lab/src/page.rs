@@ -111,7 +111,8 @@ pub fn inline_html(s: &str) -> String {
     })
 }
 
-/// A Markdown table as an HTML table (the separator row is dropped).
+/// A Markdown table as an HTML table (the separator row is dropped; cells
+/// keep their inline `**strong**` and `` `code` ``, as [`inline_html`]).
 pub fn table_to_html(md: &str) -> String {
     let mut out = String::from("<table>\n");
     for (i, line) in md.lines().enumerate() {
@@ -122,7 +123,7 @@ pub fn table_to_html(md: &str) -> String {
         let tag = if i == 0 { "th" } else { "td" };
         out.push_str("<tr>");
         for c in cells {
-            let _ = write!(out, "<{tag}>{}</{tag}>", html_escape(c));
+            let _ = write!(out, "<{tag}>{}</{tag}>", inline_html(c));
         }
         out.push_str("</tr>\n");
     }
@@ -313,6 +314,11 @@ mod tests {
             "<strong>a</strong> and <code>b&lt;c</code>"
         );
         assert_eq!(inline_html("2 ** 3"), "2 ** 3");
+        // Table cells too: a verdict in bold is bold on the page.
+        assert!(
+            table_to_html("| a | b |\n|---|---|\n| **no** | x<y |\n")
+                .contains("<tr><td><strong>no</strong></td><td>x&lt;y</td></tr>")
+        );
         assert_eq!(inline_html("one ` tick"), "one ` tick");
     }
 }
