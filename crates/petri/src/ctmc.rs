@@ -72,8 +72,11 @@ pub struct CompileStats {
     /// rows, and the outgoing ones for chains that are not irreducible:
     /// offsets, 4-byte indices, 2- or 4-byte value ids).
     pub matrix_bytes: usize,
-    /// Heap bytes of the outgoing rows while both directions existed
-    /// (released once the incoming rows are built, for irreducible chains).
+    /// Heap bytes of the outgoing rows held while the incoming ones were
+    /// built: all of them for a chain that is not irreducible, which keeps
+    /// them; the offsets and indices for an irreducible one, which releases
+    /// its value ids before the incoming indices are allocated and the rest
+    /// at the end.
     pub transposed_bytes: usize,
     /// Heap bytes of the packed tangible and vanishing markings kept.
     pub marking_bytes: usize,
@@ -266,78 +269,143 @@ impl Dictionary {
     }
 }
 
-/// The incoming rows of the outgoing rows `(offsets, dst, ids)`, self-loops
-/// left out (and pushed on `self_loops` as `(state, value id)`), each row
-/// sorted by source. `in_offsets[d]` serves as row `d`'s fill cursor, so no
-/// other array of states is allocated; at the end it holds the row's end,
-/// i.e. the next row's start, and is shifted back. `O(entries + states)`.
-fn transpose<O: Offset>(
-    offsets: &Offsets,
-    dst: &[u32],
-    ids: &Ids,
-    dictionary_len: usize,
-    self_loops: &mut Vec<(u32, u32)>,
-) -> (Vec<O>, Vec<u32>, Ids) {
-    let n = offsets.len() - 1;
+/// Row lengths of the incoming rows of `outgoing` as offsets (entry
+/// `d + 1` counts row `d`), self-loops left out and pushed on `self_loops`
+/// as `(state, value id)`.
+fn incoming_counts<O: Offset>(outgoing: &Rows, self_loops: &mut Vec<(u32, u32)>) -> Vec<O> {
+    let n = outgoing.len();
     let mut in_offsets = vec![O::ZERO; n + 1];
     for s in 0..n {
-        let (a, b) = (offsets.get(s), offsets.get(s + 1));
-        for (k, &d) in (a..b).zip(&dst[a..b]) {
+        let (a, b) = outgoing.range(s);
+        for (k, &d) in (a..b).zip(&outgoing.index[a..b]) {
             if d as usize != s {
                 let c = &mut in_offsets[d as usize + 1];
                 *c = O::of(c.to() + 1);
             } else {
-                self_loops.push((s as u32, ids.get(k) as u32));
+                self_loops.push((s as u32, outgoing.ids.get(k) as u32));
             }
         }
     }
     for j in 0..n {
         in_offsets[j + 1] = O::of(in_offsets[j + 1].to() + in_offsets[j].to());
     }
-    let m = in_offsets[n].to();
-    let mut in_src = vec![0u32; m];
-    let mut in_ids = Ids::zeros(m, dictionary_len);
+    in_offsets
+}
+
+/// Calls `put(position, source, entry)` for every entry of `outgoing` but
+/// the self-loops, `position` being its place in the incoming rows: sources
+/// are visited in order, so each incoming row comes out sorted by source.
+/// `cursors[d]` is row `d`'s fill cursor: it starts at the row's start and
+/// ends at its end, i.e. the next row's start, and is shifted back, so that
+/// the offsets serve again. `O(entries + states)`.
+fn scatter<O: Offset>(outgoing: &Rows, cursors: &mut [O], mut put: impl FnMut(usize, u32, usize)) {
+    let n = outgoing.len();
     for s in 0..n {
-        let (a, b) = (offsets.get(s), offsets.get(s + 1));
-        for (k, &d) in (a..b).zip(&dst[a..b]) {
+        let (a, b) = outgoing.range(s);
+        for (k, &d) in (a..b).zip(&outgoing.index[a..b]) {
             let d = d as usize;
             if d != s {
-                let pos = in_offsets[d].to();
-                in_offsets[d] = O::of(pos + 1);
-                in_src[pos] = s as u32;
-                in_ids.set(pos, ids.get(k));
+                let pos = cursors[d].to();
+                cursors[d] = O::of(pos + 1);
+                put(pos, s as u32, k);
             }
         }
     }
-    in_offsets.copy_within(0..n, 1);
-    in_offsets[0] = O::ZERO;
+    cursors.copy_within(0..n, 1);
+    cursors[0] = O::ZERO;
+}
+
+/// The incoming rows of `outgoing`, self-loops left out (see
+/// [`incoming_counts`]), each row sorted by source. Both directions exist
+/// at the end: 12 bytes per entry.
+fn transpose<O: Offset>(
+    outgoing: &Rows,
+    dictionary_len: usize,
+    self_loops: &mut Vec<(u32, u32)>,
+) -> (Vec<O>, Vec<u32>, Ids) {
+    let mut in_offsets = incoming_counts::<O>(outgoing, self_loops);
+    let m = in_offsets[outgoing.len()].to();
+    let mut in_src = vec![0u32; m];
+    let mut in_ids = Ids::zeros(m, dictionary_len);
+    scatter(outgoing, &mut in_offsets, |pos, s, k| {
+        in_src[pos] = s;
+        in_ids.set(pos, outgoing.ids.get(k));
+    });
     (in_offsets, in_src, in_ids)
 }
 
-/// Whether every state reaches and is reached from state 0 (one forward
-/// and one backward search; cheaper than Tarjan for the common ergodic case).
-/// When `M0` is tangible (state 0), every state is reachable from it by
-/// construction (breadth-first search from `M0`, positive rates and
-/// weights), and only the backward search is needed.
-fn irreducible(outgoing: &Rows, incoming: &Rows, m0_tangible: bool) -> bool {
-    let n = outgoing.len();
-    let all_reached = |g: &Rows| {
-        let mut seen = vec![false; n];
-        let mut stack = vec![0u32];
-        seen[0] = true;
-        let mut count = 1;
-        while let Some(v) = stack.pop() {
-            for &w in g.successors(v) {
-                if !seen[w as usize] {
-                    seen[w as usize] = true;
-                    count += 1;
-                    stack.push(w);
-                }
-            }
-        }
-        count == n
+/// [`transpose`], giving up the outgoing rows on the way: the value ids are
+/// scattered first and released, then the sources. The same incoming rows,
+/// at a peak of 10 bytes per entry instead of 12 (the outgoing indices,
+/// the incoming indices and value ids).
+fn transpose_releasing<O: Offset>(
+    mut outgoing: Rows,
+    dictionary_len: usize,
+    self_loops: &mut Vec<(u32, u32)>,
+) -> (Vec<O>, Vec<u32>, Ids) {
+    let mut in_offsets = incoming_counts::<O>(&outgoing, self_loops);
+    let m = in_offsets[outgoing.len()].to();
+    let mut in_ids = Ids::zeros(m, dictionary_len);
+    let ids = std::mem::replace(&mut outgoing.ids, Ids::zeros(0, dictionary_len));
+    scatter(&outgoing, &mut in_offsets, |pos, _, k| {
+        in_ids.set(pos, ids.get(k))
+    });
+    drop(ids);
+    let mut in_src = vec![0u32; m];
+    scatter(&outgoing, &mut in_offsets, |pos, s, _| in_src[pos] = s);
+    (in_offsets, in_src, in_ids)
+}
+
+/// The incoming rows of `outgoing` ([`transpose`]), with 4-byte offsets
+/// up to 2³² entries, 8-byte beyond.
+fn incoming_rows(outgoing: &Rows, dictionary_len: usize, self_loops: &mut Vec<(u32, u32)>) -> Rows {
+    let (offsets, index, ids) = if outgoing.index.len() <= u32::MAX as usize {
+        let (o, s, i) = transpose::<u32>(outgoing, dictionary_len, self_loops);
+        (Offsets::U32(o), s, i)
+    } else {
+        let (o, s, i) = transpose::<u64>(outgoing, dictionary_len, self_loops);
+        (Offsets::U64(o), s, i)
     };
-    n > 0 && (m0_tangible || all_reached(outgoing)) && all_reached(incoming)
+    Rows {
+        offsets,
+        index,
+        ids,
+        below: Vec::new(),
+    }
+}
+
+/// [`incoming_rows`] by [`transpose_releasing`]: the same rows, the
+/// outgoing ones given up on the way.
+fn incoming_rows_releasing(outgoing: Rows, dictionary_len: usize, self_loops: &mut Vec<(u32, u32)>) -> Rows {
+    let (offsets, index, ids) = if outgoing.index.len() <= u32::MAX as usize {
+        let (o, s, i) = transpose_releasing::<u32>(outgoing, dictionary_len, self_loops);
+        (Offsets::U32(o), s, i)
+    } else {
+        let (o, s, i) = transpose_releasing::<u64>(outgoing, dictionary_len, self_loops);
+        (Offsets::U64(o), s, i)
+    };
+    Rows {
+        offsets,
+        index,
+        ids,
+        below: Vec::new(),
+    }
+}
+
+/// Whether every state reaches and is reached from state 0, i.e. the chain
+/// is irreducible: Tarjan's algorithm on the outgoing rows alone (so that
+/// the transposition can release them), stopped at the first component
+/// smaller than the chain. `O(states + entries)`, 21 bytes per state at
+/// most.
+fn strongly_connected(outgoing: &Rows) -> bool {
+    let n = outgoing.len();
+    n > 0
+        && crate::scc::tarjan(
+            outgoing,
+            |_| true,
+            |c: &[u32]| if c.len() == n { Ok(()) } else { Err(()) },
+        )
+        .is_ok()
 }
 
 impl CompiledGspn {
@@ -450,21 +518,12 @@ impl CompiledGspn {
             tangible_rg = Vec::new();
         }
 
-        // Incoming rows: the transpose without self-loops. Sources are visited
-        // in order, so each row comes out sorted. Offsets are narrowed
-        // before the value ids, while the transitions are still 4 bytes
-        // wide and the incoming rows not yet allocated (the peak is later).
+        // Offsets are narrowed before the value ids, while the transitions
+        // are still 4 bytes wide and the incoming rows not yet allocated (the
+        // peak is later).
         let dl = dict.pairs.len();
         let offsets = Offsets::new(offsets);
         let ids = Ids::new(ids, dl);
-        let mut self_loops = Vec::new();
-        let (in_offsets, in_src, in_ids) = if dst.len() <= u32::MAX as usize {
-            let (o, s, i) = transpose::<u32>(&offsets, &dst, &ids, dl, &mut self_loops);
-            (Offsets::U32(o), s, i)
-        } else {
-            let (o, s, i) = transpose::<u64>(&offsets, &dst, &ids, dl, &mut self_loops);
-            (Offsets::U64(o), s, i)
-        };
         let mut fires = vec![false; gspn.num_transitions()];
         for k in 0..dst.len() {
             fires[dict.pairs[ids.get(k)].0 as usize] = true;
@@ -479,24 +538,26 @@ impl CompiledGspn {
             ids,
             below: Vec::new(),
         };
-        let mut incoming = Rows {
-            offsets: in_offsets,
-            index: in_src,
-            ids: in_ids,
-            below: Vec::new(),
-        };
         let entries = outgoing.index.len();
-        let transposed_bytes = outgoing.heap_bytes();
         stop.check(COMPILING)?;
-        let ergodic = irreducible(&outgoing, &incoming, initial == [(0, 1.0)]);
-        // An irreducible chain needs only the incoming rows: exit rates and
-        // throughputs are summed from them.
-        let outgoing = if ergodic {
-            drop(outgoing);
-            None
+        // An irreducible chain needs only the incoming rows (the transpose
+        // without self-loops): exit rates and throughputs are summed from
+        // them, and the outgoing rows are released while they are
+        // transposed.
+        let ergodic = strongly_connected(&outgoing);
+        let mut self_loops = Vec::new();
+        let (mut incoming, outgoing, transposed_bytes) = if ergodic {
+            let held = outgoing.offsets.bytes() + outgoing.index.capacity() * 4;
+            (incoming_rows_releasing(outgoing, dl, &mut self_loops), None, held)
         } else {
-            Some(outgoing)
+            let held = outgoing.heap_bytes();
+            (
+                incoming_rows(&outgoing, dl, &mut self_loops),
+                Some(outgoing),
+                held,
+            )
         };
+        stop.check(COMPILING)?;
         incoming.split_diagonal();
 
         let (components, bottoms, transient) = if let Some(outgoing) = outgoing.as_ref().filter(|_| !ergodic)
@@ -674,7 +735,7 @@ impl CompiledGspn {
         );
         if self.outgoing.is_none() {
             add(
-                "outgoing rows (released after the transpose)",
+                "outgoing rows: offsets, indices (released by the transpose)",
                 "compile",
                 self.stats.transposed_bytes,
             );
@@ -741,11 +802,17 @@ impl CompiledGspn {
             compile_bytes,
             solve_bytes,
             peak_bytes: generation_bytes.max(compile_bytes).max(solve_bytes),
-            guard_estimate_bytes: crate::reachability::estimated_bytes(
-                (ex.marking_bytes + ex.edge_bytes) as u64,
-                ex.markings,
-                ex.edges,
-            ),
+            guard_estimate_bytes: {
+                // What the guard compared with its limit after the last
+                // round of generation (the arrays were shrunk since).
+                let marking_bytes = (ex.markings * ex.words_per_marking * 8) as u64;
+                crate::reachability::guard_bytes(
+                    marking_bytes + (ex.index_bytes + ex.edge_bytes) as u64,
+                    marking_bytes,
+                    ex.markings,
+                    ex.edges,
+                )
+            },
             parts,
         }
     }

@@ -76,7 +76,8 @@ pub use net::{
 pub use properties::Properties;
 pub use reachability::{
     COMPILE_BYTES_PER_EDGE, COMPILE_BYTES_PER_STATE, Edge, ExploreParams, ExploreStats, FALLBACK_MAX_MEMORY,
-    MarkingId, ReachabilityGraph, SOLVE_BYTES_PER_STATE, default_max_memory, estimated_bytes,
+    FIXED_BYTES, MarkingId, ReachabilityGraph, SOLVE_BYTES_PER_EDGE, SOLVE_BYTES_PER_STATE,
+    default_max_memory, estimated_bytes, guard_bytes,
 };
 pub use simulation::{Estimate, SimParams, SimProgress, SimResult, simulate, simulate_observed};
 pub use steady_state::{Method, SolveInfo, SolveParams};

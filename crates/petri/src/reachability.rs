@@ -74,47 +74,64 @@ pub fn default_max_memory() -> u64 {
         .map_or(FALLBACK_MAX_MEMORY, |kib| kib * 1024 / 100 * 85)
 }
 
-/// Bytes per tangible marking that solving adds to the compiled chain's
-/// incoming rows and packed markings: the rows' offsets (4, or 8 beyond
-/// 2³² entries) and diagonal split (4), the exit rates (8) and BiCGSTAB's
-/// seven vectors of doubles (56); a little more for the dictionary's values
-/// and the reductions.
+/// Bytes per tangible marking held while solving, besides the packed
+/// markings and the incoming rows' entries: the rows' offsets (4, or 8
+/// beyond 2³² entries) and diagonal split (4), the exit rates (8) and
+/// BiCGSTAB's seven vectors of doubles (56).
 pub const SOLVE_BYTES_PER_STATE: u64 = 72;
-/// Bytes per edge that compiling adds to the graph's 8 (4-byte target,
-/// 4-byte transition) while both directions of the generator exist: the
-/// incoming rows (4-byte index, 2-byte value id) less the 2 bytes saved by
-/// narrowing the outgoing transitions to 2-byte value ids.
-pub const COMPILE_BYTES_PER_EDGE: u64 = 4;
-/// Bytes per marking that compiling adds to the graph: the incoming rows'
-/// offsets (4 bytes, or 8 beyond 2³² entries, when the outgoing ones are
-/// narrowed from 8 to 4 bytes as well), built while the outgoing rows still
-/// exist.
-pub const COMPILE_BYTES_PER_STATE: u64 = 4;
+/// Bytes per entry held while solving: the incoming rows' 4-byte column
+/// index and 2-byte value id.
+pub const SOLVE_BYTES_PER_EDGE: u64 = 6;
+/// Bytes per entry held while an irreducible chain's generator is
+/// transposed: the outgoing 4-byte indices and the incoming rows' 4-byte
+/// indices and 2-byte value ids (the outgoing value ids are released
+/// before the incoming indices are allocated).
+pub const COMPILE_BYTES_PER_EDGE: u64 = 10;
+/// Bytes per marking held while transposing, besides the packed markings:
+/// both directions' row offsets (4 bytes each, 8 beyond 2³² entries).
+pub const COMPILE_BYTES_PER_STATE: u64 = 8;
+/// Bytes the estimate adds for what does not grow with the chain: the
+/// dictionary of values, the self-loops of the nets measured, the
+/// reductions' scratch (1 MiB).
+pub const FIXED_BYTES: u64 = 1 << 20;
 
-/// Estimated peak bytes of generating, compiling and solving a state space
-/// whose reachability graph takes `graph_bytes` *without* the marking
-/// store's hash index (freed before compiling), with `markings` markings and
-/// `edges` edges: the larger of
+/// Estimated peak bytes of compiling and solving a state space of
+/// `markings` markings whose packed markings take `marking_bytes` (by
+/// length) and which has `edges` edges: the larger of
 ///
-/// * the transposition, when both directions of the generator exist:
-///   `graph_bytes + edges·`[`COMPILE_BYTES_PER_EDGE`]` +
-///   markings·`[`COMPILE_BYTES_PER_STATE`];
-/// * the solve, once the outgoing rows (the graph's targets, transitions
-///   and offsets: 8 bytes per edge and 8 per marking) are released and the
-///   incoming ones (6 bytes per edge) kept:
-///   `graph_bytes − 2·edges + markings·`[`SOLVE_BYTES_PER_STATE`]`.
+/// * the transposition, while both directions of the generator exist:
+///   `marking_bytes + markings·`[`COMPILE_BYTES_PER_STATE`]` +
+///   edges·`[`COMPILE_BYTES_PER_EDGE`];
+/// * the solve, once an irreducible chain has released its outgoing rows:
+///   `marking_bytes + markings·`[`SOLVE_BYTES_PER_STATE`]` +
+///   edges·`[`SOLVE_BYTES_PER_EDGE`];
 ///
-/// The generation's own peak (the hash index, 16–43 bytes per marking) is
-/// lower than both on the nets measured. For nets without vanishing
-/// markings; eliminating them adds working memory that this leaves out.
+/// plus [`FIXED_BYTES`].
+/// Lengths, not capacities: a vector's unused capacity beyond its length
+/// is address space that no page backs until it is written, and every
+/// array is shrunk to its length before the next stage. The generation's
+/// own peak (hash index and graph) is added by the guard
+/// ([`ExploreParams::max_memory`]) from what it holds. For nets without
+/// vanishing markings, as irreducible chains: eliminating vanishing
+/// markings adds working memory that this leaves out, and a reducible chain
+/// keeps its outgoing rows (2 bytes per entry more while transposing, 6
+/// while solving).
 /// `CompiledGspn::memory_account` lists what was actually allocated.
-pub fn estimated_bytes(graph_bytes: u64, markings: usize, edges: usize) -> u64 {
+pub fn estimated_bytes(marking_bytes: u64, markings: usize, edges: usize) -> u64 {
     let (m, e) = (markings as u64, edges as u64);
-    // Beyond 2³² entries the offsets stay 8 bytes wide: 4 more per marking.
-    let wide = if e > u64::from(u32::MAX) { 4 * m } else { 0 };
-    let compile = graph_bytes + e * COMPILE_BYTES_PER_EDGE + m * COMPILE_BYTES_PER_STATE + wide;
-    let solve = graph_bytes.saturating_sub(2 * e) + m * SOLVE_BYTES_PER_STATE + wide;
-    compile.max(solve)
+    // Beyond 2³² entries the offsets stay 8 bytes wide: 4 more per marking
+    // and direction.
+    let wide = u64::from(e > u64::from(u32::MAX));
+    let compile = marking_bytes + m * (COMPILE_BYTES_PER_STATE + 8 * wide) + e * COMPILE_BYTES_PER_EDGE;
+    let solve = marking_bytes + m * (SOLVE_BYTES_PER_STATE + 4 * wide) + e * SOLVE_BYTES_PER_EDGE;
+    FIXED_BYTES + compile.max(solve)
+}
+
+/// What the memory guard compares with its limit: the larger of what
+/// generation holds now (`generation_bytes`: packed markings, hash index,
+/// graph arrays) and [`estimated_bytes`] of the later stages.
+pub fn guard_bytes(generation_bytes: u64, marking_bytes: u64, markings: usize, edges: usize) -> u64 {
+    generation_bytes.max(estimated_bytes(marking_bytes, markings, edges))
 }
 
 /// Figures about a generation run.
@@ -285,9 +302,11 @@ impl ReachabilityGraph {
                 }
             }
             i = end;
-            let graph_bytes = store.heap_bytes() - store.index_bytes()
-                + edge_bytes(&offsets, &vanishing, &targets, &transitions, coeffs.as_ref());
-            let estimate = estimated_bytes(graph_bytes as u64, store.len(), targets.len());
+            let marking_bytes = (store.len() * store.layout().words() * 8) as u64;
+            let generation = marking_bytes
+                + (store.index_bytes() + graph_len_bytes(&offsets, &vanishing, &targets, coeffs.as_ref()))
+                    as u64;
+            let estimate = guard_bytes(generation, marking_bytes, store.len(), targets.len());
             if estimate > params.max_memory {
                 return Err(Error::MemoryLimit {
                     estimate,
@@ -535,6 +554,13 @@ impl Batch {
         );
         Ok(None)
     }
+}
+
+/// Bytes of the graph's arrays by length (what is written; see
+/// [`estimated_bytes`]).
+fn graph_len_bytes(offsets: &[u64], vanishing: &[bool], targets: &[u32], coeffs: Option<&Vec<f64>>) -> usize {
+    // Targets and transitions have the same length.
+    offsets.len() * 8 + vanishing.len() + targets.len() * 8 + coeffs.map_or(0, |c| c.len() * 8)
 }
 
 /// Heap bytes of the graph's arrays (capacities, not lengths).
