@@ -94,6 +94,7 @@ pub mod error;
 mod fast_math;
 mod font;
 pub mod generators;
+pub mod geodesic;
 pub mod grid;
 pub mod kinematics;
 pub mod map_server;

@@ -6,18 +6,16 @@
 //! is passable when a person's disc fits there (distance to the nearest
 //! obstacle ≥ the person's radius, by the world's distance field). For each
 //! waypoint, Dijkstra's algorithm over the 8-connected passable nodes (steps
-//! of 1 and √2 spacings) gives the walking distance of every node to the
+//! of 1 and √2 spacings, [`crate::geodesic`]) gives the walking distance of every node to the
 //! waypoint's node: `O(n log n)` per waypoint, built once per world. A
 //! person follows the field downhill ([`Routes::direction`]), around
 //! exhibits and through doors, until near the exhibit, then walks straight.
-
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
 use robot::{Pose, Vec2};
 
 use crate::distance_field::DistanceField;
 use crate::fast_math::norm;
+use crate::geodesic::{self, Lattice, Steps};
 use crate::grid::OccupancyGrid;
 
 /// Lattice spacing, metres.
@@ -58,51 +56,27 @@ impl Routes {
             origin,
             fields: Vec::with_capacity(waypoints.len()),
         };
+        let lattice = Lattice {
+            width: nx,
+            height: ny,
+            passable: &passable,
+            // No corner cutting past an impassable node.
+            cut_corners: false,
+        };
+        let steps = Steps {
+            straight: h as f32,
+            diagonal: (std::f64::consts::SQRT_2 * h) as f32,
+        };
         for &w in waypoints {
-            let mut dist = vec![f32::INFINITY; nx * ny];
-            let mut heap = BinaryHeap::new();
             // Seed the waypoint's node and its passable neighbours (an
             // exhibit's own node is often inside the exhibit).
-            if let Some((i, j)) = routes.node_of(w) {
-                for (ii, jj) in routes.around(i, j) {
-                    let k = jj * nx + ii;
-                    if passable[k] {
-                        let d = norm(node(ii, jj) - w) as f32;
-                        if d < dist[k] {
-                            dist[k] = d;
-                            heap.push(Reverse((d.to_bits(), k)));
-                        }
-                    }
-                }
-            }
-            let diag = (std::f64::consts::SQRT_2 * h) as f32;
-            while let Some(Reverse((bits, k))) = heap.pop() {
-                let d = f32::from_bits(bits);
-                if d > dist[k] {
-                    continue;
-                }
-                let (i, j) = (k % nx, k / nx);
-                for (ii, jj) in routes.around(i, j) {
-                    let m = jj * nx + ii;
-                    if m == k || !passable[m] {
-                        continue;
-                    }
-                    let step = if ii != i && jj != j {
-                        // No corner cutting past an impassable node.
-                        if !passable[j * nx + ii] || !passable[jj * nx + i] {
-                            continue;
-                        }
-                        diag
-                    } else {
-                        h as f32
-                    };
-                    let nd = d + step;
-                    if nd < dist[m] {
-                        dist[m] = nd;
-                        heap.push(Reverse((nd.to_bits(), m)));
-                    }
-                }
-            }
+            let seeds: Vec<(usize, f32)> = routes
+                .node_of(w)
+                .into_iter()
+                .flat_map(|(i, j)| routes.around(i, j))
+                .map(|(ii, jj)| (jj * nx + ii, norm(node(ii, jj) - w) as f32))
+                .collect();
+            let dist = geodesic::distances(&lattice, steps, &seeds, None);
             routes.fields.push(dist);
         }
         routes

@@ -29,15 +29,15 @@
 //!   is, so it is judged by an oracle: it succeeds the moment its true
 //!   position comes within [`ARRIVE_M`] of the goal's — generous to it.
 //! - **the shortest path** on the true grid ([`shortest_path_m`]): 8-connected
-//!   Dijkstra over the cells where the robot's disc fits, an upper bound no
+//!   Dijkstra ([`sim::geodesic`]) over the cells where the robot's disc fits, an upper bound no
 //!   sonar robot without a metric map can reach, reported as a distance and
 //!   as a time at free movement's cruise speed.
 
-use std::cmp::Reverse;
-use std::collections::{BTreeMap, BinaryHeap};
+use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, bail};
 use robot::{Command, Controller, Notes, Perception, Pose, Step, Vec2, wrap_angle};
+use sim::geodesic::{self, Lattice, Steps};
 use sim::render::{MarkerKind, Picture};
 use sim::shapes::WorldSpec;
 use sim::{
@@ -674,49 +674,33 @@ pub fn route(world: &World, spec: &RouteSpec<'_>) -> Result<RouteRun> {
 pub fn shortest_path_m(grid: &OccupancyGrid, a: Vec2, b: Vec2, radius_m: f64) -> Option<f64> {
     let field = DistanceField::new(grid);
     let (w, h) = (grid.width(), grid.height());
-    let res = grid.resolution_m();
-    let free = |c: sim::CellIndex| grid.contains(c) && field.distance_m(grid.cell_center(c)) > radius_m;
+    let passable: Vec<bool> = (0..w * h)
+        .map(|k| {
+            let c = sim::CellIndex {
+                i: (k % w) as i64,
+                j: (k / w) as i64,
+            };
+            field.distance_m(grid.cell_center(c)) > radius_m
+        })
+        .collect();
     let (ca, cb) = (grid.cell_of(a), grid.cell_of(b));
-    if !free(ca) || !free(cb) {
-        return None;
-    }
-    let index = |c: sim::CellIndex| c.j as usize * w + c.i as usize;
-    let mut dist = vec![f64::INFINITY; w * h];
-    let mut heap = BinaryHeap::new();
-    dist[index(ca)] = 0.0;
-    // Distances in cells scaled to integers (1000 per cell) for the heap's
-    // order; exact enough for a bound.
-    heap.push(Reverse((0u64, ca.i, ca.j)));
-    let diagonal = std::f64::consts::SQRT_2;
-    while let Some(Reverse((_, i, j))) = heap.pop() {
-        let c = sim::CellIndex { i, j };
-        let d = dist[index(c)];
-        if c == cb {
-            return Some(d * res);
-        }
-        for (dx, dy) in [
-            (1, 0),
-            (-1, 0),
-            (0, 1),
-            (0, -1),
-            (1, 1),
-            (1, -1),
-            (-1, 1),
-            (-1, -1),
-        ] {
-            let q = sim::CellIndex { i: i + dx, j: j + dy };
-            if !free(q) {
-                continue;
-            }
-            let step = if dx != 0 && dy != 0 { diagonal } else { 1.0 };
-            let nd = d + step;
-            if nd < dist[index(q)] {
-                dist[index(q)] = nd;
-                heap.push(Reverse(((nd * 1000.0) as u64, q.i, q.j)));
-            }
-        }
-    }
-    None
+    let index = |c: sim::CellIndex| {
+        (grid.contains(c) && passable[c.j as usize * w + c.i as usize])
+            .then(|| c.j as usize * w + c.i as usize)
+    };
+    let (ia, ib) = (index(ca)?, index(cb)?);
+    let lattice = Lattice {
+        width: w,
+        height: h,
+        passable: &passable,
+        cut_corners: true,
+    };
+    let steps = Steps {
+        straight: 1.0,
+        diagonal: std::f64::consts::SQRT_2,
+    };
+    let d = geodesic::distances(&lattice, steps, &[(ia, 0.0)], Some(ib))[ib];
+    d.is_finite().then(|| d * grid.resolution_m())
 }
 
 /// Draws the net over the world: places at their map positions (numbered
