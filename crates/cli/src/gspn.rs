@@ -137,7 +137,9 @@ pub struct SolveArgs {
     /// or an arithmetic expression (its mean), e.g. '#P1 + 2 * #P2'.
     #[arg(long = "measure", short = 'm', value_name = "EXPR")]
     measures: Vec<String>,
-    /// Steady-state method: auto = GTH/LU up to 50,000 states, BiCGSTAB above.
+    /// Steady-state method: auto = direct (GTH or sparse LU) up to 2,000
+    /// states, or beyond while the LU's fill-in stays small (nearly
+    /// one-dimensional chains); BiCGSTAB otherwise.
     #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
     method: MethodArg,
     /// Relative residual at which iterative methods stop.
