@@ -4,7 +4,10 @@
 //! seen so far; fields are packed greedily into 64-bit words and never straddle
 //! a word. Most nets fit a marking in one word (Kanban with N = 5: 16 places ×
 //! 3 bits). When a count outgrows its field, the field is widened (doubling its
-//! range) and every stored marking is re-encoded — indices do not change.
+//! range, one bit of headroom) and every stored marking is re-encoded —
+//! indices do not change. When the headroom would cost a word per marking,
+//! every field is fitted to the largest count stored instead
+//! (`MarkingStore::fitted_layout`).
 //! Markings live in one flat `Vec<u64>` in insertion order. Duplicates are
 //! found by an index over it:
 //!
@@ -380,6 +383,47 @@ impl MarkingStore {
     }
 
     /// Re-encodes every marking with a new layout (same places).
+    /// The layout to widen to when a firing needs the widths `needed`:
+    /// every field that must grow gets one bit of headroom beyond its need
+    /// (twice the range, see the module docs), unless the headroom costs a
+    /// word per marking that the counts do not need; then every field is
+    /// just wide enough for the largest count stored and for the firing
+    /// (Kanban 8: sixteen 4-bit fields, one word, where headroom would take
+    /// two). Tight fields may need more relayouts later; a word per marking
+    /// is worth it.
+    pub(crate) fn fitted_layout(&self, needed: &[u8]) -> Layout {
+        let old = &self.layout;
+        let roomy: Vec<u8> = needed
+            .iter()
+            .zip(&old.width)
+            .map(|(&n, &w)| if n > w { (n + 1).min(32) } else { w })
+            .collect();
+        let roomy = Layout::new(roomy);
+        if roomy.words() <= old.words() {
+            return roomy;
+        }
+        let mut largest = vec![0u32; old.width.len()];
+        let mut m = vec![0u32; old.width.len()];
+        for i in 0..self.len {
+            old.decode(&self.data[i * old.words..(i + 1) * old.words], &mut m);
+            for (l, &c) in largest.iter_mut().zip(&m) {
+                *l = (*l).max(c);
+            }
+        }
+        let tight: Vec<u8> = needed
+            .iter()
+            .zip(&old.width)
+            .zip(&largest)
+            .map(|((&n, &w), &l)| bits_for(l).max(if n > w { n } else { 0 }))
+            .collect();
+        let tight = Layout::new(tight);
+        if tight.words() < roomy.words() {
+            tight
+        } else {
+            roomy
+        }
+    }
+
     pub(crate) fn relayout(&mut self, layout: Layout) {
         let old = std::mem::replace(&mut self.layout, layout);
         let np = old.width.len();
@@ -441,6 +485,31 @@ impl MarkingStore {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn widening_keeps_headroom_unless_it_costs_a_word() {
+        // Fifteen 4-bit fields and one 3-bit one: 63 bits, one word.
+        let first = [8u32, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 7];
+        let mut store = MarkingStore::new(Layout::for_marking(&first, 1));
+        assert_eq!(store.layout().words(), 1);
+        let mut key = vec![0; 1];
+        store.layout().encode(&first, &mut key);
+        store.insert(&key);
+        // A count of 8 in the last field needs 4 bits, and 5 with headroom
+        // would make 65: the fields are fitted instead.
+        let mut needed = store.layout().widths().to_vec();
+        needed[15] = 4;
+        let fitted = store.fitted_layout(&needed);
+        assert_eq!(fitted.words(), 1);
+        assert_eq!(fitted.widths(), &[4; 16]);
+        store.relayout(fitted);
+        let mut m = [0; 16];
+        store.decode(0, &mut m);
+        assert_eq!(m, first);
+        // Room to spare: one bit of headroom, as before.
+        let small = MarkingStore::new(Layout::for_marking(&[1, 1], 1));
+        assert_eq!(small.fitted_layout(&[2, 1]).widths(), &[3, 1]);
+    }
 
     #[test]
     fn pack_unpack_and_widen() {

@@ -260,7 +260,8 @@ impl ReachabilityGraph {
             // The first event in marking order: an error, or a field to widen
             // (then the round is computed again in the new layout).
             if let Some(event) = events.into_iter().find_map(|e| e.transpose()) {
-                store.relayout(Layout::new(event?));
+                let layout = store.fitted_layout(&event?);
+                store.relayout(layout);
                 relayouts += 1;
                 continue;
             }
@@ -478,8 +479,8 @@ struct Batch {
 
 impl Batch {
     /// Computes the successors of `markings` and looks them up in `store`.
-    /// Returns the widths to widen the layout to if a firing would overflow
-    /// a field (the batch is then incomplete), or the error of a count beyond
+    /// Returns the widths a firing needs if it would overflow a field (the
+    /// batch is then incomplete; see `MarkingStore::fitted_layout`), or the error of a count beyond
     /// `u32`.
     fn expand(
         &mut self,
@@ -525,7 +526,7 @@ impl Batch {
                         }
                         if new > u64::from(layout.max_value(p)) {
                             let w = widen.get_or_insert_with(|| layout.widths().to_vec());
-                            w[p] = (bits_for(new as u32) + 1).min(32);
+                            w[p] = w[p].max(bits_for(new as u32));
                         }
                     }
                 }
