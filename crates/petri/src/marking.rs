@@ -391,7 +391,13 @@ impl MarkingStore {
     /// (Kanban 8: sixteen 4-bit fields, one word, where headroom would take
     /// two). Tight fields may need more relayouts later; a word per marking
     /// is worth it.
-    pub(crate) fn fitted_layout(&self, needed: &[u8]) -> Layout {
+    ///
+    /// `pending` gives the largest counts of markings about to be stored
+    /// (the successors of the round being expanded): fitting to the stored
+    /// ones alone could take from a field the width a pending marking
+    /// needs, and the next attempt would widen it again and shrink another
+    /// (a livelock met on Kanban 8). It is called only when fitting.
+    pub(crate) fn fitted_layout(&self, needed: &[u8], pending: impl FnOnce() -> Vec<u32>) -> Layout {
         let old = &self.layout;
         let roomy: Vec<u8> = needed
             .iter()
@@ -402,7 +408,7 @@ impl MarkingStore {
         if roomy.words() <= old.words() {
             return roomy;
         }
-        let mut largest = vec![0u32; old.width.len()];
+        let mut largest = pending();
         let mut m = vec![0u32; old.width.len()];
         for i in 0..self.len {
             old.decode(&self.data[i * old.words..(i + 1) * old.words], &mut m);
@@ -499,7 +505,7 @@ mod tests {
         // would make 65: the fields are fitted instead.
         let mut needed = store.layout().widths().to_vec();
         needed[15] = 4;
-        let fitted = store.fitted_layout(&needed);
+        let fitted = store.fitted_layout(&needed, || vec![0; 16]);
         assert_eq!(fitted.words(), 1);
         assert_eq!(fitted.widths(), &[4; 16]);
         store.relayout(fitted);
@@ -508,7 +514,12 @@ mod tests {
         assert_eq!(m, first);
         // Room to spare: one bit of headroom, as before.
         let small = MarkingStore::new(Layout::for_marking(&[1, 1], 1));
-        assert_eq!(small.fitted_layout(&[2, 1]).widths(), &[3, 1]);
+        assert_eq!(small.fitted_layout(&[2, 1], || unreachable!()).widths(), &[3, 1]);
+        // A pending count keeps its width: 15 in field 0 needs 4 bits even
+        // though no stored marking has more than 8 there.
+        let mut pending = vec![0; 16];
+        pending[0] = 15;
+        assert_eq!(store.fitted_layout(&needed, || pending).widths()[0], 4);
     }
 
     #[test]

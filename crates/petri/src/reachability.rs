@@ -260,7 +260,8 @@ impl ReachabilityGraph {
             // The first event in marking order: an error, or a field to widen
             // (then the round is computed again in the new layout).
             if let Some(event) = events.into_iter().find_map(|e| e.transpose()) {
-                let layout = store.fitted_layout(&event?);
+                let needed = event?;
+                let layout = store.fitted_layout(&needed, || largest_successor_counts(gspn, &store, i..end));
                 store.relayout(layout);
                 relayouts += 1;
                 continue;
@@ -555,6 +556,28 @@ impl Batch {
         );
         Ok(None)
     }
+}
+
+/// The largest count of each place over the successors of the markings
+/// `range` of `store` (the round a widening interrupted), counted without
+/// the packing's limits.
+fn largest_successor_counts(gspn: &Gspn, store: &MarkingStore, range: std::ops::Range<usize>) -> Vec<u32> {
+    let np = gspn.initial_marking().len();
+    let mut largest = vec![0u32; np];
+    let mut m = vec![0u32; np];
+    let mut firable = Vec::new();
+    for i in range {
+        store.decode(i, &mut m);
+        gspn.firable(&m, &mut firable);
+        for &t in &firable {
+            for &(p, d) in gspn.delta(t) {
+                let c = i64::from(m[p as usize]) + d;
+                let c = u32::try_from(c.max(0)).unwrap_or(u32::MAX);
+                largest[p as usize] = largest[p as usize].max(c);
+            }
+        }
+    }
+    largest
 }
 
 /// Bytes of the graph's arrays by length (what is written; see

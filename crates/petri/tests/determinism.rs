@@ -213,3 +213,32 @@ fn generation_on_one_and_two_threads_gives_breadth_first_numbering_and_identical
         assert_identical(&solutions[0], &solutions[1], &net.name);
     }
 }
+
+#[test]
+fn widening_three_large_counters_into_one_word_terminates() {
+    // Regression (Kanban 8 livelock): three places filled with 2²⁰ − 1
+    // tokens each by independent transitions. With a bit of headroom each
+    // the fields would take 3 × 21 bits + 3 control bits: two words, so the
+    // layout is fitted; fitting to the stored markings alone took from one
+    // field what a pending successor needed, and the round was widened and
+    // fitted again forever. 2³ markings, in one word.
+    let mut n = Net::new("three counters");
+    for k in 0..3 {
+        let control = n.add_place(format!("c{k}"), 1u32);
+        let counter = n.add_place(format!("p{k}"), 0u32);
+        let fill = n.add_timed(format!("fill{k}"), 1.0);
+        n.input(control, fill);
+        n.add_arc(petri::ArcKind::Output, counter, fill, (1u32 << 20) - 1);
+    }
+    let g = n.instantiate(&Params::new()).unwrap();
+    // A livelock fails the test instead of hanging it.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let rg = petri::ReachabilityGraph::explore(&g, &ExploreParams::default()).unwrap();
+        let _ = tx.send((rg.num_markings(), rg.stats().words_per_marking));
+    });
+    let (markings, words) = rx
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("generation of 8 markings did not end within a minute");
+    assert_eq!((markings, words), (8, 1));
+}
