@@ -147,6 +147,23 @@ pub struct ExploreStats {
     pub edge_bytes: usize,
 }
 
+/// A store holding only the initial marking `m0` (index 0), in the
+/// narrowest layout that fits it.
+fn store_with(m0: &[u32]) -> MarkingStore {
+    let mut store = MarkingStore::new(Layout::for_marking(m0, 1));
+    let mut key = vec![0u64; store.layout().words()];
+    store.layout().encode(m0, &mut key);
+    store.insert(&key);
+    store
+}
+
+/// The end of the round that starts at marking `i` when the store holds
+/// `len` markings: [`ROUND_PER_THREAD`] markings per thread when the round
+/// runs on `threads` threads, one [`BATCH`] when it runs on one.
+fn round_end(i: usize, len: usize, threads: Option<usize>) -> usize {
+    (i + threads.map_or(BATCH, |t| ROUND_PER_THREAD * t)).min(len)
+}
+
 /// The reachability graph.
 #[derive(Debug, Clone)]
 pub struct ReachabilityGraph {
@@ -194,11 +211,7 @@ impl ReachabilityGraph {
     ) -> Result<ReachabilityGraph> {
         let start = Instant::now();
         let m0 = gspn.initial_marking().to_vec();
-        let mut store = MarkingStore::new(Layout::for_marking(&m0, 1));
-        let mut key = vec![0u64; store.layout().words()];
-        store.layout().encode(&m0, &mut key);
-        store.insert(&key);
-        drop(key);
+        let mut store = store_with(&m0);
 
         let mut vanishing = Vec::new();
         let mut offsets = vec![0u64];
@@ -223,12 +236,7 @@ impl ReachabilityGraph {
             stop.check("generating the reachability graph")?;
             // The round's size changes the speed, never the result.
             let parallel = threads > 1 && store.len() >= PARALLEL_FROM;
-            let end = (i + if parallel {
-                ROUND_PER_THREAD * threads
-            } else {
-                BATCH
-            })
-            .min(store.len());
+            let end = round_end(i, store.len(), parallel.then_some(threads));
             let chunks = (end - i).div_ceil(BATCH);
             batches.resize_with(chunks.max(batches.len()), Batch::default);
             let run = |(c, b): (usize, &mut Batch)| {
