@@ -34,7 +34,7 @@ use hashbrown::HashMap;
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::gspn::Gspn;
-use crate::interrupt::Interrupt;
+use crate::interrupt::{Interrupt, Stage};
 use crate::marking::MarkingStore;
 use crate::net::{Params, PlaceId, TransitionId};
 use crate::reachability::{ExploreParams, ExploreStats, ReachabilityGraph};
@@ -505,6 +505,7 @@ impl CompiledGspn {
         stop: Interrupt<'_>,
     ) -> Result<CompiledGspn> {
         stop.check(COMPILING)?;
+        stop.stage(Stage::Compiling);
         let start = Instant::now();
         let (tangible_id, mut tangible_rg) = tangible_numbering(&rg);
         let n = tangible_rg.len();

@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::gspn::{Gspn, MarkingKind};
-use crate::interrupt::Interrupt;
+use crate::interrupt::{Interrupt, Stage};
 use crate::marking::{Layout, MarkingStore, bits_for};
 use crate::net::TransitionId;
 use crate::scc::Successors;
@@ -210,6 +210,7 @@ impl ReachabilityGraph {
         stop: Interrupt<'_>,
     ) -> Result<ReachabilityGraph> {
         let start = Instant::now();
+        stop.stage(Stage::Generating);
         let m0 = gspn.initial_marking().to_vec();
         let mut store = store_with(&m0);
 
@@ -234,6 +235,7 @@ impl ReachabilityGraph {
         let mut i = 0usize;
         while i < store.len() {
             stop.check("generating the reachability graph")?;
+            stop.generated(store.len(), targets.len());
             // The round's size changes the speed, never the result.
             let parallel = threads > 1 && store.len() >= PARALLEL_FROM;
             let end = round_end(i, store.len(), parallel.then_some(threads));
@@ -305,6 +307,7 @@ impl ReachabilityGraph {
                 });
             }
         }
+        stop.generated(store.len(), targets.len());
         // Vec growth leaves up to half of each array unused; large blocks are
         // remapped, not copied, when shrunk.
         targets.shrink_to_fit();

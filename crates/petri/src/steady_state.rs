@@ -33,8 +33,8 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::interrupt::Interrupt;
 pub(crate) use crate::interrupt::SOLVING;
+use crate::interrupt::{Interrupt, Stage};
 use crate::krylov::{self, Stopping};
 use crate::linear;
 use crate::rows::Chain;
@@ -178,6 +178,7 @@ pub(crate) fn solve(
 ) -> Result<(Vec<f64>, SolveInfo)> {
     params.validate()?;
     stop.check(SOLVING)?;
+    stop.stage(Stage::Solving);
     let start = Instant::now();
     let n = rows.n();
     if n == 0 {
@@ -451,6 +452,7 @@ fn gauss_seidel(
             imbalance /= sum;
         }
         let proxy = if flow > 0.0 { imbalance / flow } else { imbalance };
+        stop.iterated(it, proxy);
         if proxy <= params.tolerance {
             last = residual(rows, &x, rhs);
             if last <= params.tolerance {
