@@ -380,3 +380,148 @@ pub(crate) fn bicgstab(
         tolerance: params.tolerance,
     })
 }
+
+/// EXPERIMENT: restarted GMRES(m), right-preconditioned by the same block
+/// Gauss–Seidel sweep (one pass over the entries per iteration, Eisenstat's
+/// product), classical Gram–Schmidt fused into two passes per iteration.
+pub(crate) fn gmres(chain: &Chain<'_>, params: Stopping, m: usize, stop: Interrupt<'_>) -> Result<(Vec<f64>, usize)> {
+    let n = chain.n();
+    let mut x = vec![1.0 / n as f64; n];
+    for _ in 0..3 {
+        for j in 0..n {
+            x[j] = chain.inflow(j, &x) / chain.exit(j);
+        }
+    }
+    let k = most_probable(&x);
+    let xk = x[k];
+    if xk > 0.0 && xk.is_finite() {
+        x.iter_mut().for_each(|v| *v /= xk);
+    } else {
+        x.iter_mut().for_each(|v| *v = 1.0);
+    }
+    let a = Blocked::new(chain, k);
+    let mut basis: Vec<Vec<f64>> = (0..=m).map(|_| vec![0.0; n]).collect();
+    let (mut y, mut t) = (vec![0.0; n], vec![0.0; n]);
+    let mut it = 0;
+    let mut last = f64::INFINITY;
+    let mut check_below = params.tolerance * 1e3;
+    let converged = |x: &[f64], t: &mut [f64], cheap: f64, last: &mut f64, check_below: &mut f64| {
+        if cheap > *check_below {
+            return false;
+        }
+        normalise_into(x, t);
+        *last = chain.residual(t, None);
+        if *last <= params.tolerance {
+            return true;
+        }
+        *check_below = (cheap * params.tolerance / *last).min(params.tolerance * 1e3);
+        false
+    };
+    let mut h = vec![vec![0.0f64; m]; m + 1];
+    let (mut cs, mut sn, mut g) = (vec![0.0f64; m], vec![0.0f64; m], vec![0.0f64; m + 1]);
+    while it < params.max_iterations {
+        let r = &mut basis[0];
+        a.matvec(&x, r);
+        update(r, |j, ax| if j == k { 1.0 } else { 0.0 } - ax);
+        let beta = dot(r, r).sqrt();
+        if !beta.is_finite() {
+            break;
+        }
+        if converged(&x, &mut t, beta, &mut last, &mut check_below) {
+            return Ok((t, it));
+        }
+        update(r, |_, v| v / beta);
+        g.iter_mut().for_each(|e| *e = 0.0);
+        g[0] = beta;
+        let mut used = 0;
+        for j in 0..m {
+            stop.check(SOLVING)?;
+            it += 1;
+            used = j + 1;
+            // w = A M⁻¹ v_j into basis[j + 1].
+            let (head, tail) = basis.split_at_mut(j + 1);
+            let vj = &mut head[j];
+            a.sweep(vj, &mut y, None, |_, p| p);
+            let w = &mut tail[0];
+            a.product(vj, &y, w, |_, _| [0.0, 0.0]);
+            // Classical Gram–Schmidt: all (w, v_i) in one pass, then w -= Σ h_i v_i.
+            let dots: Vec<Vec<f64>> = w
+                .par_chunks(CHUNK)
+                .enumerate()
+                .map(|(c, wc)| {
+                    let lo = c * CHUNK;
+                    head.iter()
+                        .map(|v| wc.iter().zip(&v[lo..lo + wc.len()]).map(|(p, q)| p * q).sum::<f64>())
+                        .collect()
+                })
+                .collect();
+            for i in 0..=j {
+                h[i][j] = dots.iter().map(|d| d[i]).sum();
+            }
+            let hj: Vec<f64> = (0..=j).map(|i| h[i][j]).collect();
+            let partial: Vec<f64> = w
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .map(|(c, wc)| {
+                    let lo = c * CHUNK;
+                    let mut s = 0.0;
+                    for (jj, e) in wc.iter_mut().enumerate() {
+                        let mut v = *e;
+                        for (i, hi) in hj.iter().enumerate() {
+                            v -= hi * head[i][lo + jj];
+                        }
+                        *e = v;
+                        s += v * v;
+                    }
+                    s
+                })
+                .collect();
+            let norm = partial.iter().sum::<f64>().sqrt();
+            h[j + 1][j] = norm;
+            if norm > 0.0 {
+                update(w, |_, v| v / norm);
+            }
+            for i in 0..j {
+                let tmp = cs[i] * h[i][j] + sn[i] * h[i + 1][j];
+                h[i + 1][j] = -sn[i] * h[i][j] + cs[i] * h[i + 1][j];
+                h[i][j] = tmp;
+            }
+            let d = h[j][j].hypot(h[j + 1][j]);
+            cs[j] = h[j][j] / d;
+            sn[j] = h[j + 1][j] / d;
+            h[j][j] = d;
+            h[j + 1][j] = 0.0;
+            g[j + 1] = -sn[j] * g[j];
+            g[j] *= cs[j];
+            let estimate = g[j + 1].abs();
+            stop.iterated(it, estimate);
+            if estimate <= check_below || norm == 0.0 || it >= params.max_iterations {
+                break;
+            }
+        }
+        // y_m = H⁻¹ g, x += M⁻¹ (V y_m).
+        let mut coef = vec![0.0; used];
+        for i in (0..used).rev() {
+            let mut s = g[i];
+            for l in i + 1..used {
+                s -= h[i][l] * coef[l];
+            }
+            coef[i] = s / h[i][i];
+        }
+        let combo = &basis;
+        let mut u = std::mem::take(&mut t);
+        update(&mut u, |j, _| coef.iter().enumerate().map(|(i, c)| c * combo[i][j]).sum());
+        a.sweep(&mut u, &mut y, None, |_, p| p);
+        t = u;
+        update(&mut x, |j, xj| xj + y[j]);
+        if !x.iter().all(|v| v.is_finite()) {
+            break;
+        }
+    }
+    Err(Error::NoConvergence {
+        solver: "GMRES",
+        iterations: it,
+        residual: last,
+        tolerance: params.tolerance,
+    })
+}
