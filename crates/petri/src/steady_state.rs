@@ -225,16 +225,10 @@ pub(crate) fn solve(
         m => m,
     };
     let (x, name, iterations) = match method {
-        Method::Bicgstab => match std::env::var("PETRI_GMRES").ok().and_then(|v| v.parse().ok()) {
-            Some(m) => {
-                let (x, it) = krylov::gmres(rows, params.stopping(), m, stop)?;
-                (x, "gmres", it)
-            }
-            None => {
-                let (x, it) = krylov::bicgstab(rows, params.stopping(), stop)?;
-                (x, "bicgstab", it)
-            }
-        },
+        Method::Bicgstab => {
+            let (x, it) = krylov::bicgstab(rows, params.stopping(), stop)?;
+            (x, "bicgstab", it)
+        }
         Method::Direct if rhs.is_none() && n <= linear::DENSE_LIMIT => (gth(rows)?, "direct-gth", 0),
         Method::Direct => (solve_direct(rows, rhs)?, "direct-lu", 0),
         _ => {
