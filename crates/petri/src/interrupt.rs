@@ -27,7 +27,7 @@
 //! ([`simulate_observed`](crate::simulate_observed)).
 //!
 //! ```
-//! use std::sync::atomic::{AtomicBool, AtomicU8, AtomicU64, AtomicUsize, Ordering};
+//! use std::sync::atomic::{AtomicBool, Ordering};
 //! use petri::{ExploreParams, Interrupt, ReachabilityGraph};
 //!
 //! let net = petri::families::kanban(2);
