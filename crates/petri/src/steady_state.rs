@@ -27,6 +27,14 @@
 //!   with ω > 1 can diverge; offered for comparison and for absorption
 //!   systems.
 //!
+//! [`Method::Auto`] picks direct for small chains (and larger ones whose LU
+//! stays cheap), BiCGSTAB otherwise. Measured against it on Kanban 2–6 and
+//! not chosen automatically (`EXPERIMENTS.md`, `BENCHMARKS.md`): GMRES(m)
+//! with the same preconditioner (more products than BiCGSTAB even without
+//! restarts, stagnates when restarted), and SOR, which at ω = 1.2 took
+//! fewer passes over the matrix than BiCGSTAB on Kanban 4 and 5 but is
+//! erratic in ω and diverges from ω = 1.3.
+//!
 //! Residual: `‖x Q (+ b)‖₁ / Σ_j exit_j x_j` — the total flow imbalance over
 //! the total flow, independent of the time unit and of the number of states.
 
@@ -426,7 +434,9 @@ fn gauss_seidel(
         Some(b) => (0..n).map(|j| b[j] / rows.exit(j)).collect(),
     };
     let mut last = f64::INFINITY;
+    let mut swept = 0;
     for it in 1..=params.max_iterations {
+        swept = it;
         stop.check(SOLVING)?;
         let (mut imbalance, mut flow) = (0.0f64, 0.0f64);
         for j in 0..n {
@@ -467,7 +477,7 @@ fn gauss_seidel(
     }
     Err(Error::NoConvergence {
         solver: if omega == 1.0 { "Gauss-Seidel" } else { "SOR" },
-        iterations: params.max_iterations,
+        iterations: swept,
         residual: last,
         tolerance: params.tolerance,
     })
