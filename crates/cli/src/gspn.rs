@@ -9,7 +9,8 @@ use guide::supervisor::Behaviour;
 use lab::gspn::{SimOptions, SolveOptions};
 use petri::io::Format;
 use petri::{
-    CompiledGspn, ExploreParams, Gspn, Interrupt, Method, Net, Params, ReachabilityGraph, SolveParams,
+    CompiledGspn, ExploreParams, Gspn, Interrupt, Method, Net, Params, Progress, ProgressSnapshot,
+    ReachabilityGraph, SolveParams, Stage,
 };
 use serde_json::Value;
 
@@ -444,6 +445,80 @@ impl Drop for Phase {
     }
 }
 
+/// Runs `work` while a spinner on standard error (a terminal) shows what
+/// `progress` says, redrawn ten times a second by a second thread that
+/// ends with `work`. Ctrl-C ends the command at once.
+fn with_progress_line<T>(progress: &Progress, work: impl FnOnce() -> T) -> T {
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    let (done, finished) = std::sync::mpsc::channel::<()>();
+    let shown = bar.clone();
+    let result = std::thread::scope(|scope| {
+        scope.spawn(move || {
+            let bar = shown;
+            let mut rate = StageRate::default();
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =
+                finished.recv_timeout(std::time::Duration::from_millis(100))
+            {
+                let now = progress.snapshot();
+                bar.set_message(progress_message(&now, rate.per_second(&now)));
+                bar.tick();
+            }
+        });
+        let result = work();
+        // Fails only if the thread has already ended.
+        let _ = done.send(());
+        result
+    });
+    bar.finish_and_clear();
+    result
+}
+
+/// Markings per second since generation was first seen.
+#[derive(Default)]
+struct StageRate {
+    first: Option<(std::time::Instant, usize)>,
+}
+
+impl StageRate {
+    fn per_second(&mut self, now: &ProgressSnapshot) -> f64 {
+        if now.stage != Stage::Generating {
+            return 0.0;
+        }
+        let (since, markings) = *self
+            .first
+            .get_or_insert_with(|| (std::time::Instant::now(), now.markings));
+        let seconds = since.elapsed().as_secs_f64();
+        if seconds > 0.0 {
+            now.markings.saturating_sub(markings) as f64 / seconds
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The progress line of `gspn solve`: the stage and its counters.
+fn progress_message(now: &ProgressSnapshot, markings_per_second: f64) -> String {
+    match now.stage {
+        Stage::Idle => "starting".into(),
+        Stage::Generating => format!(
+            "generating the reachability graph: {} markings, {} edges ({:.2} M markings/s)",
+            now.markings,
+            now.edges,
+            markings_per_second / 1e6
+        ),
+        Stage::Compiling => format!("compiling the CTMC of {} markings", now.markings),
+        Stage::Solving if now.iteration == 0 => "solving the steady state".into(),
+        Stage::Solving => format!(
+            "solving the steady state: iteration {}, residual estimate {:.1e}",
+            now.iteration, now.residual
+        ),
+    }
+}
+
 fn solve(a: &SolveArgs) -> Result<()> {
     let (_, gspn) = load(&a.net)?;
     let measures = lab::gspn::parse_measures(&a.measures)?;
@@ -452,9 +527,19 @@ fn solve(a: &SolveArgs) -> Result<()> {
         solve: solve_params(a.method, a.tolerance),
         default_rate: a.default_rate,
     };
-    let phase = Phase::new();
-    let steady = lab::gspn::solve(&gspn, &options, Interrupt::NEVER, &mut |m| phase.show(m))?;
-    drop(phase);
+    let steady = if std::io::stderr().is_terminal() {
+        let progress = Progress::new();
+        with_progress_line(&progress, || {
+            lab::gspn::solve(
+                &gspn,
+                &options,
+                Interrupt::NEVER.with_progress(&progress),
+                &mut |_| {},
+            )
+        })?
+    } else {
+        lab::gspn::solve(&gspn, &options, Interrupt::NEVER, &mut |_| {})?
+    };
     let values = steady.measures(&measures)?;
     let (compiled, sol) = (&steady.space.compiled, &steady.solution);
     let vanishing = steady.space.vanishing_markings;

@@ -317,6 +317,36 @@ fn family_writes_a_model_that_solves() {
     assert_eq!(v["tangible_markings"], 160);
 }
 
+/// The progress line of `gspn solve` is for terminals only: with standard
+/// error piped, nothing is written to it, and the output is the same.
+#[test]
+fn solve_prints_no_progress_when_not_on_a_terminal() {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("kanban2-progress.pnpro");
+    let f = path.to_str().unwrap();
+    assert!(
+        petrinav(&["gspn", "family", "kanban", "2", "-o", f])
+            .status
+            .success()
+    );
+    for args in [vec!["gspn", "solve", f, "--json"], vec!["gspn", "solve", f]] {
+        let out = petrinav(&args);
+        assert!(out.status.success(), "{args:?}");
+        assert!(
+            out.stderr.is_empty(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(!text.contains('\r') && !text.contains('\u{1b}'), "{text}");
+        assert!(
+            !text.contains("generating") && !text.contains("iteration "),
+            "{text}"
+        );
+    }
+    let v = json(&["gspn", "solve", f, "--json"]);
+    assert_eq!(v["tangible_markings"], 4600);
+}
+
 /// Issue 17: `select --set lambda3=1e200` printed `f_auto NaN` and decided
 /// on it. The answer exists: the localizer leaves Success at once, so
 /// AutoMove never completes and Contour tracking is chosen.

@@ -34,7 +34,7 @@ use hashbrown::HashMap;
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::gspn::Gspn;
-use crate::interrupt::Interrupt;
+use crate::interrupt::{Interrupt, Stage};
 use crate::marking::MarkingStore;
 use crate::net::{Params, PlaceId, TransitionId};
 use crate::reachability::{ExploreParams, ExploreStats, ReachabilityGraph};
@@ -44,6 +44,9 @@ use crate::steady_state::{self, SolveInfo, SolveParams};
 use crate::vanishing;
 
 const NONE: u32 = u32::MAX;
+
+/// What [`Error::Cancelled`] says a stopped compilation was doing.
+const COMPILING: &str = "compiling the CTMC";
 
 /// Largest ratio between the fastest and the slowest rate of the timed
 /// transitions that fire in a chain that [`CompiledGspn::solve_rates`]
@@ -408,6 +411,147 @@ fn strongly_connected(outgoing: &Rows) -> bool {
         .is_ok()
 }
 
+/// A steady state before its normalisation and measures.
+struct Reducible {
+    /// Unnormalised π (sums to 1 up to the absorption solve's error).
+    pi: Vec<f64>,
+    /// What the solvers did.
+    info: SolveInfo,
+    /// Residual of the absorption equations (0 without transient states).
+    absorption_residual: f64,
+    /// Probability of ending in each bottom component.
+    bottom_probabilities: Vec<f64>,
+}
+
+/// Numbers the tangible markings in graph order: the tangible id of every
+/// graph index ([`NONE`] for a vanishing one) and the graph index of every
+/// tangible id.
+fn tangible_numbering(rg: &ReachabilityGraph) -> (Vec<u32>, Vec<u32>) {
+    let mut tangible_id = vec![NONE; rg.num_markings()];
+    let mut tangible_rg = Vec::with_capacity(rg.num_tangible());
+    for (i, slot) in tangible_id.iter_mut().enumerate() {
+        if !rg.vanishing[i] {
+            *slot = tangible_rg.len() as u32;
+            tangible_rg.push(i as u32);
+        }
+    }
+    (tangible_id, tangible_rg)
+}
+
+/// The outgoing rows of a tangible chain, before compression.
+struct TangibleRows {
+    /// Row offsets (one more than rows).
+    offsets: Vec<u64>,
+    /// Target of each entry.
+    dst: Vec<u32>,
+    /// Dictionary id of each entry.
+    ids: Vec<u32>,
+    /// The initial distribution over tangible markings.
+    initial: Vec<(u32, f64)>,
+}
+
+/// The outgoing rows of the tangible chain of a graph with vanishing
+/// markings: each edge into a vanishing marking is replaced by the
+/// tangible markings its elimination reaches, entries with the same target
+/// and transition merged (summed in order); the immediate firings on the
+/// way are recorded in `imm`.
+fn tangible_rows(
+    gspn: &Gspn,
+    rg: &ReachabilityGraph,
+    tangible_id: &[u32],
+    tangible_rg: &[u32],
+    dict: &mut Dictionary,
+    imm: &mut ImmediateFlows,
+    stop: Interrupt<'_>,
+) -> Result<TangibleRows> {
+    let el = vanishing::eliminate(gspn, rg, tangible_id)?;
+    stop.check(COMPILING)?;
+    let mut offsets = Vec::with_capacity(tangible_rg.len() + 1);
+    offsets.push(0u64);
+    let (mut dst, mut ids) = (Vec::new(), Vec::new());
+    let mut row: Vec<(u32, u32, f64)> = Vec::new();
+    for &s in tangible_rg {
+        row.clear();
+        let (a, b) = rg.range(s as usize);
+        for k in a..b {
+            let (w, t, c) = (rg.targets[k], rg.transitions[k], rg.coeff(k));
+            if tangible_id[w as usize] != NONE {
+                row.push((tangible_id[w as usize], t, c));
+                continue;
+            }
+            for &(u, q) in el.dist(w) {
+                row.push((u, t, c * q));
+            }
+            let f = el.firings(w);
+            if !f.is_empty() {
+                imm.src.push(tangible_id[s as usize]);
+                imm.trans.push(t);
+                imm.coeff.push(c);
+                imm.f_items.extend_from_slice(f);
+                imm.f_start.push(imm.f_items.len() as u64);
+            }
+        }
+        // Merge entries with the same target and transition.
+        row.sort_unstable_by_key(|e| (e.0, e.1));
+        let mut i = 0;
+        while i < row.len() {
+            let (u, t, mut c) = row[i];
+            i += 1;
+            while i < row.len() && row[i].0 == u && row[i].1 == t {
+                c += row[i].2;
+                i += 1;
+            }
+            dst.push(u);
+            ids.push(dict.id(t, c));
+        }
+        offsets.push(dst.len() as u64);
+    }
+    let initial = if rg.vanishing[0] {
+        el.dist(0).to_vec()
+    } else {
+        vec![(tangible_id[0], 1.0)]
+    };
+    Ok(TangibleRows {
+        offsets,
+        dst,
+        ids,
+        initial,
+    })
+}
+
+/// The timed transitions that label at least one of the chain's
+/// `entries` entries (their rates set the solve's time unit), in order.
+fn firing_timed(gspn: &Gspn, dict: &Dictionary, ids: &Ids, entries: usize) -> Vec<u32> {
+    let mut fires = vec![false; gspn.num_transitions()];
+    for k in 0..entries {
+        fires[dict.pairs[ids.get(k)].0 as usize] = true;
+    }
+    (0..gspn.num_transitions() as u32)
+        .filter(|&t| fires[t as usize] && !gspn.is_immediate(TransitionId(t)))
+        .collect()
+}
+
+/// The strongly connected components of a chain that is not irreducible,
+/// its bottom components' states (in the order of [`Components::bottoms`])
+/// and its transient states, each list in state order.
+fn bottom_partition(outgoing: &Rows, n: usize) -> (Option<Components>, Vec<Vec<u32>>, Vec<u32>) {
+    let c = Components::of(outgoing);
+    let bottom_ids = c.bottoms();
+    let mut bottom_index = vec![NONE; c.len()];
+    for (b, &id) in bottom_ids.iter().enumerate() {
+        bottom_index[id as usize] = b as u32;
+    }
+    let mut bottoms = vec![Vec::new(); bottom_ids.len()];
+    let mut transient = Vec::new();
+    for s in 0..n as u32 {
+        match bottom_index[c.comp[s as usize] as usize] {
+            NONE => transient.push(s),
+            b => bottoms[b as usize].push(s),
+        }
+    }
+    (Some(c), bottoms, transient)
+}
+
 impl CompiledGspn {
     /// Generates the state space of `gspn` and compiles its CTMC.
     pub fn build(gspn: &Gspn, explore: &ExploreParams) -> Result<CompiledGspn> {
@@ -428,17 +572,10 @@ impl CompiledGspn {
         rg: ReachabilityGraph,
         stop: Interrupt<'_>,
     ) -> Result<CompiledGspn> {
-        const COMPILING: &str = "compiling the CTMC";
         stop.check(COMPILING)?;
+        stop.stage(Stage::Compiling);
         let start = Instant::now();
-        let mut tangible_id = vec![NONE; rg.num_markings()];
-        let mut tangible_rg = Vec::with_capacity(rg.num_tangible());
-        for (i, slot) in tangible_id.iter_mut().enumerate() {
-            if !rg.vanishing[i] {
-                *slot = tangible_rg.len() as u32;
-                tangible_rg.push(i as u32);
-            }
-        }
+        let (tangible_id, mut tangible_rg) = tangible_numbering(&rg);
         let n = tangible_rg.len();
         let identity = rg.stats.vanishing == 0;
         let mut dict = Dictionary::new(gspn.num_transitions());
@@ -463,54 +600,8 @@ impl CompiledGspn {
             }
             (offsets, targets, ids, vec![(0u32, 1.0)], store)
         } else {
-            let el = vanishing::eliminate(&gspn, &rg, &tangible_id)?;
-            stop.check(COMPILING)?;
-            let mut offsets = Vec::with_capacity(n + 1);
-            offsets.push(0u64);
-            let (mut dst, mut ids) = (Vec::new(), Vec::new());
-            let mut row: Vec<(u32, u32, f64)> = Vec::new();
-            for &s in &tangible_rg {
-                row.clear();
-                let (a, b) = rg.range(s as usize);
-                for k in a..b {
-                    let (w, t, c) = (rg.targets[k], rg.transitions[k], rg.coeff(k));
-                    if tangible_id[w as usize] != NONE {
-                        row.push((tangible_id[w as usize], t, c));
-                        continue;
-                    }
-                    for &(u, q) in el.dist(w) {
-                        row.push((u, t, c * q));
-                    }
-                    let f = el.firings(w);
-                    if !f.is_empty() {
-                        imm.src.push(tangible_id[s as usize]);
-                        imm.trans.push(t);
-                        imm.coeff.push(c);
-                        imm.f_items.extend_from_slice(f);
-                        imm.f_start.push(imm.f_items.len() as u64);
-                    }
-                }
-                // Merge entries with the same target and transition.
-                row.sort_unstable_by_key(|e| (e.0, e.1));
-                let mut i = 0;
-                while i < row.len() {
-                    let (u, t, mut c) = row[i];
-                    i += 1;
-                    while i < row.len() && row[i].0 == u && row[i].1 == t {
-                        c += row[i].2;
-                        i += 1;
-                    }
-                    dst.push(u);
-                    ids.push(dict.id(t, c));
-                }
-                offsets.push(dst.len() as u64);
-            }
-            let initial = if rg.vanishing[0] {
-                el.dist(0).to_vec()
-            } else {
-                vec![(tangible_id[0], 1.0)]
-            };
-            (offsets, dst, ids, initial, rg.store)
+            let rows = tangible_rows(&gspn, &rg, &tangible_id, &tangible_rg, &mut dict, &mut imm, stop)?;
+            (rows.offsets, rows.dst, rows.ids, rows.initial, rg.store)
         };
         store.drop_index();
         drop(tangible_id);
@@ -524,14 +615,7 @@ impl CompiledGspn {
         let dl = dict.pairs.len();
         let offsets = Offsets::new(offsets);
         let ids = Ids::new(ids, dl);
-        let mut fires = vec![false; gspn.num_transitions()];
-        for k in 0..dst.len() {
-            fires[dict.pairs[ids.get(k)].0 as usize] = true;
-        }
-        let firing_timed: Vec<u32> = (0..gspn.num_transitions() as u32)
-            .filter(|&t| fires[t as usize] && !gspn.is_immediate(TransitionId(t)))
-            .collect();
-        drop(fires);
+        let firing_timed = firing_timed(&gspn, &dict, &ids, dst.len());
         let outgoing = Rows {
             offsets,
             index: dst,
@@ -560,25 +644,9 @@ impl CompiledGspn {
         stop.check(COMPILING)?;
         incoming.split_diagonal();
 
-        let (components, bottoms, transient) = if let Some(outgoing) = outgoing.as_ref().filter(|_| !ergodic)
-        {
-            let c = Components::of(outgoing);
-            let bottom_ids = c.bottoms();
-            let mut bottom_index = vec![NONE; c.len()];
-            for (b, &id) in bottom_ids.iter().enumerate() {
-                bottom_index[id as usize] = b as u32;
-            }
-            let mut bottoms = vec![Vec::new(); bottom_ids.len()];
-            let mut transient = Vec::new();
-            for s in 0..n as u32 {
-                match bottom_index[c.comp[s as usize] as usize] {
-                    NONE => transient.push(s),
-                    b => bottoms[b as usize].push(s),
-                }
-            }
-            (Some(c), bottoms, transient)
-        } else {
-            (None, Vec::new(), Vec::new())
+        let (components, bottoms, transient) = match outgoing.as_ref().filter(|_| !ergodic) {
+            Some(outgoing) => bottom_partition(outgoing, n),
+            None => (None, Vec::new(), Vec::new()),
         };
         let stats = CompileStats {
             explore,
@@ -853,24 +921,7 @@ impl CompiledGspn {
     ) -> Result<Solution> {
         let start = Instant::now();
         params.validate()?;
-        if rates.len() != self.gspn.num_transitions() {
-            return Err(Error::Invalid(format!(
-                "{} rates given for {} transitions",
-                rates.len(),
-                self.gspn.num_transitions()
-            )));
-        }
-        for (t, &r) in rates.iter().enumerate() {
-            if !(self.gspn.is_immediate(TransitionId(t as u32)) || (r.is_finite() && r > 0.0)) {
-                return Err(Error::InvalidValue {
-                    element: format!("timed transition `{}`", self.gspn.transition_names()[t]),
-                    what: "the rate",
-                    requirement: "a finite number > 0",
-                    value: r,
-                });
-            }
-        }
-        let n = self.num_tangible();
+        self.check_rates(rates)?;
         // Solve in the time unit of the fastest rate (docs/gspn.md, *Steady-state methods*: rates far
         // apart must not break the solver): every value is then at most its
         // coefficient, so no exit rate or elimination entry overflows, and
@@ -889,81 +940,23 @@ impl CompiledGspn {
         };
         // π is allocated once the solver returns (an irreducible chain's
         // solver hands its own vector over): no extra vector during the solve.
-        let mut pi;
-        let mut info;
-        let mut absorption_residual = 0.0;
-        let mut bottom_probabilities = Vec::new();
-        match &self.components {
+        let Reducible {
+            mut pi,
+            mut info,
+            absorption_residual,
+            bottom_probabilities,
+        } = match &self.components {
             None => {
-                let (x, i) = steady_state::solve(&chain, None, params, stop)?;
-                pi = x;
-                info = i;
-                bottom_probabilities.push(1.0);
-            }
-            Some(components) => {
-                pi = vec![0.0; n];
-                // Probability of ending in each bottom component.
-                let mut init = vec![0.0; n];
-                for &(s, p) in &self.initial {
-                    init[s as usize] += p;
-                }
-                let mut comp_prob = vec![0.0; components.len()];
-                for (s, &p) in init.iter().enumerate() {
-                    comp_prob[components.comp[s] as usize] += p;
-                }
-                let mut absorption_bytes = 0;
-                if !self.transient.is_empty() {
-                    let sub = self.sub_chain(&self.transient)?;
-                    let sub_exit: Vec<f64> = self.transient.iter().map(|&s| exit[s as usize]).collect();
-                    let sub_chain = Chain {
-                        incoming: &sub,
-                        values: &values,
-                        exit: &sub_exit,
-                    };
-                    let b: Vec<f64> = self.transient.iter().map(|&s| init[s as usize]).collect();
-                    let (x, ai) = steady_state::solve(&sub_chain, Some(&b), params, stop)?;
-                    absorption_residual = ai.residual;
-                    absorption_bytes = ai.vector_bytes;
-                    let out = self.outgoing()?;
-                    for (&s, &xs) in self.transient.iter().zip(&x) {
-                        let (a, b) = out.range(s as usize);
-                        for k in a..b {
-                            let c = components.comp[out.index[k] as usize] as usize;
-                            if components.bottom[c] {
-                                comp_prob[c] += xs * values[out.ids.get(k)];
-                            }
-                        }
-                    }
-                }
-                info = SolveInfo {
-                    method: "trivial",
-                    vector_bytes: absorption_bytes,
-                    ..SolveInfo::default()
-                };
-                let mut largest = 0;
-                for states in &self.bottoms {
-                    let prob = comp_prob[components.comp[states[0] as usize] as usize];
-                    bottom_probabilities.push(prob);
-                    let sub = self.sub_chain(states)?;
-                    let sub_exit: Vec<f64> = states.iter().map(|&s| exit[s as usize]).collect();
-                    let sub_chain = Chain {
-                        incoming: &sub,
-                        values: &values,
-                        exit: &sub_exit,
-                    };
-                    let (x, i) = steady_state::solve(&sub_chain, None, params, stop)?;
-                    if states.len() >= largest {
-                        largest = states.len();
-                        info.method = i.method;
-                    }
-                    info.iterations += i.iterations;
-                    info.vector_bytes = info.vector_bytes.max(i.vector_bytes);
-                    for (&s, &v) in states.iter().zip(&x) {
-                        pi[s as usize] = prob * v;
-                    }
+                let (pi, info) = steady_state::solve(&chain, None, params, stop)?;
+                Reducible {
+                    pi,
+                    info,
+                    absorption_residual: 0.0,
+                    bottom_probabilities: vec![1.0],
                 }
             }
-        }
+            Some(components) => self.solve_reducible(components, &values, &exit, params, stop)?,
+        };
         // Absorption probabilities come from a numerical solve: renormalise so
         // that the distribution sums to 1 to rounding.
         let total: f64 = pi.iter().sum();
@@ -990,6 +983,113 @@ impl CompiledGspn {
             throughput,
             mean_tokens,
             prob_nonempty,
+            info,
+            absorption_residual,
+            bottom_probabilities,
+        })
+    }
+
+    /// Input checks of [`solve_rates`](Self::solve_rates): one rate per
+    /// transition, a finite number > 0 for every timed one.
+    fn check_rates(&self, rates: &[f64]) -> Result<()> {
+        if rates.len() != self.gspn.num_transitions() {
+            return Err(Error::Invalid(format!(
+                "{} rates given for {} transitions",
+                rates.len(),
+                self.gspn.num_transitions()
+            )));
+        }
+        for (t, &r) in rates.iter().enumerate() {
+            if !(self.gspn.is_immediate(TransitionId(t as u32)) || (r.is_finite() && r > 0.0)) {
+                return Err(Error::InvalidValue {
+                    element: format!("timed transition `{}`", self.gspn.transition_names()[t]),
+                    what: "the rate",
+                    requirement: "a finite number > 0",
+                    value: r,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The steady state of a chain that is not irreducible: the probability
+    /// of ending in each bottom component (from the initial distribution,
+    /// through the transient states' absorption equations), times each
+    /// bottom component's own steady state.
+    fn solve_reducible(
+        &self,
+        components: &Components,
+        values: &[f64],
+        exit: &[f64],
+        params: &SolveParams,
+        stop: Interrupt<'_>,
+    ) -> Result<Reducible> {
+        let n = self.num_tangible();
+        let mut pi = vec![0.0; n];
+        // Probability of ending in each bottom component.
+        let mut init = vec![0.0; n];
+        for &(s, p) in &self.initial {
+            init[s as usize] += p;
+        }
+        let mut comp_prob = vec![0.0; components.len()];
+        for (s, &p) in init.iter().enumerate() {
+            comp_prob[components.comp[s] as usize] += p;
+        }
+        let mut absorption_bytes = 0;
+        let mut absorption_residual = 0.0;
+        if !self.transient.is_empty() {
+            let sub = self.sub_chain(&self.transient)?;
+            let sub_exit: Vec<f64> = self.transient.iter().map(|&s| exit[s as usize]).collect();
+            let sub_chain = Chain {
+                incoming: &sub,
+                values,
+                exit: &sub_exit,
+            };
+            let b: Vec<f64> = self.transient.iter().map(|&s| init[s as usize]).collect();
+            let (x, ai) = steady_state::solve(&sub_chain, Some(&b), params, stop)?;
+            absorption_residual = ai.residual;
+            absorption_bytes = ai.vector_bytes;
+            let out = self.outgoing()?;
+            for (&s, &xs) in self.transient.iter().zip(&x) {
+                let (a, b) = out.range(s as usize);
+                for k in a..b {
+                    let c = components.comp[out.index[k] as usize] as usize;
+                    if components.bottom[c] {
+                        comp_prob[c] += xs * values[out.ids.get(k)];
+                    }
+                }
+            }
+        }
+        let mut info = SolveInfo {
+            method: "trivial",
+            vector_bytes: absorption_bytes,
+            ..SolveInfo::default()
+        };
+        let mut bottom_probabilities = Vec::new();
+        let mut largest = 0;
+        for states in &self.bottoms {
+            let prob = comp_prob[components.comp[states[0] as usize] as usize];
+            bottom_probabilities.push(prob);
+            let sub = self.sub_chain(states)?;
+            let sub_exit: Vec<f64> = states.iter().map(|&s| exit[s as usize]).collect();
+            let sub_chain = Chain {
+                incoming: &sub,
+                values,
+                exit: &sub_exit,
+            };
+            let (x, i) = steady_state::solve(&sub_chain, None, params, stop)?;
+            if states.len() >= largest {
+                largest = states.len();
+                info.method = i.method;
+            }
+            info.iterations += i.iterations;
+            info.vector_bytes = info.vector_bytes.max(i.vector_bytes);
+            for (&s, &v) in states.iter().zip(&x) {
+                pi[s as usize] = prob * v;
+            }
+        }
+        Ok(Reducible {
+            pi,
             info,
             absorption_residual,
             bottom_probabilities,

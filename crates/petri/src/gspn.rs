@@ -104,6 +104,121 @@ fn whole(v: f64, element: String, what: &'static str, min: f64) -> Result<u32> {
     Ok(v as u32)
 }
 
+/// Evaluates a structural expression (marking, multiplicity, priority,
+/// weight) in a context ("the initial marking of place `P`").
+type EvalStructural<'a> = dyn FnMut(&Expr, String) -> Result<f64> + 'a;
+
+/// Each transition's timing (servers, or priority and weight, checked) and
+/// rate expression (`None` for immediate ones).
+fn timings(net: &Net, eval_structural: &mut EvalStructural<'_>) -> Result<(Vec<Timing>, Vec<Option<Expr>>)> {
+    let nt = net.transitions.len();
+    let mut timing = Vec::with_capacity(nt);
+    let mut rate_exprs = Vec::with_capacity(nt);
+    for t in &net.transitions {
+        match &t.kind {
+            TransitionKind::Timed { rate, servers } => {
+                if let Servers::K(0) = servers {
+                    return Err(Error::InvalidValue {
+                        element: format!("transition `{}`", t.name),
+                        what: "the number of servers",
+                        requirement: "≥ 1",
+                        value: 0.0,
+                    });
+                }
+                if let Some(r) = rate {
+                    if r.uses_tokens() {
+                        return Err(Error::Eval {
+                            text: r.to_string(),
+                            context: format!("the rate of transition `{}`", t.name),
+                            message: "marking-dependent rates are not supported; use server semantics (nservers) instead".into(),
+                        });
+                    }
+                }
+                timing.push(Timing::Timed { servers: *servers });
+                rate_exprs.push(rate.clone());
+            }
+            TransitionKind::Immediate { weight, priority } => {
+                let pr = eval_structural(priority, format!("the priority of transition `{}`", t.name))?;
+                let pr = whole(pr, format!("transition `{}`", t.name), "the priority", 1.0)?;
+                let w = eval_structural(weight, format!("the weight of transition `{}`", t.name))?;
+                if !(w.is_finite() && w > 0.0) {
+                    return Err(Error::InvalidValue {
+                        element: format!("immediate transition `{}`", t.name),
+                        what: "the weight",
+                        requirement: "a finite number > 0 (leave a branch of weight 0 out of the net)",
+                        value: w,
+                    });
+                }
+                timing.push(Timing::Immediate {
+                    priority: pr,
+                    weight: w,
+                });
+                rate_exprs.push(None);
+            }
+        }
+    }
+    Ok((timing, rate_exprs))
+}
+
+/// The arcs' multiplicities, merged per (transition, kind, place): input
+/// and output multiplicities add up, parallel inhibitor arcs keep the
+/// smallest.
+fn merged_arcs(
+    net: &Net,
+    eval_structural: &mut EvalStructural<'_>,
+) -> Result<BTreeMap<(u32, ArcKind, u32), u32>> {
+    let mut merged: BTreeMap<(u32, ArcKind, u32), u32> = BTreeMap::new();
+    for a in &net.arcs {
+        let ctx = format!(
+            "the multiplicity of the {} arc between `{}` and `{}`",
+            a.kind.name(),
+            net.places[a.place.index()].name,
+            net.transitions[a.transition.index()].name
+        );
+        let v = eval_structural(&a.multiplicity, ctx.clone())?;
+        let m = whole(v, ctx, "the value", 1.0)?;
+        let key = (a.transition.0, a.kind, a.place.0);
+        match merged.get_mut(&key) {
+            None => {
+                merged.insert(key, m);
+            }
+            Some(old) if a.kind == ArcKind::Inhibitor => *old = (*old).min(m),
+            Some(old) => {
+                *old = old.checked_add(m).ok_or_else(|| Error::InvalidValue {
+                    element: format!(
+                        "the parallel {} arcs between `{}` and `{}`",
+                        a.kind.name(),
+                        net.places[a.place.index()].name,
+                        net.transitions[a.transition.index()].name
+                    ),
+                    what: "the total multiplicity",
+                    requirement: "at most 4294967295",
+                    value: f64::from(*old) + f64::from(m),
+                })?
+            }
+        }
+    }
+    Ok(merged)
+}
+
+/// Each transition's change of the marking, `outputs − inputs`, per place
+/// in place order, zeros left out.
+fn token_deltas(ins: &[Vec<(u32, u32)>], outs: &[Vec<(u32, u32)>]) -> Vec<Vec<(u32, i64)>> {
+    ins.iter()
+        .zip(outs)
+        .map(|(ins, outs)| {
+            let mut d: BTreeMap<u32, i64> = BTreeMap::new();
+            for &(p, m) in ins {
+                *d.entry(p).or_default() -= i64::from(m);
+            }
+            for &(p, m) in outs {
+                *d.entry(p).or_default() += i64::from(m);
+            }
+            d.into_iter().filter(|&(_, v)| v != 0).collect()
+        })
+        .collect()
+}
+
 impl Gspn {
     /// Binds the parameters (the net's own values, replaced by `overrides`)
     /// and checks everything that does not depend on rates: markings and
@@ -140,86 +255,9 @@ impl Gspn {
             )?);
         }
 
+        let (timing, rate_exprs) = timings(net, &mut eval_structural)?;
+        let merged = merged_arcs(net, &mut eval_structural)?;
         let nt = net.transitions.len();
-        let mut timing = Vec::with_capacity(nt);
-        let mut rate_exprs = Vec::with_capacity(nt);
-        for t in &net.transitions {
-            match &t.kind {
-                TransitionKind::Timed { rate, servers } => {
-                    if let Servers::K(0) = servers {
-                        return Err(Error::InvalidValue {
-                            element: format!("transition `{}`", t.name),
-                            what: "the number of servers",
-                            requirement: "≥ 1",
-                            value: 0.0,
-                        });
-                    }
-                    if let Some(r) = rate {
-                        if r.uses_tokens() {
-                            return Err(Error::Eval {
-                                text: r.to_string(),
-                                context: format!("the rate of transition `{}`", t.name),
-                                message: "marking-dependent rates are not supported; use server semantics (nservers) instead".into(),
-                            });
-                        }
-                    }
-                    timing.push(Timing::Timed { servers: *servers });
-                    rate_exprs.push(rate.clone());
-                }
-                TransitionKind::Immediate { weight, priority } => {
-                    let pr = eval_structural(priority, format!("the priority of transition `{}`", t.name))?;
-                    let pr = whole(pr, format!("transition `{}`", t.name), "the priority", 1.0)?;
-                    let w = eval_structural(weight, format!("the weight of transition `{}`", t.name))?;
-                    if !(w.is_finite() && w > 0.0) {
-                        return Err(Error::InvalidValue {
-                            element: format!("immediate transition `{}`", t.name),
-                            what: "the weight",
-                            requirement: "a finite number > 0 (leave a branch of weight 0 out of the net)",
-                            value: w,
-                        });
-                    }
-                    timing.push(Timing::Immediate {
-                        priority: pr,
-                        weight: w,
-                    });
-                    rate_exprs.push(None);
-                }
-            }
-        }
-
-        // Arcs, merged per (transition, place, kind): input and output
-        // multiplicities add up, parallel inhibitor arcs keep the smallest.
-        let mut merged: BTreeMap<(u32, ArcKind, u32), u32> = BTreeMap::new();
-        for a in &net.arcs {
-            let ctx = format!(
-                "the multiplicity of the {} arc between `{}` and `{}`",
-                a.kind.name(),
-                net.places[a.place.index()].name,
-                net.transitions[a.transition.index()].name
-            );
-            let v = eval_structural(&a.multiplicity, ctx.clone())?;
-            let m = whole(v, ctx, "the value", 1.0)?;
-            let key = (a.transition.0, a.kind, a.place.0);
-            match merged.get_mut(&key) {
-                None => {
-                    merged.insert(key, m);
-                }
-                Some(old) if a.kind == ArcKind::Inhibitor => *old = (*old).min(m),
-                Some(old) => {
-                    *old = old.checked_add(m).ok_or_else(|| Error::InvalidValue {
-                        element: format!(
-                            "the parallel {} arcs between `{}` and `{}`",
-                            a.kind.name(),
-                            net.places[a.place.index()].name,
-                            net.transitions[a.transition.index()].name
-                        ),
-                        what: "the total multiplicity",
-                        requirement: "at most 4294967295",
-                        value: f64::from(*old) + f64::from(m),
-                    })?
-                }
-            }
-        }
         let mut ins = vec![Vec::new(); nt];
         let mut outs = vec![Vec::new(); nt];
         let mut inhs = vec![Vec::new(); nt];
@@ -231,17 +269,7 @@ impl Gspn {
             };
             list[t as usize].push((p, m));
         }
-        let mut deltas = vec![Vec::new(); nt];
-        for t in 0..nt {
-            let mut d: BTreeMap<u32, i64> = BTreeMap::new();
-            for &(p, m) in &ins[t] {
-                *d.entry(p).or_default() -= i64::from(m);
-            }
-            for &(p, m) in &outs[t] {
-                *d.entry(p).or_default() += i64::from(m);
-            }
-            deltas[t] = d.into_iter().filter(|&(_, v)| v != 0).collect();
-        }
+        let deltas = token_deltas(&ins, &outs);
 
         Ok(Gspn {
             name: net.name.clone(),

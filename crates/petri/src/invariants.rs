@@ -495,7 +495,64 @@ fn farkas(
     }
 
     let words = n.div_ceil(64);
-    let mut rows: Vec<Row> = matrix
+    let mut rows = initial_rows(matrix, words);
+    let mut info = FarkasInfo {
+        initial_rows: n,
+        rows_peak: n,
+        ..FarkasInfo::default()
+    };
+
+    let mut pos = vec![0usize; num_columns];
+    let mut neg = vec![0usize; num_columns];
+    let mut union = vec![0u64; words];
+    while let Some(j) = pivot_column(&rows, &mut pos, &mut neg) {
+        let values: Vec<i128> = rows
+            .iter()
+            .map(|r| {
+                r.rest
+                    .binary_search_by_key(&j, |&(c, _)| c)
+                    .map_or(0, |k| r.rest[k].1)
+            })
+            .collect();
+        let mut combined =
+            combine_pairs(&rows, &values, &mut union, &mut info, params.max_rows).map_err(|e| match e {
+                Overflow::Entry => overflow(info.columns_eliminated, i128::MAX as u128),
+                Overflow::Rows => limit(info.columns_eliminated),
+            })?;
+        combined.sort_unstable_by(|x, z| x.y.cmp(&z.y));
+        combined.dedup_by(|x, z| x.y == z.y);
+
+        let mut next: Vec<Row> = rows
+            .into_iter()
+            .zip(&values)
+            .filter(|&(_, &v)| v == 0)
+            .map(|(r, _)| r)
+            .collect();
+        next.extend(combined);
+        rows = next;
+        info.columns_eliminated += 1;
+        info.rows_peak = info.rows_peak.max(rows.len());
+    }
+
+    let mut vectors =
+        normalised_supports(rows).map_err(|()| overflow(info.columns_eliminated, u128::from(u64::MAX)))?;
+    vectors.sort_unstable();
+    vectors.dedup();
+    Ok((vectors, info))
+}
+
+/// Why [`combine_pairs`] stopped.
+enum Overflow {
+    /// An entry outgrew `i128`.
+    Entry,
+    /// The matrix outgrew the row limit.
+    Rows,
+}
+
+/// The rows `(1, 0)`…`(0, 1)` of `[A | I]`: each matrix row (zeros
+/// dropped, sorted by column) with its own unit vector as combination.
+fn initial_rows(matrix: Vec<Vec<(u32, i64)>>, words: usize) -> Vec<Row> {
+    matrix
         .into_iter()
         .enumerate()
         .map(|(i, r)| {
@@ -514,96 +571,88 @@ fn farkas(
                 weight: 1,
             }
         })
-        .collect();
-    let mut info = FarkasInfo {
-        initial_rows: n,
-        rows_peak: n,
-        ..FarkasInfo::default()
-    };
+        .collect()
+}
 
-    let mut pos = vec![0usize; num_columns];
-    let mut neg = vec![0usize; num_columns];
-    let mut union = vec![0u64; words];
-    loop {
-        pos.fill(0);
-        neg.fill(0);
-        for r in &rows {
-            for &(c, v) in &r.rest {
-                if v > 0 {
-                    pos[c as usize] += 1;
-                } else {
-                    neg[c as usize] += 1;
-                }
+/// The column to eliminate next: among those not yet zero, the one whose
+/// elimination adds the fewest rows (`p·q − p − q` for `p` positive and `q`
+/// negative entries), the first on ties; `None` when every column is zero.
+/// `pos` and `neg` are scratch, one entry per column.
+fn pivot_column(rows: &[Row], pos: &mut [usize], neg: &mut [usize]) -> Option<u32> {
+    pos.fill(0);
+    neg.fill(0);
+    for r in rows {
+        for &(c, v) in &r.rest {
+            if v > 0 {
+                pos[c as usize] += 1;
+            } else {
+                neg[c as usize] += 1;
             }
         }
-        let Some(j) = (0..num_columns)
-            .filter(|&c| pos[c] + neg[c] > 0)
-            .min_by_key(|&c| {
-                let (p, q) = (pos[c] as i128, neg[c] as i128);
-                (p * q - p - q, c)
-            })
-        else {
-            break;
-        };
-        let j = j as u32;
-
-        let values: Vec<i128> = rows
-            .iter()
-            .map(|r| {
-                r.rest
-                    .binary_search_by_key(&j, |&(c, _)| c)
-                    .map_or(0, |k| r.rest[k].1)
-            })
-            .collect();
-        let positive: Vec<usize> = (0..rows.len()).filter(|&k| values[k] > 0).collect();
-        let negative: Vec<usize> = (0..rows.len()).filter(|&k| values[k] < 0).collect();
-        let kept = rows.len() - positive.len() - negative.len();
-        // Candidate witnesses for the support test, lightest first.
-        let mut by_weight: Vec<usize> = (0..rows.len()).collect();
-        by_weight.sort_by_key(|&k| rows[k].weight);
-
-        let mut combined: Vec<Row> = Vec::new();
-        for &a in &positive {
-            for &b in &negative {
-                info.pairs_examined += 1;
-                let mut weight = 0;
-                for (u, (x, z)) in union.iter_mut().zip(rows[a].support.iter().zip(&rows[b].support)) {
-                    *u = x | z;
-                    weight += u.count_ones();
-                }
-                let dominated = by_weight
-                    .iter()
-                    .take_while(|&&k| rows[k].weight <= weight)
-                    .any(|&k| {
-                        k != a && k != b && rows[k].support.iter().zip(&union).all(|(s, u)| s & !u == 0)
-                    });
-                if dominated {
-                    continue;
-                }
-                let row = combine(&rows[a], values[a], &rows[b], values[b], &union, weight)
-                    .ok_or_else(|| overflow(info.columns_eliminated, i128::MAX as u128))?;
-                combined.push(row);
-                info.rows_combined += 1;
-                if kept + combined.len() > params.max_rows {
-                    return Err(limit(info.columns_eliminated));
-                }
-            }
-        }
-        combined.sort_unstable_by(|x, z| x.y.cmp(&z.y));
-        combined.dedup_by(|x, z| x.y == z.y);
-
-        let mut next: Vec<Row> = rows
-            .into_iter()
-            .zip(&values)
-            .filter(|&(_, &v)| v == 0)
-            .map(|(r, _)| r)
-            .collect();
-        next.extend(combined);
-        rows = next;
-        info.columns_eliminated += 1;
-        info.rows_peak = info.rows_peak.max(rows.len());
     }
+    (0..pos.len())
+        .filter(|&c| pos[c] + neg[c] > 0)
+        .min_by_key(|&c| {
+            let (p, q) = (pos[c] as i128, neg[c] as i128);
+            (p * q - p - q, c)
+        })
+        .map(|j| j as u32)
+}
 
+/// The new rows of a column's elimination: each pair of a row with a
+/// positive (`values[a] > 0`) and a row with a negative entry in the column,
+/// combined to cancel it, unless another row's support lies within the
+/// pair's (the adjacency test: the result would not be minimal). `union`
+/// is scratch of the support's width; `max_rows` bounds the rows kept plus
+/// those made.
+fn combine_pairs(
+    rows: &[Row],
+    values: &[i128],
+    union: &mut [u64],
+    info: &mut FarkasInfo,
+    max_rows: usize,
+) -> std::result::Result<Vec<Row>, Overflow> {
+    let positive: Vec<usize> = (0..rows.len()).filter(|&k| values[k] > 0).collect();
+    let negative: Vec<usize> = (0..rows.len()).filter(|&k| values[k] < 0).collect();
+    let kept = rows.len() - positive.len() - negative.len();
+    // Candidate witnesses for the support test, lightest first.
+    let mut by_weight: Vec<usize> = (0..rows.len()).collect();
+    by_weight.sort_by_key(|&k| rows[k].weight);
+
+    let mut combined: Vec<Row> = Vec::new();
+    for &a in &positive {
+        for &b in &negative {
+            info.pairs_examined += 1;
+            let mut weight = 0;
+            for (u, (x, z)) in union.iter_mut().zip(rows[a].support.iter().zip(&rows[b].support)) {
+                *u = x | z;
+                weight += u.count_ones();
+            }
+            let dominated = by_weight
+                .iter()
+                .take_while(|&&k| rows[k].weight <= weight)
+                .any(|&k| {
+                    k != a && k != b && rows[k].support.iter().zip(union.iter()).all(|(s, u)| s & !u == 0)
+                });
+            if dominated {
+                continue;
+            }
+            let row =
+                combine(&rows[a], values[a], &rows[b], values[b], union, weight).ok_or(Overflow::Entry)?;
+            combined.push(row);
+            info.rows_combined += 1;
+            if kept + combined.len() > max_rows {
+                return Err(Overflow::Rows);
+            }
+        }
+    }
+    Ok(combined)
+}
+
+/// The combinations `y` of the final rows, each divided by the gcd of its
+/// coefficients, in the order of `rows`; `Err` if a coefficient exceeds
+/// `u64`.
+fn normalised_supports(rows: Vec<Row>) -> std::result::Result<Vec<SparseVector>, ()> {
     let mut vectors = Vec::with_capacity(rows.len());
     for r in rows {
         let g = r.y.iter().fold(0u128, |g, &(_, v)| gcd(g, v.unsigned_abs()));
@@ -614,12 +663,10 @@ fn farkas(
                     u64::try_from(c).map(|c| (i, c))
                 })
                 .collect::<std::result::Result<Vec<_>, _>>()
-                .map_err(|_| overflow(info.columns_eliminated, u128::from(u64::MAX)))?;
+                .map_err(|_| ())?;
         vectors.push(v);
     }
-    vectors.sort_unstable();
-    vectors.dedup();
-    Ok((vectors, info))
+    Ok(vectors)
 }
 
 /// The row `α·a + β·b` that cancels the column where `a` has `va > 0` and `b`

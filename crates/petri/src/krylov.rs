@@ -358,6 +358,7 @@ pub(crate) fn bicgstab(
             });
             rho_next = rhr;
             let cheap = rr.sqrt();
+            stop.iterated(it, cheap);
             if !cheap.is_finite() {
                 break;
             }

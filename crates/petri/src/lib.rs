@@ -64,7 +64,7 @@ pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
 pub use gspn::{Gspn, MarkingKind, Timing};
 pub use incidence::{DisplayIncidence, Incidence};
-pub use interrupt::Interrupt;
+pub use interrupt::{Interrupt, Progress, ProgressSnapshot, Stage};
 pub use invariants::{
     DisplayInvariant, DisplayInvariants, FarkasInfo, FarkasParams, InvariantKind, Invariants, NamedInvariant,
     NamedTerm, p_invariants, structural_bounds, t_invariants,

@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::gspn::{Gspn, MarkingKind};
-use crate::interrupt::Interrupt;
+use crate::interrupt::{Interrupt, Stage};
 use crate::marking::{Layout, MarkingStore, bits_for};
 use crate::net::TransitionId;
 use crate::scc::Successors;
@@ -164,6 +164,23 @@ pub struct ExploreStats {
     pub edge_bytes: usize,
 }
 
+/// A store holding only the initial marking `m0` (index 0), in the
+/// narrowest layout that fits it.
+fn store_with(m0: &[u32]) -> MarkingStore {
+    let mut store = MarkingStore::new(Layout::for_marking(m0, 1));
+    let mut key = vec![0u64; store.layout().words()];
+    store.layout().encode(m0, &mut key);
+    store.insert(&key);
+    store
+}
+
+/// The end of the round that starts at marking `i` when the store holds
+/// `len` markings: [`ROUND_PER_THREAD`] markings per thread when the round
+/// runs on `threads` threads, one [`BATCH`] when it runs on one.
+fn round_end(i: usize, len: usize, threads: Option<usize>) -> usize {
+    (i + threads.map_or(BATCH, |t| ROUND_PER_THREAD * t)).min(len)
+}
+
 /// The reachability graph.
 #[derive(Debug, Clone)]
 pub struct ReachabilityGraph {
@@ -210,12 +227,9 @@ impl ReachabilityGraph {
         stop: Interrupt<'_>,
     ) -> Result<ReachabilityGraph> {
         let start = Instant::now();
+        stop.stage(Stage::Generating);
         let m0 = gspn.initial_marking().to_vec();
-        let mut store = MarkingStore::new(Layout::for_marking(&m0, 1));
-        let mut key = vec![0u64; store.layout().words()];
-        store.layout().encode(&m0, &mut key);
-        store.insert(&key);
-        drop(key);
+        let mut store = store_with(&m0);
 
         let mut vanishing = Vec::new();
         let mut offsets = vec![0u64];
@@ -238,14 +252,10 @@ impl ReachabilityGraph {
         let mut i = 0usize;
         while i < store.len() {
             stop.check("generating the reachability graph")?;
+            stop.generated(store.len(), targets.len());
             // The round's size changes the speed, never the result.
             let parallel = threads > 1 && store.len() >= PARALLEL_FROM;
-            let end = (i + if parallel {
-                ROUND_PER_THREAD * threads
-            } else {
-                BATCH
-            })
-            .min(store.len());
+            let end = round_end(i, store.len(), parallel.then_some(threads));
             let chunks = (end - i).div_ceil(BATCH);
             batches.resize_with(chunks.max(batches.len()), Batch::default);
             let run = |(c, b): (usize, &mut Batch)| {
@@ -318,6 +328,7 @@ impl ReachabilityGraph {
                 });
             }
         }
+        stop.generated(store.len(), targets.len());
         // Vec growth leaves up to half of each array unused; large blocks are
         // remapped, not copied, when shrunk.
         targets.shrink_to_fit();

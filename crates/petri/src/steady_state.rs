@@ -27,14 +27,22 @@
 //!   with ω > 1 can diverge; offered for comparison and for absorption
 //!   systems.
 //!
+//! [`Method::Auto`] picks direct for small chains (and larger ones whose LU
+//! stays cheap), BiCGSTAB otherwise. Measured against it on Kanban 2–6 and
+//! not chosen automatically (`EXPERIMENTS.md`, `BENCHMARKS.md`): GMRES(m)
+//! with the same preconditioner (more products than BiCGSTAB even without
+//! restarts, stagnates when restarted), and SOR, which at ω = 1.2 took
+//! fewer passes over the matrix than BiCGSTAB on Kanban 4 and 5 but is
+//! erratic in ω and diverges from ω = 1.3.
+//!
 //! Residual: `‖x Q (+ b)‖₁ / Σ_j exit_j x_j` — the total flow imbalance over
 //! the total flow, independent of the time unit and of the number of states.
 
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::interrupt::Interrupt;
 pub(crate) use crate::interrupt::SOLVING;
+use crate::interrupt::{Interrupt, Stage};
 use crate::krylov::{self, Stopping};
 use crate::linear;
 use crate::rows::Chain;
@@ -178,6 +186,7 @@ pub(crate) fn solve(
 ) -> Result<(Vec<f64>, SolveInfo)> {
     params.validate()?;
     stop.check(SOLVING)?;
+    stop.stage(Stage::Solving);
     let start = Instant::now();
     let n = rows.n();
     if n == 0 {
@@ -425,7 +434,9 @@ fn gauss_seidel(
         Some(b) => (0..n).map(|j| b[j] / rows.exit(j)).collect(),
     };
     let mut last = f64::INFINITY;
+    let mut swept = 0;
     for it in 1..=params.max_iterations {
+        swept = it;
         stop.check(SOLVING)?;
         let (mut imbalance, mut flow) = (0.0f64, 0.0f64);
         for j in 0..n {
@@ -451,6 +462,7 @@ fn gauss_seidel(
             imbalance /= sum;
         }
         let proxy = if flow > 0.0 { imbalance / flow } else { imbalance };
+        stop.iterated(it, proxy);
         if proxy <= params.tolerance {
             last = residual(rows, &x, rhs);
             if last <= params.tolerance {
@@ -465,7 +477,7 @@ fn gauss_seidel(
     }
     Err(Error::NoConvergence {
         solver: if omega == 1.0 { "Gauss-Seidel" } else { "SOR" },
-        iterations: params.max_iterations,
+        iterations: swept,
         residual: last,
         tolerance: params.tolerance,
     })

@@ -549,3 +549,22 @@ fn memory_guard_is_an_error_with_the_estimate_and_the_limit() {
         58_400
     );
 }
+
+/// A diverging SOR stops as soon as its iterate is no longer finite; its
+/// error said it had done `max_iterations` sweeps.
+#[test]
+fn diverging_sor_reports_the_sweeps_it_did() {
+    let gspn = families::kanban(3).instantiate(&Params::new()).unwrap();
+    let c = CompiledGspn::build(&gspn, &ExploreParams::default()).unwrap();
+    let p = SolveParams {
+        method: Method::GaussSeidel,
+        omega: 1.8,
+        ..SolveParams::default()
+    };
+    match c.solve(&Params::new(), None, &p).unwrap_err() {
+        Error::NoConvergence { iterations, .. } => {
+            assert!(iterations > 0 && iterations < p.max_iterations, "{iterations}");
+        }
+        other => panic!("expected NoConvergence, got {other:?}"),
+    }
+}

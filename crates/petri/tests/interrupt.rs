@@ -71,3 +71,31 @@ fn a_flag_raised_midway_stops_a_long_generation_soon() {
         assert!(started.elapsed() < Duration::from_secs(3));
     });
 }
+
+#[test]
+fn progress_follows_the_stages_and_changes_no_result() {
+    use petri::{Progress, Stage};
+    let gspn = kanban(3);
+    let explore = ExploreParams::default();
+    let progress = Progress::new();
+    assert_eq!(progress.snapshot().stage, Stage::Idle);
+    let observed = Interrupt::NEVER.with_progress(&progress);
+    let rg = ReachabilityGraph::explore_interruptible(&gspn, &explore, observed).unwrap();
+    let seen = progress.snapshot();
+    assert_eq!(seen.stage, Stage::Generating);
+    assert_eq!((seen.markings, seen.edges), (rg.num_markings(), rg.num_edges()));
+    let compiled = CompiledGspn::from_graph_interruptible(gspn.clone(), rg, observed).unwrap();
+    assert_eq!(progress.snapshot().stage, Stage::Compiling);
+    let rates = gspn.rates(&Params::new(), None).unwrap();
+    let params = SolveParams::default();
+    let a = compiled
+        .solve_rates_interruptible(&rates, &params, observed)
+        .unwrap();
+    let seen = progress.snapshot();
+    assert_eq!(seen.stage, Stage::Solving);
+    assert_eq!(a.info.method, "bicgstab");
+    assert_eq!(seen.iteration, a.info.iterations);
+    assert!(seen.residual.is_finite() && seen.residual > 0.0);
+    let b = compiled.solve_rates(&rates, &params).unwrap();
+    assert_eq!(a.pi, b.pi);
+}

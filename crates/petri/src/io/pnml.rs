@@ -138,7 +138,7 @@ use super::{attr_location, fmt_f64, parse_expr, parse_f64, push_attr, push_xml_e
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::net::{
-    ArcKind, Net, Param, ParamKind, Place, PlaceId, Servers, Transition, TransitionId, TransitionKind,
+    Arc, ArcKind, Net, Param, ParamKind, Place, PlaceId, Servers, Transition, TransitionId, TransitionKind,
 };
 
 /// The PNML 2009 grammar namespace.
@@ -912,6 +912,166 @@ fn push_position(out: &mut String, indent: &str, position: Option<(f64, f64)>) {
 
 const TOOL_OPEN: &str = "<toolspecific tool=\"petrinav\" version=\"1\">\n";
 
+/// The net's tool-specific block: its documentation and parameters (none
+/// when it has neither).
+fn push_net_tools(out: &mut String, net: &Net) -> Result<()> {
+    let net_what = || "the net".to_string();
+    if net.doc.is_some() || !net.params.is_empty() {
+        out.push_str("    ");
+        out.push_str(TOOL_OPEN);
+        if let Some(doc) = &net.doc {
+            push_value(out, "      ", "doc", doc, &net_what)?;
+        }
+        for p in &net.params {
+            let what = || format!("parameter `{}`", p.name);
+            out.push_str("      <parameter");
+            push_attr(out, "name", &p.name, &what)?;
+            out.push_str(match p.kind {
+                ParamKind::Int => " kind=\"int\"",
+                ParamKind::Real => " kind=\"real\"",
+            });
+            if let Some(v) = p.value {
+                out.push_str(&format!(" value=\"{}\"", fmt_f64(v)));
+            }
+            if let Some(v) = p.suggested {
+                out.push_str(&format!(" suggested=\"{}\"", fmt_f64(v)));
+            }
+            if let Some(doc) = &p.doc {
+                push_attr(out, "doc", doc, &what)?;
+            }
+            out.push_str("/>\n");
+        }
+        out.push_str("    </toolspecific>\n");
+    }
+    Ok(())
+}
+
+/// A `<place>` element with id `id`; `values` are the parameters' values
+/// (an initial marking given by an expression is written as its value too).
+fn push_place(out: &mut String, p: &Place, id: &str, values: &HashMap<&str, f64>) -> Result<()> {
+    let what = || format!("place `{}`", p.name);
+    out.push_str(&format!("      <place id=\"{id}\">\n"));
+    push_name(out, "        ", &p.name, &what)?;
+    push_position(out, "        ", p.position);
+    if let Some(v) = whole_value(&p.initial, values, 0.0).filter(|&v| v > 0) {
+        out.push_str(&format!(
+            "        <initialMarking><text>{v}</text></initialMarking>\n"
+        ));
+    }
+    let expression = !is_plain(&p.initial, 0.0);
+    if expression || p.capacity.is_some() || p.doc.is_some() {
+        out.push_str("        ");
+        out.push_str(TOOL_OPEN);
+        if expression {
+            push_value(out, "          ", "marking", &p.initial.to_string(), &what)?;
+        }
+        if let Some(c) = p.capacity {
+            push_value(out, "          ", "capacity", &c.to_string(), &what)?;
+        }
+        if let Some(doc) = &p.doc {
+            push_value(out, "          ", "doc", doc, &what)?;
+        }
+        out.push_str("        </toolspecific>\n");
+    }
+    out.push_str("      </place>\n");
+    Ok(())
+}
+
+/// A `<transition>` element with id `id`, its GSPN attributes in the
+/// tool-specific block (none for a plain single-server timed transition
+/// without a rate).
+fn push_transition(out: &mut String, t: &Transition, id: &str) -> Result<()> {
+    let what = || format!("transition `{}`", t.name);
+    out.push_str(&format!("      <transition id=\"{id}\">\n"));
+    push_name(out, "        ", &t.name, &what)?;
+    push_position(out, "        ", t.position);
+    let plain = matches!(
+        t.kind,
+        TransitionKind::Timed {
+            rate: None,
+            servers: Servers::Single
+        }
+    ) && t.doc.is_none();
+    if !plain {
+        let ind = "          ";
+        out.push_str("        ");
+        out.push_str(TOOL_OPEN);
+        match &t.kind {
+            TransitionKind::Timed { rate, servers } => {
+                push_value(out, ind, "timed", "true", &what)?;
+                if let Some(r) = rate {
+                    push_value(out, ind, "rate", &r.to_string(), &what)?;
+                }
+                match servers {
+                    Servers::Single => {}
+                    Servers::Infinite => push_value(out, ind, "servers", "infinite", &what)?,
+                    Servers::K(k) => push_value(out, ind, "servers", &k.to_string(), &what)?,
+                }
+            }
+            TransitionKind::Immediate { weight, priority } => {
+                push_value(out, ind, "timed", "false", &what)?;
+                push_value(out, ind, "weight", &weight.to_string(), &what)?;
+                push_value(out, ind, "priority", &priority.to_string(), &what)?;
+            }
+        }
+        if let Some(doc) = &t.doc {
+            push_value(out, ind, "doc", doc, &what)?;
+        }
+        out.push_str("        </toolspecific>\n");
+    }
+    out.push_str("      </transition>\n");
+    Ok(())
+}
+
+/// An `<arc>` element with id `id` between the place `pid` and the
+/// transition `tid`, in the direction of its kind.
+fn push_arc(
+    out: &mut String,
+    a: &Arc,
+    id: &str,
+    pid: &str,
+    tid: &str,
+    values: &HashMap<&str, f64>,
+) -> Result<()> {
+    let what = || format!("an arc of transition `{tid}`");
+    let (source, target) = match a.kind {
+        ArcKind::Input | ArcKind::Inhibitor => (pid, tid),
+        ArcKind::Output => (tid, pid),
+    };
+    let mut inner = String::new();
+    if let Some(v) = whole_value(&a.multiplicity, values, 1.0).filter(|&v| v != 1) {
+        inner.push_str(&format!("        <inscription><text>{v}</text></inscription>\n"));
+    }
+    if a.kind == ArcKind::Inhibitor {
+        inner.push_str("        <type value=\"inhibitor\"/>\n");
+        // pm4py's form (and ProM's), which ignores `<type>`.
+        inner.push_str("        <arctype><text>inhibitor</text></arctype>\n");
+    }
+    if !is_plain(&a.multiplicity, 1.0) {
+        inner.push_str("        ");
+        inner.push_str(TOOL_OPEN);
+        push_value(
+            &mut inner,
+            "          ",
+            "multiplicity",
+            &a.multiplicity.to_string(),
+            &what,
+        )?;
+        inner.push_str("        </toolspecific>\n");
+    }
+    out.push_str(&format!(
+        "      <arc id=\"{id}\" source=\"{source}\" target=\"{target}\""
+    ));
+    if inner.is_empty() {
+        out.push_str("/>\n");
+    } else {
+        out.push_str(">\n");
+        out.push_str(&inner);
+        out.push_str("      </arc>\n");
+    }
+    Ok(())
+}
+
 /// Writes a net as a PNML place/transition net, with its GSPN attributes in
 /// the petrinav tool-specific form (see the module documentation).
 ///
@@ -944,103 +1104,15 @@ pub fn write_pnml(net: &Net) -> Result<String> {
     out.push_str(&format!("  <net id=\"{net_id}\" type=\"{PTNET_TYPE}\">\n"));
     let net_what = || "the net".to_string();
     push_name(&mut out, "    ", &net.name, &net_what)?;
-    if net.doc.is_some() || !net.params.is_empty() {
-        out.push_str("    ");
-        out.push_str(TOOL_OPEN);
-        if let Some(doc) = &net.doc {
-            push_value(&mut out, "      ", "doc", doc, &net_what)?;
-        }
-        for p in &net.params {
-            let what = || format!("parameter `{}`", p.name);
-            out.push_str("      <parameter");
-            push_attr(&mut out, "name", &p.name, &what)?;
-            out.push_str(match p.kind {
-                ParamKind::Int => " kind=\"int\"",
-                ParamKind::Real => " kind=\"real\"",
-            });
-            if let Some(v) = p.value {
-                out.push_str(&format!(" value=\"{}\"", fmt_f64(v)));
-            }
-            if let Some(v) = p.suggested {
-                out.push_str(&format!(" suggested=\"{}\"", fmt_f64(v)));
-            }
-            if let Some(doc) = &p.doc {
-                push_attr(&mut out, "doc", doc, &what)?;
-            }
-            out.push_str("/>\n");
-        }
-        out.push_str("    </toolspecific>\n");
-    }
+    push_net_tools(&mut out, net)?;
     out.push_str(&format!("    <page id=\"{page_id}\">\n"));
 
     for (p, id) in net.places.iter().zip(&place_ids) {
-        let what = || format!("place `{}`", p.name);
-        out.push_str(&format!("      <place id=\"{id}\">\n"));
-        push_name(&mut out, "        ", &p.name, &what)?;
-        push_position(&mut out, "        ", p.position);
-        if let Some(v) = whole_value(&p.initial, &values, 0.0).filter(|&v| v > 0) {
-            out.push_str(&format!(
-                "        <initialMarking><text>{v}</text></initialMarking>\n"
-            ));
-        }
-        let expression = !is_plain(&p.initial, 0.0);
-        if expression || p.capacity.is_some() || p.doc.is_some() {
-            out.push_str("        ");
-            out.push_str(TOOL_OPEN);
-            if expression {
-                push_value(&mut out, "          ", "marking", &p.initial.to_string(), &what)?;
-            }
-            if let Some(c) = p.capacity {
-                push_value(&mut out, "          ", "capacity", &c.to_string(), &what)?;
-            }
-            if let Some(doc) = &p.doc {
-                push_value(&mut out, "          ", "doc", doc, &what)?;
-            }
-            out.push_str("        </toolspecific>\n");
-        }
-        out.push_str("      </place>\n");
+        push_place(&mut out, p, id, &values)?;
     }
 
     for (t, id) in net.transitions.iter().zip(&transition_ids) {
-        let what = || format!("transition `{}`", t.name);
-        out.push_str(&format!("      <transition id=\"{id}\">\n"));
-        push_name(&mut out, "        ", &t.name, &what)?;
-        push_position(&mut out, "        ", t.position);
-        let plain = matches!(
-            t.kind,
-            TransitionKind::Timed {
-                rate: None,
-                servers: Servers::Single
-            }
-        ) && t.doc.is_none();
-        if !plain {
-            let ind = "          ";
-            out.push_str("        ");
-            out.push_str(TOOL_OPEN);
-            match &t.kind {
-                TransitionKind::Timed { rate, servers } => {
-                    push_value(&mut out, ind, "timed", "true", &what)?;
-                    if let Some(r) = rate {
-                        push_value(&mut out, ind, "rate", &r.to_string(), &what)?;
-                    }
-                    match servers {
-                        Servers::Single => {}
-                        Servers::Infinite => push_value(&mut out, ind, "servers", "infinite", &what)?,
-                        Servers::K(k) => push_value(&mut out, ind, "servers", &k.to_string(), &what)?,
-                    }
-                }
-                TransitionKind::Immediate { weight, priority } => {
-                    push_value(&mut out, ind, "timed", "false", &what)?;
-                    push_value(&mut out, ind, "weight", &weight.to_string(), &what)?;
-                    push_value(&mut out, ind, "priority", &priority.to_string(), &what)?;
-                }
-            }
-            if let Some(doc) = &t.doc {
-                push_value(&mut out, ind, "doc", doc, &what)?;
-            }
-            out.push_str("        </toolspecific>\n");
-        }
-        out.push_str("      </transition>\n");
+        push_transition(&mut out, t, id)?;
     }
 
     for (i, a) in net.arcs.iter().enumerate() {
@@ -1050,43 +1122,8 @@ pub fn write_pnml(net: &Net) -> Result<String> {
         ) else {
             continue;
         };
-        let what = || format!("an arc of transition `{tid}`");
         let id = unique_id(format!("a{i}"), &mut used);
-        let (source, target) = match a.kind {
-            ArcKind::Input | ArcKind::Inhibitor => (pid, tid),
-            ArcKind::Output => (tid, pid),
-        };
-        let mut inner = String::new();
-        if let Some(v) = whole_value(&a.multiplicity, &values, 1.0).filter(|&v| v != 1) {
-            inner.push_str(&format!("        <inscription><text>{v}</text></inscription>\n"));
-        }
-        if a.kind == ArcKind::Inhibitor {
-            inner.push_str("        <type value=\"inhibitor\"/>\n");
-            // pm4py's form (and ProM's), which ignores `<type>`.
-            inner.push_str("        <arctype><text>inhibitor</text></arctype>\n");
-        }
-        if !is_plain(&a.multiplicity, 1.0) {
-            inner.push_str("        ");
-            inner.push_str(TOOL_OPEN);
-            push_value(
-                &mut inner,
-                "          ",
-                "multiplicity",
-                &a.multiplicity.to_string(),
-                &what,
-            )?;
-            inner.push_str("        </toolspecific>\n");
-        }
-        out.push_str(&format!(
-            "      <arc id=\"{id}\" source=\"{source}\" target=\"{target}\""
-        ));
-        if inner.is_empty() {
-            out.push_str("/>\n");
-        } else {
-            out.push_str(">\n");
-            out.push_str(&inner);
-            out.push_str("      </arc>\n");
-        }
+        push_arc(&mut out, a, &id, pid, tid, &values)?;
     }
     out.push_str("    </page>\n  </net>\n</pnml>\n");
     Ok(out)
