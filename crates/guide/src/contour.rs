@@ -553,6 +553,24 @@ const GAP_REFUSED_M: f64 = 0.3;
 /// this, metres.
 const CORRIDOR_SLACK_M: f64 = 0.05;
 
+/// The followed contour takes in points on its side and this far past the
+/// front onto the other side, degrees.
+const CONTOUR_FRONT_DEG: f64 = 45.0;
+
+/// A corridor's walls are the nearest points beside the robot: bearings
+/// between this and [`BESIDE_TO_DEG`] on either side, degrees.
+const BESIDE_FROM_DEG: f64 = 45.0;
+
+/// The outer bound of "beside the robot" ([`BESIDE_FROM_DEG`]), degrees.
+const BESIDE_TO_DEG: f64 = 135.0;
+
+/// At a hit, clear bearings are looked for either side of the goal's in
+/// steps of this, degrees ...
+const FREE_SIDE_STEP_DEG: f64 = 5.0;
+
+/// ... up to this many steps (180°).
+const FREE_SIDE_STEPS: i32 = 36;
+
 /// The point of the offset curve — `d` from the contour, no nearer to any
 /// of its points — near `q`: `q` moved to `d` from the contour point
 /// nearest it (towards or away from it); if that lands behind the robot
@@ -1285,8 +1303,8 @@ impl ContourTracker {
     /// The side to follow when blocked: the obstacle on the side away from
     /// the smaller turn towards a clear bearing near the goal's.
     fn free_side(&self, points: &[Vec2], goal_bearing: f64, half: f64) -> Side {
-        let step = 5f64.to_radians();
-        for k in 0..=36 {
+        let step = FREE_SIDE_STEP_DEG.to_radians();
+        for k in 0..=FREE_SIDE_STEPS {
             let a = k as f64 * step;
             let left = clear_along(points, wrap_angle(goal_bearing + a), half, self.p.hit_m);
             let right = clear_along(points, wrap_angle(goal_bearing - a), half, self.p.hit_m);
@@ -1323,8 +1341,8 @@ impl ContourTracker {
         // The contour: points on the followed side, front included, and
         // remembered points now out of the laser's view on that side.
         let (lo, hi) = match side {
-            Side::Left => (deg(-45.0), deg(180.0)),
-            Side::Right => (deg(-180.0), deg(45.0)),
+            Side::Left => (deg(-CONTOUR_FRONT_DEG), deg(180.0)),
+            Side::Right => (deg(-180.0), deg(CONTOUR_FRONT_DEG)),
         };
         let mut contour: Vec<Vec2> = Vec::new();
         // The nearest point seen, and its distance.
@@ -1374,8 +1392,8 @@ impl ContourTracker {
         // front sector's points on the other half are the far side of a
         // passage here, not a wall ahead, nor are remembered points behind
         // the robot's centre (module docs, passages).
-        let left = polar.nearest_in(deg(45.0), deg(135.0));
-        let right = polar.nearest_in(deg(-135.0), deg(-45.0));
+        let left = polar.nearest_in(deg(BESIDE_FROM_DEG), deg(BESIDE_TO_DEG));
+        let right = polar.nearest_in(deg(-BESIDE_TO_DEG), deg(-BESIDE_FROM_DEG));
         // Only while moving (module docs, passages): a robot turning on
         // the spot was commanded no speed last cycle.
         let own = || {
