@@ -301,52 +301,15 @@ fn rates_text(l: &Learned) -> String {
     t.render()
 }
 
+/// Prints a log: per entry a line or a table row, then the rates learnt
+/// from it (`json`: the entries and the learnt rates as JSON lines).
 fn show(path: &Path, json: bool) -> Result<()> {
     let (entries, kind) = read_any(path)?;
     if kind == Kind::Credit && !json {
-        for (k, e) in entries.iter().enumerate() {
-            let line = match e {
-                Entry::Calibration(c) => format!(
-                    "{:>3}  calibration {:<8} {:<10} {} s",
-                    k + 1,
-                    format!("{:?}", c.behaviour).to_lowercase(),
-                    c.outcome,
-                    num(c.duration_s)
-                ),
-                Entry::Mission(m) => format!(
-                    "{:>3}  mission {:<12} {:<10} {} s, automove {} s, contour {} s, {} decisions, {} segments",
-                    k + 1,
-                    m.mission,
-                    m.outcome,
-                    num(m.duration_s),
-                    num(m.time_automove_s),
-                    num(m.time_contour_s),
-                    m.decisions.len(),
-                    m.segments.len()
-                ),
-            };
-            outln!("{line}")?;
-        }
-        outln!()?;
-        match credit_text(&entries) {
-            Ok(t) => outln!("{}", t.trim_end())?,
-            Err(e) => outln!("no rates yet: {e}")?,
-        }
-        return Ok(());
+        return show_credit(&entries);
     }
     if kind == Kind::Credit {
-        for e in &entries {
-            outln!("{}", serde_json::to_string(e)?)?;
-        }
-        let m = guide::supervisor::credit_learning::CreditModel::learn(&entries);
-        match &m {
-            Ok(m) => outln!("{}", serde_json::json!({ "learned": m }))?,
-            Err(e) => outln!(
-                "{}",
-                serde_json::json!({ "learned": null, "error": e.to_string() })
-            )?,
-        }
-        return Ok(());
+        return show_credit_json(&entries);
     }
     let learned = learning::learn(&entries);
     if json {
@@ -362,6 +325,76 @@ fn show(path: &Path, json: bool) -> Result<()> {
         }
         return Ok(());
     }
+    let t = entries_table(&entries);
+    outln!("{}", t.trim_end())?;
+    outln!()?;
+    match learned {
+        Ok(l) => {
+            outln!(
+                "learnt from {} missions ({} reached the goal) and the calibration runs:",
+                l.missions,
+                l.successes
+            )?;
+            outln!("{}", rates_text(&l).trim_end())?;
+        }
+        Err(e) => outln!("no rates yet: {e}")?,
+    }
+    Ok(())
+}
+
+/// Prints a credit log: a line per entry, then the rates learnt from it.
+fn show_credit(entries: &[Entry]) -> Result<()> {
+    for (k, e) in entries.iter().enumerate() {
+        let line = match e {
+            Entry::Calibration(c) => format!(
+                "{:>3}  calibration {:<8} {:<10} {} s",
+                k + 1,
+                format!("{:?}", c.behaviour).to_lowercase(),
+                c.outcome,
+                num(c.duration_s)
+            ),
+            Entry::Mission(m) => format!(
+                "{:>3}  mission {:<12} {:<10} {} s, automove {} s, contour {} s, {} decisions, {} segments",
+                k + 1,
+                m.mission,
+                m.outcome,
+                num(m.duration_s),
+                num(m.time_automove_s),
+                num(m.time_contour_s),
+                m.decisions.len(),
+                m.segments.len()
+            ),
+        };
+        outln!("{line}")?;
+    }
+    outln!()?;
+    match credit_text(entries) {
+        Ok(t) => outln!("{}", t.trim_end())?,
+        Err(e) => outln!("no rates yet: {e}")?,
+    }
+    Ok(())
+}
+
+/// Prints a credit log as JSON lines: the entries, then the model learnt
+/// from them (or the error).
+fn show_credit_json(entries: &[Entry]) -> Result<()> {
+    for e in entries {
+        outln!("{}", serde_json::to_string(e)?)?;
+    }
+    let m = guide::supervisor::credit_learning::CreditModel::learn(entries);
+    match &m {
+        Ok(m) => outln!("{}", serde_json::json!({ "learned": m }))?,
+        Err(e) => outln!(
+            "{}",
+            serde_json::json!({ "learned": null, "error": e.to_string() })
+        )?,
+    }
+    Ok(())
+}
+
+/// The table of a log's entries: outcome, time, warnings, Abnormal
+/// episodes, time per behaviour and decisions of each.
+fn entries_table(entries: &[Entry]) -> String {
     let mut t = Table::new([
         "#",
         "entry",
@@ -427,20 +460,7 @@ fn show(path: &Path, json: bool) -> Result<()> {
             }
         }
     }
-    outln!("{}", t.render().trim_end())?;
-    outln!()?;
-    match learned {
-        Ok(l) => {
-            outln!(
-                "learnt from {} missions ({} reached the goal) and the calibration runs:",
-                l.missions,
-                l.successes
-            )?;
-            outln!("{}", rates_text(&l).trim_end())?;
-        }
-        Err(e) => outln!("no rates yet: {e}")?,
-    }
-    Ok(())
+    t.render()
 }
 
 fn learn(path: &Path, json: bool) -> Result<()> {

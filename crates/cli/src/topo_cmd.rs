@@ -460,6 +460,27 @@ pub fn print_plan(net: &FuzzyPetriNet, plan: &Plan, map: &Path, json: bool) -> R
         outln!("{}", serde_json::to_string_pretty(&plan_json(net, plan, map))?)?;
         return Ok(());
     }
+    out!("{}", plan_summary(net, plan, map))?;
+    if plan.route.is_empty() {
+        outln!("\nthe start is a goal: nothing to do")?;
+        return Ok(());
+    }
+    outln!("\n{}", route_table(net, plan).trim_end())?;
+    let others = alternatives(net, plan);
+    if others.is_empty() {
+        outln!("\nno other transition leaves the route's places")?;
+        return Ok(());
+    }
+    outln!(
+        "\nthe other transitions leaving the route's places:\n{}",
+        alternatives_table(net, plan, others).trim_end()
+    )?;
+    Ok(())
+}
+
+/// A plan's summary: the map, the mode, the start and goals, the cost, the
+/// start's value, the propagation's length and the route.
+fn plan_summary(net: &FuzzyPetriNet, plan: &Plan, map: &Path) -> String {
     let name = |p: PlaceId| net.place(p).name.as_str();
     let mut path = vec![name(plan.start).to_string()];
     for &t in &plan.route {
@@ -477,46 +498,45 @@ pub fn print_plan(net: &FuzzyPetriNet, plan: &Plan, map: &Path, json: bool) -> R
         PlanMode::Paper if plan.iterations == 1 => "1 round".to_string(),
         PlanMode::Paper => format!("{} rounds", plan.iterations),
     };
-    out!(
-        "{}",
-        fields(&[
-            (
-                "map",
-                format!(
-                    "{} ({} places, {} transitions)",
-                    map.display(),
-                    net.num_places(),
-                    net.num_transitions()
-                )
+    fields(&[
+        (
+            "map",
+            format!(
+                "{} ({} places, {} transitions)",
+                map.display(),
+                net.num_places(),
+                net.num_transitions()
             ),
-            ("mode", mode_words(plan.mode).to_string()),
-            ("from", name(plan.start).to_string()),
-            ("to", goals.join(", ")),
-            ("goal", goal),
-            ("cost", format!("{}  (Σ C(t) along the route)", num(plan.cost))),
-            (
-                "α(from)",
-                format!(
-                    "{}  ({})",
-                    num(plan.alpha[plan.start.index()]),
-                    match plan.mode {
-                        PlanMode::Optimal => "the start's value: the cost",
-                        PlanMode::Paper =>
-                            "the start's value when the propagation stopped; f(t) below are of the last round",
-                    }
-                )
+        ),
+        ("mode", mode_words(plan.mode).to_string()),
+        ("from", name(plan.start).to_string()),
+        ("to", goals.join(", ")),
+        ("goal", goal),
+        ("cost", format!("{}  (Σ C(t) along the route)", num(plan.cost))),
+        (
+            "α(from)",
+            format!(
+                "{}  ({})",
+                num(plan.alpha[plan.start.index()]),
+                match plan.mode {
+                    PlanMode::Optimal => "the start's value: the cost",
+                    PlanMode::Paper =>
+                        "the start's value when the propagation stopped; f(t) below are of the last round",
+                }
             ),
-            ("propagation", iterations),
-            (
-                "route",
-                format!("{}  ({})", path.join(" → "), transitions(plan.route.len()))
-            ),
-        ])
-    )?;
-    if plan.route.is_empty() {
-        outln!("\nthe start is a goal: nothing to do")?;
-        return Ok(());
-    }
+        ),
+        ("propagation", iterations),
+        (
+            "route",
+            format!("{}  ({})", path.join(" → "), transitions(plan.route.len())),
+        ),
+    ])
+}
+
+/// The table of a plan's route: per transition its places, strategy, exit
+/// turn, cost, f, λ and the value of where it leads.
+fn route_table(net: &FuzzyPetriNet, plan: &Plan) -> String {
+    let name = |p: PlaceId| net.place(p).name.as_str();
     let mut t = Table::new([
         "step",
         "transition",
@@ -544,12 +564,13 @@ pub fn print_plan(net: &FuzzyPetriNet, plan: &Plan, map: &Path, json: bool) -> R
             num(plan.alpha[tr.to.index()]),
         ]);
     }
-    outln!("\n{}", t.render().trim_end())?;
-    let others = alternatives(net, plan);
-    if others.is_empty() {
-        outln!("\nno other transition leaves the route's places")?;
-        return Ok(());
-    }
+    t.render()
+}
+
+/// The table of the transitions `others` leaving the route's places, with
+/// why each was not taken.
+fn alternatives_table(net: &FuzzyPetriNet, plan: &Plan, others: Vec<(TransitionId, Status)>) -> String {
+    let name = |p: PlaceId| net.place(p).name.as_str();
     let mut t = Table::new([
         "transition",
         "from",
@@ -586,11 +607,7 @@ pub fn print_plan(net: &FuzzyPetriNet, plan: &Plan, map: &Path, json: bool) -> R
             why,
         ]);
     }
-    outln!(
-        "\nthe other transitions leaving the route's places:\n{}",
-        t.render().trim_end()
-    )?;
-    Ok(())
+    t.render()
 }
 
 // ---------------------------------------------------------------------------

@@ -260,6 +260,7 @@ fn finite(x: f64) -> serde_json::Value {
     }
 }
 
+/// `topo go`: drives a route on a map in a world and prints how it went.
 pub fn go(a: &GoArgs) -> Result<()> {
     let (world, _) = world(&a.world)?;
     let map: FuzzyPetriNet = load_map(&a.map)?;
@@ -268,29 +269,7 @@ pub fn go(a: &GoArgs) -> Result<()> {
     if !(a.time_limit.is_finite() && a.time_limit > 0.0 && a.time_limit <= 1e6) {
         bail!("--time-limit {}: expected seconds in (0, 1e6]", a.time_limit);
     }
-    // Without the true poses of an exploration, every place stands where
-    // the map says: the robot starts at the start place's map pose, and
-    // arrival is judged against the goal's map position.
-    let truth: Vec<Pose> = map
-        .places()
-        .iter()
-        .map(|p| Pose::new(p.x_m, p.y_m, p.heading_rad))
-        .collect();
-    let radius = topo::robot().drive.radius_m;
-    let mut truth = truth;
-    let mapped = truth[from.0 as usize];
-    // A map position carries the exploration's drift and may lie in a
-    // wall: the robot is put at the nearest pose within 1 m where it fits.
-    let Some(start) = nearest_fit(&world, mapped, radius, 1.0) else {
-        bail!(
-            "place {} is at ({}, {}) in the map, and the robot fits nowhere within 1 m of it in {}: is this the world the map was made in?",
-            a.from,
-            num(mapped.x_m),
-            num(mapped.y_m),
-            a.world.display()
-        );
-    };
-    truth[from.0 as usize] = start;
+    let truth = true_poses(&world, &map, from, a)?;
     let params = NavigateParams {
         mode: a.mode.into(),
         ..NavigateParams::default()
@@ -316,6 +295,45 @@ pub fn go(a: &GoArgs) -> Result<()> {
             robot: topo::robot(),
         },
     )?;
+    write_outputs(a, &world, &map, &run)?;
+    print_route(a, &map, &run)?;
+    // Not arriving is a result, not an error: the exit code is 0, the
+    // outcome says what happened (as for `nav go`).
+    Ok(())
+}
+
+/// The places' true poses for a route without an exploration: where the
+/// map says, the start moved to the nearest pose where the robot fits.
+fn true_poses(world: &World, map: &FuzzyPetriNet, from: ::topo::PlaceId, a: &GoArgs) -> Result<Vec<Pose>> {
+    // Without the true poses of an exploration, every place stands where
+    // the map says: the robot starts at the start place's map pose, and
+    // arrival is judged against the goal's map position.
+    let truth: Vec<Pose> = map
+        .places()
+        .iter()
+        .map(|p| Pose::new(p.x_m, p.y_m, p.heading_rad))
+        .collect();
+    let radius = topo::robot().drive.radius_m;
+    let mut truth = truth;
+    let mapped = truth[from.0 as usize];
+    // A map position carries the exploration's drift and may lie in a
+    // wall: the robot is put at the nearest pose within 1 m where it fits.
+    let Some(start) = nearest_fit(world, mapped, radius, 1.0) else {
+        bail!(
+            "place {} is at ({}, {}) in the map, and the robot fits nowhere within 1 m of it in {}: is this the world the map was made in?",
+            a.from,
+            num(mapped.x_m),
+            num(mapped.y_m),
+            a.world.display()
+        );
+    };
+    truth[from.0 as usize] = start;
+    Ok(truth)
+}
+
+/// Writes what the options ask for: the map learnt, the trace, the
+/// picture.
+fn write_outputs(a: &GoArgs, world: &World, map: &FuzzyPetriNet, run: &topo::RouteRun) -> Result<()> {
     if let Some(path) = &a.save_map
         && let Some(m) = &run.map
     {
@@ -332,12 +350,17 @@ pub fn go(a: &GoArgs) -> Result<()> {
         let poses = trajectory(run.trace.as_ref());
         topo::picture(
             world.grid(),
-            run.map.as_ref().unwrap_or(&map),
+            run.map.as_ref().unwrap_or(map),
             None,
             poses.as_deref(),
             path,
         )?;
     }
+    Ok(())
+}
+
+/// Prints how the route went (`--json`: as one JSON object).
+fn print_route(a: &GoArgs, map: &FuzzyPetriNet, run: &topo::RouteRun) -> Result<()> {
     let stats = run.stats.unwrap_or_default();
     let planned: Vec<String> = run
         .plan
@@ -400,7 +423,5 @@ pub fn go(a: &GoArgs) -> Result<()> {
             out!("picture: {}\n", p.display())?;
         }
     }
-    // Not arriving is a result, not an error: the exit code is 0, the
-    // outcome says what happened (as for `nav go`).
     Ok(())
 }

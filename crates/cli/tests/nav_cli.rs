@@ -213,20 +213,23 @@ fn small_map(dir: &Path, all_occupied: bool) -> String {
     yaml.display().to_string()
 }
 
+/// Runs petrinav with `args`, which must fail with an error message (no
+/// panic) that contains each of `expect`.
+fn fails(args: &[&str], expect: &[&str]) {
+    let out = petrinav(args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    let err = stderr(&out);
+    assert!(err.starts_with("error:"), "{args:?}: {err}");
+    for e in expect {
+        assert!(err.contains(e), "{args:?}: `{e}` not in: {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+}
+
 #[test]
-fn bad_input_is_a_clear_error() {
+fn bad_places_are_a_clear_error() {
     let dir = fresh("bad");
     let (map, places) = b31();
-    let fails = |args: &[&str], expect: &[&str]| {
-        let out = petrinav(args);
-        assert!(!out.status.success(), "{args:?} should fail");
-        let err = stderr(&out);
-        assert!(err.starts_with("error:"), "{args:?}: {err}");
-        for e in expect {
-            assert!(err.contains(e), "{args:?}: `{e}` not in: {err}");
-        }
-        assert!(!err.contains("panicked"), "{err}");
-    };
     // A malformed places file names its line.
     let bad_places = dir.join("bad.yaml");
     std::fs::write(&bad_places, "a: [1, 2, 0]\nb: [1, two, 0]\n").unwrap();
@@ -255,6 +258,11 @@ fn bad_input_is_a_clear_error() {
         &["nav", "go", &map, "--from", "entrance", "--to", "1,1,0"],
         &["no --goals"],
     );
+}
+
+#[test]
+fn places_off_the_free_space_are_a_clear_error() {
+    let dir = fresh("bad_spaces");
     // A place in a wall, in unknown space, off the map; a start in a wall.
     let small = small_map(&dir, false);
     let walls = dir.join("walls.yaml");
@@ -306,6 +314,12 @@ fn bad_input_is_a_clear_error() {
         &["nav", "go", &full, "--from", "1,1,0", "--to", "1.2,1,0"],
         &["no free cell"],
     );
+}
+
+#[test]
+fn impossible_numbers_and_tours_are_a_clear_error() {
+    let dir = fresh("bad_numbers");
+    let (map, places) = b31();
     // Impossible numbers.
     fails(
         &[

@@ -590,7 +590,12 @@ fn convert_writes_pnml_dot_and_the_map_file() {
     let net = petri::io::read_file(&pnml).unwrap();
     assert_eq!(net.name, "office route");
     assert_eq!(net.places[0].initial.as_number(), Some(1.0));
+}
 
+#[test]
+fn convert_refuses_unknown_outputs_and_misplaced_options() {
+    let dir = fresh("convert_refuses");
+    let (dot, json) = (dir.join("office.dot"), dir.join("copy.fpn.json"));
     let err = fails(&[
         "topo",
         "convert",

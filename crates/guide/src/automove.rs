@@ -157,6 +157,23 @@ impl AutoMoveParams {
     }
 }
 
+/// Speed falls within this distance of the last goal, metres.
+const SLOW_NEAR_GOAL_M: f64 = 1.0;
+
+/// The least fraction of cruise speed kept near the last goal.
+const SLOW_NEAR_GOAL_MIN: f64 = 0.3;
+
+/// Full speed with this much room to spare beyond the footprint, metres
+/// (speed falls with less).
+const SPARE_FOR_FULL_SPEED_M: f64 = 0.4;
+
+/// The least fraction of cruise speed kept when scraping by a narrow place.
+const SLOW_WHEN_NARROW_MIN: f64 = 0.35;
+
+/// The safety layer plans braking at this fraction of `max_accel_mps2`
+/// (dimensionless).
+const BRAKING_FRACTION: f64 = 0.8;
+
 /// An exception of the planner.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -367,7 +384,8 @@ impl AutoMove {
                 let target = self.lookahead(here);
                 let psi = wrap_angle((target - here).angle() - estimate.theta_rad);
                 let omega = (self.p.k_heading * psi).clamp(-self.p.max_turn_radps, self.p.max_turn_radps);
-                let slow_near_goal = (here.dist(goals[last]) / 1.0).clamp(0.3, 1.0);
+                let slow_near_goal =
+                    (here.dist(goals[last]) / SLOW_NEAR_GOAL_M).clamp(SLOW_NEAR_GOAL_MIN, 1.0);
                 // Slow in narrow places: full speed with 0.4 m to spare
                 // beyond the footprint, a third of it when scraping by.
                 let spare = self
@@ -375,7 +393,7 @@ impl AutoMove {
                     .cost_map()
                     .and_then(|c| c.clearance_m(self.map.cell_of(here)))
                     .map_or(f64::INFINITY, |c| c - self.p.robot_radius_m);
-                let slow_when_narrow = (spare / 0.4).clamp(0.35, 1.0);
+                let slow_when_narrow = (spare / SPARE_FOR_FULL_SPEED_M).clamp(SLOW_WHEN_NARROW_MIN, 1.0);
                 let wanted =
                     self.p.cruise_mps * psi.cos().max(0.0).powi(2) * slow_near_goal * slow_when_narrow;
                 // Safety: stop in time for what the laser sees, or saw
@@ -387,7 +405,7 @@ impl AutoMove {
                     wanted,
                     omega,
                     radius,
-                    0.8 * self.p.max_accel_mps2,
+                    BRAKING_FRACTION * self.p.max_accel_mps2,
                     dt_s,
                 ));
                 self.since_s = None;

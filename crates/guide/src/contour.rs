@@ -456,6 +456,44 @@ impl Polar<'_> {
     }
 }
 
+/// What one control cycle sees: the filtered scan and its points, the
+/// goal's distance and bearing, the clearance the law wants, the odometry
+/// pose and the time.
+struct Cycle<'a> {
+    scan: &'a LaserScan,
+    polar: Polar<'a>,
+    /// Distance to the goal, metres.
+    goal_m: f64,
+    /// Bearing of the goal, robot frame, radians.
+    goal_bearing: f64,
+    /// Half the width of the usual clearance (footprint and margin), metres.
+    half: f64,
+    odometry: Pose,
+    time_s: f64,
+}
+
+/// What the hit rule decided this cycle (seeking, stopped at an obstacle).
+#[derive(Debug, Clone, Copy)]
+struct Hit {
+    /// Waiting for the obstacle to step aside.
+    waiting: bool,
+    /// Turning to the goal on the spot, still asking.
+    turning_to_goal: bool,
+}
+
+/// The heading the law wants this cycle and what it follows.
+#[derive(Debug, Clone, Copy)]
+struct Aim {
+    /// Heading, robot frame, radians (wrapped).
+    psi: f64,
+    /// Distance to the followed contour, metres (`INFINITY` if none).
+    contour_m: f64,
+    /// Centred in a corridor.
+    centred: bool,
+    /// Passing a gap.
+    in_gap: bool,
+}
+
 /// The point of `points` nearest `q` (of equally near ones, the first).
 fn nearest_to(points: &[Vec2], q: Vec2) -> Option<Vec2> {
     points
@@ -472,6 +510,66 @@ const OFFSET_STEPS: usize = 4;
 /// then does a blocked way start a turn on the spot, and only then is the
 /// side to follow chosen at a hit.
 const FACING_RAD: f64 = 0.3;
+
+/// Clearance beyond the footprint the way straight ahead must leave for
+/// any speed when not in a gap, metres.
+const AHEAD_MARGIN_M: f64 = 0.05;
+
+/// Full speed once the way ahead is free this far beyond the set contour
+/// distance d*, metres (speed falls linearly to none where the footprint
+/// would touch).
+const SLOW_BEYOND_DISTANCE_M: f64 = 1.0;
+
+/// In a gap, full (creep) speed once the way ahead is free this far,
+/// metres.
+const GAP_SLOW_WITHIN_M: f64 = 0.3;
+
+/// The robot counts as held up by the safety layer when the law wanted at
+/// least this fraction of `creep_mps` and got less (dimensionless).
+const HELD_FRACTION: f64 = 0.5;
+
+/// The reaction time the safety layer allows before braking: one control
+/// period, seconds.
+const REACTION_S: f64 = 0.1;
+
+/// A gap is passed once the robot's centre is this far beyond the
+/// footprint's radius past its line, metres.
+const GAP_PASSED_M: f64 = 0.1;
+
+/// A gap is dropped once the robot is farther than this from its middle,
+/// metres.
+const GAP_DROP_M: f64 = 2.5;
+
+/// A new gap is taken only within this angle of the wanted heading,
+/// degrees.
+const GAP_WITHIN_DEG: f64 = 35.0;
+
+/// A gap whose middle is within this distance of one the robot stalled at
+/// lately is refused, metres.
+const GAP_REFUSED_M: f64 = 0.3;
+
+/// In a corridor the robot keeps to the middle unless something on the
+/// followed side's own half is nearer than the middle (or d*) by more than
+/// this, metres.
+const CORRIDOR_SLACK_M: f64 = 0.05;
+
+/// The followed contour takes in points on its side and this far past the
+/// front onto the other side, degrees.
+const CONTOUR_FRONT_DEG: f64 = 45.0;
+
+/// A corridor's walls are the nearest points beside the robot: bearings
+/// between this and [`BESIDE_TO_DEG`] on either side, degrees.
+const BESIDE_FROM_DEG: f64 = 45.0;
+
+/// The outer bound of "beside the robot" ([`BESIDE_FROM_DEG`]), degrees.
+const BESIDE_TO_DEG: f64 = 135.0;
+
+/// At a hit, clear bearings are looked for either side of the goal's in
+/// steps of this, degrees ...
+const FREE_SIDE_STEP_DEG: f64 = 5.0;
+
+/// ... up to this many steps (180°).
+const FREE_SIDE_STEPS: i32 = 36;
 
 /// The point of the offset curve — `d` from the contour, no nearer to any
 /// of its points — near `q`: `q` moved to `d` from the contour point
@@ -760,17 +858,83 @@ impl ContourTracker {
         // crowded mission).
         let bearings: Vec<f64> = points.iter().map(|q| q.angle()).collect();
         let norms: Vec<f64> = points.iter().map(|q| q.norm()).collect();
-        let polar = Polar {
-            points: &points,
-            bearings: &bearings,
-            norms: &norms,
-        };
         let to_goal = estimate.inverse_transform(goal);
-        let goal_m = to_goal.norm();
-        let goal_bearing = to_goal.angle();
-        let half = p.robot_radius_m + p.margin_m;
-        // Stalled on a contour (a pocket, a gap too narrow to tell from a
-        // passage): follow it the other way.
+        let cycle = Cycle {
+            scan,
+            polar: Polar {
+                points: &points,
+                bearings: &bearings,
+                norms: &norms,
+            },
+            goal_m: to_goal.norm(),
+            goal_bearing: to_goal.angle(),
+            half: p.robot_radius_m + p.margin_m,
+            odometry,
+            time_s,
+        };
+        self.check_stall(odometry, time_s);
+        self.expire_gap(odometry, time_s);
+        let hit = self.leave_or_hit(&cycle);
+        let aim = self.aim(&cycle);
+        let in_gap = aim.in_gap;
+        // Room straight ahead for the footprint and 5 cm (in a gap, and
+        // `pass_margin_m`): full speed beyond d* + 1 m, none when it would
+        // touch.
+        let body = p.robot_radius_m + if in_gap { p.pass_margin_m } else { AHEAD_MARGIN_M };
+        let free = free_ahead(&points, body);
+        let slow_within = if in_gap {
+            GAP_SLOW_WITHIN_M
+        } else {
+            p.distance_m + SLOW_BEYOND_DISTANCE_M - body
+        };
+        let room = (free / slow_within).clamp(0.0, 1.0);
+        // Stopped at a hit (waiting, or turning to the goal): held up, and
+        // asking at once.
+        let at_hit = hit.waiting || hit.turning_to_goal;
+        let (psi, mut held) = self.turn_if_blocked(&cycle.polar, aim.psi, room, hit);
+        let omega = if hit.waiting {
+            0.0
+        } else {
+            (p.k_heading * psi).clamp(-p.max_turn_radps, p.max_turn_radps)
+        };
+        let top = if in_gap { p.creep_mps } else { p.cruise_mps };
+        let wanted = if at_hit {
+            0.0
+        } else {
+            top * psi.cos().max(0.0) * room
+        };
+        let v = self.guarded_speed(scan, odometry, time_s, wanted, omega, in_gap);
+        // Held up: the safety layer stopped what the law wanted.
+        if wanted >= HELD_FRACTION * p.creep_mps && v < HELD_FRACTION * p.creep_mps {
+            held = true;
+        }
+        // Following something that stands in the goal's way: it may be
+        // people.
+        let in_the_way = matches!(self.mode, ContourMode::Follow { .. })
+            && !clear_along(&points, cycle.goal_bearing, cycle.half, p.hit_m.min(cycle.goal_m));
+        if in_the_way {
+            held = true;
+        }
+        let request = self.request(in_gap, held, at_hit, time_s);
+        self.last_v = v;
+        ContourStep {
+            command: Command::Twist {
+                v_mps: v,
+                omega_radps: omega,
+            },
+            mode: self.mode,
+            contour_m: aim.contour_m,
+            centred: aim.centred,
+            gap: in_gap,
+            request,
+        }
+    }
+
+    /// Stalled on a contour (a pocket, a gap too narrow to tell from a
+    /// passage): follows it the other way, and refuses the gap being
+    /// passed.
+    fn check_stall(&mut self, odometry: Pose, time_s: f64) {
+        let p = self.p;
         let (here, since) = *self.checkpoint.get_or_insert((odometry.position(), time_s));
         if odometry.position().dist(here) >= p.stall_m {
             self.checkpoint = Some((odometry.position(), time_s));
@@ -787,20 +951,28 @@ impl ContourTracker {
             }
             self.checkpoint = Some((odometry.position(), time_s));
         }
-        self.expire_gap(odometry, time_s);
+    }
+
+    /// The leave and hit rules: leaves a contour for the goal when the way
+    /// to it is clear and the robot is nearer than at the hit; seeking,
+    /// stops at an obstacle (waiting, then turning to the goal, then
+    /// following a side).
+    fn leave_or_hit(&mut self, cycle: &Cycle<'_>) -> Hit {
+        let p = self.p;
+        let points = cycle.polar.points;
+        let (goal_m, goal_bearing, half) = (cycle.goal_m, cycle.goal_bearing, cycle.half);
         let in_gap = self.gap.is_some();
-        // Leave, or hit.
-        let mut waiting = false;
-        // Seeking, stopped at a hit with the goal not ahead: turn to it on
-        // the spot, asking.
-        let mut turning_to_goal = false;
+        let mut hit = Hit {
+            waiting: false,
+            turning_to_goal: false,
+        };
         match self.mode {
             ContourMode::Follow { hit_goal_m, .. } => {
                 let length = p.leave_clear_m.min(goal_m);
                 if !in_gap
                     && goal_m < hit_goal_m - p.leave_progress_m
-                    && scan::covers(scan, goal_bearing)
-                    && clear_along(&points, goal_bearing, half, length)
+                    && scan::covers(cycle.scan, goal_bearing)
+                    && clear_along(points, goal_bearing, half, length)
                 {
                     self.mode = ContourMode::Seek;
                     self.memory.clear();
@@ -808,21 +980,21 @@ impl ContourTracker {
                 self.hit_since = None;
             }
             ContourMode::Seek => {
-                let blocked_ahead = !clear_along(&points, 0.0, half, p.hit_m);
-                let blocked_goal = !clear_along(&points, goal_bearing, half, p.hit_m.min(goal_m));
+                let blocked_ahead = !clear_along(points, 0.0, half, p.hit_m);
+                let blocked_goal = !clear_along(points, goal_bearing, half, p.hit_m.min(goal_m));
                 if blocked_ahead && blocked_goal && !in_gap {
                     // Stop and ask first: a person steps aside, a wall
                     // does not. Then, if the goal is not ahead, turn to it
                     // on the spot (still asking) before choosing the side
                     // to follow: the side is chosen from a scan that sees
                     // the goal's way (module docs, the leave rule).
-                    let since = *self.hit_since.get_or_insert(time_s);
-                    if time_s - since < p.hit_wait_s {
-                        waiting = true;
+                    let since = *self.hit_since.get_or_insert(cycle.time_s);
+                    if cycle.time_s - since < p.hit_wait_s {
+                        hit.waiting = true;
                     } else if goal_bearing.abs() >= FACING_RAD {
-                        turning_to_goal = true;
+                        hit.turning_to_goal = true;
                     } else {
-                        let side = self.free_side(&points, goal_bearing, half);
+                        let side = self.free_side(points, goal_bearing, half);
                         self.mode = ContourMode::Follow {
                             side,
                             hit_goal_m: goal_m,
@@ -834,14 +1006,24 @@ impl ContourTracker {
                 }
             }
         }
+        hit
+    }
+
+    /// The heading the law wants (robot frame, wrapped): the goal's when
+    /// seeking, the contour's when following, through a gap in the way
+    /// when there is one; back to seeking when the contour has been lost
+    /// for `lost_after_s`.
+    fn aim(&mut self, cycle: &Cycle<'_>) -> Aim {
+        let p = self.p;
+        let (odometry, time_s) = (cycle.odometry, cycle.time_s);
         let (mut psi, mut contour_m, mut centred) = match self.mode {
-            ContourMode::Seek => (goal_bearing, f64::INFINITY, false),
-            ContourMode::Follow { side, .. } => self.follow(scan, &polar, side, odometry, time_s),
+            ContourMode::Seek => (cycle.goal_bearing, f64::INFINITY, false),
+            ContourMode::Follow { side, .. } => self.follow(cycle.scan, &cycle.polar, side, odometry, time_s),
         };
         // A gap in the way the law wants to go, narrower than the usual
         // clearance, that the footprint fits through: pass it (module
         // docs, doors).
-        self.find_gap_towards(&points, odometry, time_s, wrap_angle(psi));
+        self.find_gap_towards(cycle.polar.points, odometry, time_s, wrap_angle(psi));
         let in_gap = self.gap.is_some();
         if let Some(gap) = self.gap {
             psi = self.through_gap(gap, odometry);
@@ -857,26 +1039,28 @@ impl ContourTracker {
                 self.mode = ContourMode::Seek;
                 self.memory.clear();
                 self.lost_since = None;
-                psi = goal_bearing;
+                psi = cycle.goal_bearing;
             }
         } else {
             self.lost_since = None;
         }
-        psi = wrap_angle(psi);
-        // Room straight ahead for the footprint and 5 cm (in a gap, and
-        // `pass_margin_m`): full speed beyond d* + 1 m, none when it would
-        // touch.
-        let body = p.robot_radius_m + if in_gap { p.pass_margin_m } else { 0.05 };
-        let free = free_ahead(&points, body);
-        let slow_within = if in_gap { 0.3 } else { p.distance_m + 1.0 - body };
-        let room = (free / slow_within).clamp(0.0, 1.0);
-        // Stopped at a hit (waiting, or turning to the goal): held up, and
-        // asking at once.
-        let at_hit = waiting || turning_to_goal;
-        let mut held = at_hit;
-        if waiting {
+        Aim {
+            psi: wrap_angle(psi),
+            contour_m,
+            centred,
+            in_gap,
+        }
+    }
+
+    /// The heading after the hit and a blocked way ahead are taken into
+    /// account, and whether the robot is held up: none while waiting at a
+    /// hit; blocked the way it wants to go, a turn on the spot.
+    fn turn_if_blocked(&mut self, polar: &Polar<'_>, psi: f64, room: f64, hit: Hit) -> (f64, bool) {
+        let mut psi = psi;
+        let mut held = hit.waiting || hit.turning_to_goal;
+        if hit.waiting {
             psi = 0.0;
-        } else if turning_to_goal {
+        } else if hit.turning_to_goal {
             self.turning = None;
         } else if room == 0.0 && (psi.abs() < FACING_RAD || self.turning.is_some()) {
             // Blocked the way it wants to go: turn on the spot, away from
@@ -899,17 +1083,21 @@ impl ContourTracker {
         } else {
             self.turning = None;
         }
-        let omega = if waiting {
-            0.0
-        } else {
-            (p.k_heading * psi).clamp(-p.max_turn_radps, p.max_turn_radps)
-        };
-        let top = if in_gap { p.creep_mps } else { p.cruise_mps };
-        let wanted = if at_hit {
-            0.0
-        } else {
-            top * psi.cos().max(0.0) * room
-        };
+        (psi, held)
+    }
+
+    /// The speed the safety layer allows of `wanted`, keeping clear of the
+    /// obstacles near (this scan's and earlier ones out of view) and, in a
+    /// gap, of its sides.
+    fn guarded_speed(
+        &mut self,
+        scan: &LaserScan,
+        odometry: Pose,
+        time_s: f64,
+        wanted: f64,
+        omega: f64,
+        in_gap: bool,
+    ) -> f64 {
         let mut near = self.nearby.update(scan, odometry, time_s).to_vec();
         // The sides of the gap being passed, as found (the remembered
         // echoes are one per 5 cm square: up to a few centimetres from the
@@ -917,21 +1105,15 @@ impl ContourTracker {
         if let Some(g) = self.gap {
             near.extend(g.sides.map(|q| odometry.inverse_transform(q)));
         }
-        let near = &near[..];
-        let v = Self::safe_speed(&p, near, wanted, omega, in_gap);
-        // Held up: the safety layer stopped what the law wanted.
-        if wanted >= 0.5 * p.creep_mps && v < 0.5 * p.creep_mps {
-            held = true;
-        }
-        // Following something that stands in the goal's way: it may be
-        // people.
-        let in_the_way = matches!(self.mode, ContourMode::Follow { .. })
-            && !clear_along(&points, goal_bearing, half, p.hit_m.min(goal_m));
-        if in_the_way {
-            held = true;
-        }
-        // In a gap, "excuse me": people make way, walls do not.
-        let request = if in_gap {
+        Self::safe_speed(&self.p, &near, wanted, omega, in_gap)
+    }
+
+    /// What the robot asks of the people around: in a gap, "excuse me"
+    /// (people make way, walls do not); held up, after `ask_after_s` (at
+    /// once at a hit).
+    fn request(&mut self, in_gap: bool, held: bool, at_hit: bool, time_s: f64) -> Option<Request> {
+        let p = self.p;
+        if in_gap {
             Some(Request::StepAside {
                 radius_m: p.ask_radius_m,
             })
@@ -943,18 +1125,6 @@ impl ContourTracker {
         } else {
             self.held_since = None;
             None
-        };
-        self.last_v = v;
-        ContourStep {
-            command: Command::Twist {
-                v_mps: v,
-                omega_radps: omega,
-            },
-            mode: self.mode,
-            contour_m,
-            centred,
-            gap: in_gap,
-            request,
         }
     }
 
@@ -971,7 +1141,7 @@ impl ContourTracker {
                 omega,
                 p.robot_radius_m + p.safety_margin_m,
                 p.decel_mps2,
-                0.1,
+                REACTION_S,
             ));
         }
         let margin = |v: f64| {
@@ -985,7 +1155,7 @@ impl ContourTracker {
                 omega,
                 p.robot_radius_m + margin(v),
                 p.decel_mps2,
-                0.1,
+                REACTION_S,
             ))
         };
         let v = limit(wanted);
@@ -1006,8 +1176,8 @@ impl ContourTracker {
             // Passed; or no longer seen before the robot got to it (people
             // moved: the gap is not there any more).
             let past = (here - g.mid).dot(g.through);
-            let unseen = time_s - g.seen_s > GAP_UNSEEN_S && past < -(p.robot_radius_m + 0.1);
-            if past > p.robot_radius_m + 0.1 || here.dist(g.mid) > 2.5 || unseen {
+            let unseen = time_s - g.seen_s > GAP_UNSEEN_S && past < -(p.robot_radius_m + GAP_PASSED_M);
+            if past > p.robot_radius_m + GAP_PASSED_M || here.dist(g.mid) > GAP_DROP_M || unseen {
                 self.gap = None;
             }
         }
@@ -1022,7 +1192,7 @@ impl ContourTracker {
         let here = odometry.position();
         let usual = p.robot_radius_m + p.margin_m;
         let wanted = |g: &Gap| {
-            wrap_angle(g.mid.angle() - heading).abs() < 35f64.to_radians()
+            wrap_angle(g.mid.angle() - heading).abs() < GAP_WITHIN_DEG.to_radians()
                 && !clear_along(points, heading, usual, GAP_REACH_M)
         };
         // A new gap is wanted only where the usual clearance is blocked:
@@ -1038,7 +1208,7 @@ impl ContourTracker {
         let found = find_gap(points, &p, around).filter(|g| self.gap.is_some() || wanted(g));
         if let Some(g) = found {
             let mid = odometry.transform(g.mid);
-            if self.refused.iter().any(|&(at, _)| at.dist(mid) < 0.3) {
+            if self.refused.iter().any(|&(at, _)| at.dist(mid) < GAP_REFUSED_M) {
                 return;
             }
             let seen = Gap {
@@ -1067,7 +1237,7 @@ impl ContourTracker {
                     let across = Vec2::new(through.y, -through.x);
                     // Before the gap its sides are in view: as seen now (a
                     // person who moved is not kept as a ghost).
-                    let inside = (here - mid).dot(through) > -(p.robot_radius_m + 0.1);
+                    let inside = (here - mid).dot(through) > -(p.robot_radius_m + GAP_PASSED_M);
                     let mut sides = if inside { g.sides } else { seen.sides };
                     for q in seen.sides {
                         let side = (q - mid).dot(across);
@@ -1133,8 +1303,8 @@ impl ContourTracker {
     /// The side to follow when blocked: the obstacle on the side away from
     /// the smaller turn towards a clear bearing near the goal's.
     fn free_side(&self, points: &[Vec2], goal_bearing: f64, half: f64) -> Side {
-        let step = 5f64.to_radians();
-        for k in 0..=36 {
+        let step = FREE_SIDE_STEP_DEG.to_radians();
+        for k in 0..=FREE_SIDE_STEPS {
             let a = k as f64 * step;
             let left = clear_along(points, wrap_angle(goal_bearing + a), half, self.p.hit_m);
             let right = clear_along(points, wrap_angle(goal_bearing - a), half, self.p.hit_m);
@@ -1171,8 +1341,8 @@ impl ContourTracker {
         // The contour: points on the followed side, front included, and
         // remembered points now out of the laser's view on that side.
         let (lo, hi) = match side {
-            Side::Left => (deg(-45.0), deg(180.0)),
-            Side::Right => (deg(-180.0), deg(45.0)),
+            Side::Left => (deg(-CONTOUR_FRONT_DEG), deg(180.0)),
+            Side::Right => (deg(-180.0), deg(CONTOUR_FRONT_DEG)),
         };
         let mut contour: Vec<Vec2> = Vec::new();
         // The nearest point seen, and its distance.
@@ -1222,8 +1392,8 @@ impl ContourTracker {
         // front sector's points on the other half are the far side of a
         // passage here, not a wall ahead, nor are remembered points behind
         // the robot's centre (module docs, passages).
-        let left = polar.nearest_in(deg(45.0), deg(135.0));
-        let right = polar.nearest_in(deg(-135.0), deg(-45.0));
+        let left = polar.nearest_in(deg(BESIDE_FROM_DEG), deg(BESIDE_TO_DEG));
+        let right = polar.nearest_in(deg(-BESIDE_TO_DEG), deg(-BESIDE_FROM_DEG));
         // Only while moving (module docs, passages): a robot turning on
         // the spot was commanded no speed last cycle.
         let own = || {
@@ -1239,7 +1409,7 @@ impl ContourTracker {
         };
         if let (Some((l, ln)), Some((r, rn))) = (left, right)
             && ln + rn <= p.corridor_m
-            && own() > p.distance_m.min(0.5 * (ln + rn)) - 0.05
+            && own() > p.distance_m.min(0.5 * (ln + rn)) - CORRIDOR_SLACK_M
         {
             let tl = wrap_angle(l.angle() - std::f64::consts::FRAC_PI_2);
             let tr = wrap_angle(r.angle() + std::f64::consts::FRAC_PI_2);

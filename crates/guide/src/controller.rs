@@ -30,7 +30,7 @@
 //! remaining part of each behaviour's reference trajectory
 //! ([`crate::supervisor::reference`]).
 
-use robot::{Command, Controller, Event, GridMap, Notes, Perception, Pose, Request, Step, Vec2};
+use robot::{Command, Controller, Event, GridMap, LaserScan, Notes, Perception, Pose, Request, Step, Vec2};
 
 use crate::supervisor::credit::CreditSupervisor;
 use crate::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel, CrowdMeter, Segment, SegmentEnd};
@@ -42,7 +42,7 @@ use super::automove::{AutoMove, AutoMoveError, AutoMoveParams};
 use super::contour::{ContourMode, ContourParams, ContourTracker, Side};
 use crate::supervisor::Behaviour;
 use localization::{
-    LocalizationError, LocalizationStatus, Localizer, MclParams, RecoveryStage, ScanConsistency,
+    LocalizationError, LocalizationStatus, Localizer, MclParams, RecoveryStage, ScanConsistency, UpdateInfo,
 };
 
 /// Parameters of the guide controller.
@@ -622,10 +622,255 @@ impl GuideController {
     }
 }
 
+/// The name of a behaviour in traces.
 fn behaviour_name(b: Behaviour) -> &'static str {
     match b {
         Behaviour::AutoMove => "automove",
         Behaviour::Contour => "contour",
+    }
+}
+
+impl GuideController {
+    /// Adds the cycle that just ended (`dt` seconds) to the time spent in
+    /// the localizer's, the planner's and the behaviours' states and to
+    /// the current segment.
+    fn account_time(&mut self, dt: f64) {
+        if self.status == LocalizationStatus::Warning {
+            self.stats.time_in_warning_s += dt;
+        }
+        if self.abnormal {
+            self.stats.time_abnormal_s += dt;
+        }
+        match self.active {
+            Behaviour::AutoMove => self.stats.time_automove_s += dt,
+            Behaviour::Contour => self.stats.time_contour_s += dt,
+        }
+        let estimate = self.localizer.estimate();
+        self.account_segment(dt, estimate);
+    }
+
+    /// Takes in what a localizer update did: its scores and consistency,
+    /// and on a change of status the event, the sojourn and the policy's
+    /// switch.
+    fn observe_update(&mut self, info: &UpdateInfo, t: f64, notes: &mut Notes) {
+        self.stats.filter_iterations += u64::from(info.filtered);
+        if let Some(c) = info.consistency {
+            self.last_consistency = Some(c);
+            self.crowd.observe(t, c.unmapped_objects as f64);
+        }
+        self.last_scores = Some([
+            info.score_estimate,
+            info.score_odometry,
+            info.effective_sample_size,
+        ]);
+        if notes.is_enabled() && info.filtered {
+            notes.cloud(PARTICLES_CLOUD, self.localizer.particles().map(|p| p.pose));
+        }
+        if info.status != self.status {
+            let kind = match info.status {
+                LocalizationStatus::Warning => {
+                    self.stats.warnings += 1;
+                    "warning"
+                }
+                LocalizationStatus::Success => "success",
+            };
+            notes.event(
+                Event::new(kind, t)
+                    .at(info.estimate.position())
+                    .with("score_estimate", info.score_estimate)
+                    .with("score_odometry", info.score_odometry),
+            );
+            self.sojourns_loc.push(Sojourn {
+                state: match self.status {
+                    LocalizationStatus::Success => StateName::Success,
+                    LocalizationStatus::Warning => StateName::Warning,
+                },
+                duration_s: t - self.loc_since_s,
+                ended: true,
+            });
+            self.loc_since_s = t;
+            self.status = info.status;
+            self.on_status_change(info.status, t, info.estimate, notes);
+        }
+    }
+
+    /// The policy's answer to the localizer's new `status`: a decision of
+    /// the supervisor, or the rule's switch.
+    fn on_status_change(&mut self, status: LocalizationStatus, t: f64, at: Pose, notes: &mut Notes) {
+        match (&self.policy, status) {
+            (Policy::Fixed(_), _) => {}
+            (Policy::Supervisor(_), status) => {
+                let localized = status == LocalizationStatus::Success;
+                let reason = if localized { "recovered" } else { "warning" };
+                let choice = self.decide_credit(reason, t, at, localized, notes);
+                self.switch(choice, "decision", t, at.position(), notes);
+            }
+            (_, LocalizationStatus::Warning) => {
+                self.switch(Behaviour::Contour, "warning", t, at.position(), notes)
+            }
+            (Policy::AutoMoveThenContour, LocalizationStatus::Success) => {}
+            (Policy::Rule, LocalizationStatus::Success) => {
+                self.switch(Behaviour::AutoMove, "success", t, at.position(), notes)
+            }
+            (Policy::SupervisorSource(_), LocalizationStatus::Success) => {
+                let choice = self.decide("recovered", t, at, notes);
+                self.switch(choice, "decision", t, at.position(), notes);
+            }
+        }
+    }
+
+    /// The first cycle: the sojourns start, and a supervisor makes its
+    /// first decision.
+    fn start(&mut self, t: f64, estimate: Pose, notes: &mut Notes) {
+        self.started = true;
+        self.loc_since_s = t;
+        self.plan_since_s = t;
+        match self.policy {
+            Policy::SupervisorSource(_) => {
+                let choice = self.decide("start", t, estimate, notes);
+                self.switch(choice, "decision", t, estimate.position(), notes);
+            }
+            Policy::Supervisor(_) => {
+                let localized = self.status == LocalizationStatus::Success;
+                let choice = self.decide_credit("start", t, estimate, localized, notes);
+                self.switch(choice, "decision", t, estimate.position(), notes);
+            }
+            _ => {}
+        }
+        if let Policy::Supervisor(plan) = &self.policy {
+            self.last_remaining_m = Some(plan.model.reference.remaining_m(estimate.position()));
+        }
+    }
+
+    /// The localizer's values of this cycle, for traces and replays.
+    fn note_localization(&self, estimate: Pose, notes: &mut Notes) {
+        notes.value("estimate_x_m", estimate.x_m);
+        notes.value("estimate_y_m", estimate.y_m);
+        notes.value("estimate_theta_rad", estimate.theta_rad);
+        notes.value(
+            "warning",
+            f64::from(u8::from(self.status == LocalizationStatus::Warning)),
+        );
+        if let Some([estimate, odometry, ess]) = self.last_scores {
+            notes.value("score_estimate", estimate);
+            notes.value("score_odometry", odometry);
+            notes.value("effective_sample_size", ess);
+        }
+        if let Some(c) = self.last_consistency {
+            notes.value("contradiction", c.contradiction());
+            notes.value("evidence_beams", c.evidence() as f64);
+            notes.value("unmapped_objects", c.unmapped_objects as f64);
+        }
+        notes.value(
+            "recovering",
+            match self.localizer.recovery_stage() {
+                RecoveryStage::Idle => 0.0,
+                RecoveryStage::Scattered => 1.0,
+                RecoveryStage::Global => 2.0,
+            },
+        );
+    }
+
+    /// One cycle of AutoMove: its command, with the Normal/Abnormal
+    /// sojourns and events and the requests it makes.
+    fn automove_cycle(
+        &mut self,
+        p: &Perception,
+        scan: &LaserScan,
+        estimate: Pose,
+        dt: f64,
+        notes: &mut Notes,
+    ) -> Command {
+        let t = p.time_s;
+        let s = self.automove.step(estimate, scan, p.odometry, dt, t);
+        if s.abnormal != self.abnormal {
+            self.sojourns_plan.push(Sojourn {
+                state: if self.abnormal {
+                    StateName::Abnormal
+                } else {
+                    StateName::Normal
+                },
+                duration_s: t - self.plan_since_s,
+                ended: true,
+            });
+            self.plan_since_s = t;
+            let mut e = Event::new(if s.abnormal { "abnormal" } else { "normal" }, t).at(estimate.position());
+            if let Some(x) = s.exception {
+                e = e.with("exception", x.name());
+            }
+            if s.abnormal {
+                self.stats.abnormal_episodes += 1;
+            }
+            notes.event(e);
+            self.abnormal = s.abnormal;
+        }
+        let asking = s.request.is_some();
+        if asking {
+            self.stats.asking_cycles += 1;
+            if !self.asking {
+                let mut e = Event::new("ask", t).at(estimate.position());
+                if let Some(x) = s.exception {
+                    e = e.with("exception", x.name());
+                }
+                notes.event(e);
+            }
+        }
+        self.asking = asking;
+        self.request = s.request;
+        s.command
+    }
+
+    /// One cycle of contour tracking: its command, with the end of an
+    /// Abnormal sojourn, the tracker's values and the requests it makes.
+    fn contour_cycle(
+        &mut self,
+        p: &Perception,
+        scan: &LaserScan,
+        estimate: Pose,
+        notes: &mut Notes,
+    ) -> Command {
+        let t = p.time_s;
+        if self.abnormal {
+            self.sojourns_plan.push(Sojourn {
+                state: StateName::Abnormal,
+                duration_s: t - self.plan_since_s,
+                ended: true,
+            });
+            self.plan_since_s = t;
+            self.abnormal = false;
+            notes.event(Event::new("normal", t).at(estimate.position()));
+        }
+        let s = self.contour.step(scan, p.odometry, estimate, self.goal, t);
+        if notes.is_enabled() {
+            // What the tracker does, for traces and replays: mode
+            // (0 seek, −1 following on the right, +1 on the left),
+            // distance to the contour, centred, passing a gap.
+            let mode = match s.mode {
+                ContourMode::Seek => 0.0,
+                ContourMode::Follow { side, .. } => match side {
+                    Side::Left => 1.0,
+                    Side::Right => -1.0,
+                },
+            };
+            notes.value("contour_mode", mode);
+            notes.value("contour_m", s.contour_m);
+            notes.value("contour_centred", f64::from(u8::from(s.centred)));
+            notes.value("contour_gap", f64::from(u8::from(s.gap)));
+        }
+        let asking = s.request.is_some();
+        if asking {
+            self.stats.asking_cycles += 1;
+            if !self.asking {
+                notes.event(
+                    Event::new("ask", t)
+                        .at(estimate.position())
+                        .with("exception", "contour_blocked"),
+                );
+            }
+        }
+        self.asking = asking;
+        self.request = s.request;
+        s.command
     }
 }
 
@@ -635,18 +880,7 @@ impl Controller for GuideController {
         let dt = self.last_time_s.map_or(0.1, |t0| (t - t0).max(1e-3));
         // Time spent in the states of the cycle that just ended.
         if self.last_time_s.is_some() {
-            if self.status == LocalizationStatus::Warning {
-                self.stats.time_in_warning_s += dt;
-            }
-            if self.abnormal {
-                self.stats.time_abnormal_s += dt;
-            }
-            match self.active {
-                Behaviour::AutoMove => self.stats.time_automove_s += dt,
-                Behaviour::Contour => self.stats.time_contour_s += dt,
-            }
-            let estimate = self.localizer.estimate();
-            self.account_segment(dt, estimate);
+            self.account_time(dt);
         }
         self.last_time_s = Some(t);
         self.request = None;
@@ -655,67 +889,7 @@ impl Controller for GuideController {
             return Step::GiveUp;
         };
         match self.localizer.update_at(t, p.odometry, scan) {
-            Ok(Some(info)) => {
-                self.stats.filter_iterations += u64::from(info.filtered);
-                if let Some(c) = info.consistency {
-                    self.last_consistency = Some(c);
-                    self.crowd.observe(t, c.unmapped_objects as f64);
-                }
-                self.last_scores = Some([
-                    info.score_estimate,
-                    info.score_odometry,
-                    info.effective_sample_size,
-                ]);
-                if notes.is_enabled() && info.filtered {
-                    notes.cloud(PARTICLES_CLOUD, self.localizer.particles().map(|p| p.pose));
-                }
-                if info.status != self.status {
-                    let kind = match info.status {
-                        LocalizationStatus::Warning => {
-                            self.stats.warnings += 1;
-                            "warning"
-                        }
-                        LocalizationStatus::Success => "success",
-                    };
-                    notes.event(
-                        Event::new(kind, t)
-                            .at(info.estimate.position())
-                            .with("score_estimate", info.score_estimate)
-                            .with("score_odometry", info.score_odometry),
-                    );
-                    self.sojourns_loc.push(Sojourn {
-                        state: match self.status {
-                            LocalizationStatus::Success => StateName::Success,
-                            LocalizationStatus::Warning => StateName::Warning,
-                        },
-                        duration_s: t - self.loc_since_s,
-                        ended: true,
-                    });
-                    self.loc_since_s = t;
-                    self.status = info.status;
-                    let at = info.estimate;
-                    match (&self.policy, info.status) {
-                        (Policy::Fixed(_), _) => {}
-                        (Policy::Supervisor(_), status) => {
-                            let localized = status == LocalizationStatus::Success;
-                            let reason = if localized { "recovered" } else { "warning" };
-                            let choice = self.decide_credit(reason, t, at, localized, notes);
-                            self.switch(choice, "decision", t, at.position(), notes);
-                        }
-                        (_, LocalizationStatus::Warning) => {
-                            self.switch(Behaviour::Contour, "warning", t, at.position(), notes)
-                        }
-                        (Policy::AutoMoveThenContour, LocalizationStatus::Success) => {}
-                        (Policy::Rule, LocalizationStatus::Success) => {
-                            self.switch(Behaviour::AutoMove, "success", t, at.position(), notes)
-                        }
-                        (Policy::SupervisorSource(_), LocalizationStatus::Success) => {
-                            let choice = self.decide("recovered", t, at, notes);
-                            self.switch(choice, "decision", t, at.position(), notes);
-                        }
-                    }
-                }
-            }
+            Ok(Some(info)) => self.observe_update(&info, t, notes),
             Ok(None) => {}
             Err(e) => {
                 notes.event(Event::new("localizer_error", t).with("error", e.to_string()));
@@ -724,51 +898,10 @@ impl Controller for GuideController {
         }
         let estimate = self.localizer.estimate();
         if !self.started {
-            self.started = true;
-            self.loc_since_s = t;
-            self.plan_since_s = t;
-            match self.policy {
-                Policy::SupervisorSource(_) => {
-                    let choice = self.decide("start", t, estimate, notes);
-                    self.switch(choice, "decision", t, estimate.position(), notes);
-                }
-                Policy::Supervisor(_) => {
-                    let localized = self.status == LocalizationStatus::Success;
-                    let choice = self.decide_credit("start", t, estimate, localized, notes);
-                    self.switch(choice, "decision", t, estimate.position(), notes);
-                }
-                _ => {}
-            }
-            if let Policy::Supervisor(plan) = &self.policy {
-                self.last_remaining_m = Some(plan.model.reference.remaining_m(estimate.position()));
-            }
+            self.start(t, estimate, notes);
         }
         if notes.is_enabled() {
-            notes.value("estimate_x_m", estimate.x_m);
-            notes.value("estimate_y_m", estimate.y_m);
-            notes.value("estimate_theta_rad", estimate.theta_rad);
-            notes.value(
-                "warning",
-                f64::from(u8::from(self.status == LocalizationStatus::Warning)),
-            );
-            if let Some([estimate, odometry, ess]) = self.last_scores {
-                notes.value("score_estimate", estimate);
-                notes.value("score_odometry", odometry);
-                notes.value("effective_sample_size", ess);
-            }
-            if let Some(c) = self.last_consistency {
-                notes.value("contradiction", c.contradiction());
-                notes.value("evidence_beams", c.evidence() as f64);
-                notes.value("unmapped_objects", c.unmapped_objects as f64);
-            }
-            notes.value(
-                "recovering",
-                match self.localizer.recovery_stage() {
-                    RecoveryStage::Idle => 0.0,
-                    RecoveryStage::Scattered => 1.0,
-                    RecoveryStage::Global => 2.0,
-                },
-            );
+            self.note_localization(estimate, notes);
         }
         if estimate.position().dist(self.goal) <= self.p.arrive_m {
             notes.event(Event::new("arrived", t).at(estimate.position()));
@@ -777,88 +910,8 @@ impl Controller for GuideController {
         }
         notes.behaviour(behaviour_name(self.active));
         let command = match self.active {
-            Behaviour::AutoMove => {
-                let s = self.automove.step(estimate, scan, p.odometry, dt, t);
-                if s.abnormal != self.abnormal {
-                    self.sojourns_plan.push(Sojourn {
-                        state: if self.abnormal {
-                            StateName::Abnormal
-                        } else {
-                            StateName::Normal
-                        },
-                        duration_s: t - self.plan_since_s,
-                        ended: true,
-                    });
-                    self.plan_since_s = t;
-                    let mut e =
-                        Event::new(if s.abnormal { "abnormal" } else { "normal" }, t).at(estimate.position());
-                    if let Some(x) = s.exception {
-                        e = e.with("exception", x.name());
-                    }
-                    if s.abnormal {
-                        self.stats.abnormal_episodes += 1;
-                    }
-                    notes.event(e);
-                    self.abnormal = s.abnormal;
-                }
-                let asking = s.request.is_some();
-                if asking {
-                    self.stats.asking_cycles += 1;
-                    if !self.asking {
-                        let mut e = Event::new("ask", t).at(estimate.position());
-                        if let Some(x) = s.exception {
-                            e = e.with("exception", x.name());
-                        }
-                        notes.event(e);
-                    }
-                }
-                self.asking = asking;
-                self.request = s.request;
-                s.command
-            }
-            Behaviour::Contour => {
-                if self.abnormal {
-                    self.sojourns_plan.push(Sojourn {
-                        state: StateName::Abnormal,
-                        duration_s: t - self.plan_since_s,
-                        ended: true,
-                    });
-                    self.plan_since_s = t;
-                    self.abnormal = false;
-                    notes.event(Event::new("normal", t).at(estimate.position()));
-                }
-                let s = self.contour.step(scan, p.odometry, estimate, self.goal, t);
-                if notes.is_enabled() {
-                    // What the tracker does, for traces and replays: mode
-                    // (0 seek, −1 following on the right, +1 on the left),
-                    // distance to the contour, centred, passing a gap.
-                    let mode = match s.mode {
-                        ContourMode::Seek => 0.0,
-                        ContourMode::Follow { side, .. } => match side {
-                            Side::Left => 1.0,
-                            Side::Right => -1.0,
-                        },
-                    };
-                    notes.value("contour_mode", mode);
-                    notes.value("contour_m", s.contour_m);
-                    notes.value("contour_centred", f64::from(u8::from(s.centred)));
-                    notes.value("contour_gap", f64::from(u8::from(s.gap)));
-                }
-                let asking = s.request.is_some();
-                if asking {
-                    self.stats.asking_cycles += 1;
-                    if !self.asking {
-                        notes.event(
-                            Event::new("ask", t)
-                                .at(estimate.position())
-                                .with("exception", "contour_blocked"),
-                        );
-                    }
-                }
-                self.asking = asking;
-                self.request = s.request;
-                s.command
-            }
+            Behaviour::AutoMove => self.automove_cycle(p, scan, estimate, dt, notes),
+            Behaviour::Contour => self.contour_cycle(p, scan, estimate, notes),
         };
         Step::Run(command)
     }

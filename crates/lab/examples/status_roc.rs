@@ -24,6 +24,7 @@ use rand::{RngExt, SeedableRng};
 use robot::Pose;
 use sim::TraceParams;
 
+/// The 5, 25, 50, 75 and 95 % quantiles of `v` (sorted in place).
 fn quantiles(v: &mut [f64]) -> String {
     v.sort_by(f64::total_cmp);
     let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
@@ -37,18 +38,11 @@ fn quantiles(v: &mut [f64]) -> String {
     )
 }
 
-fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let people: usize = args.first().map_or(Ok(60), |s| s.parse()).context("visitors")?;
-    let missions: u32 = args.get(1).map_or(Ok(6), |s| s.parse()).context("missions")?;
-    let tol = ConsistencyTolerances {
-        hit_within_m: args.get(2).map_or(Ok(0.1), |s| s.parse())?,
-        through_tolerance_m: args.get(3).map_or(Ok(0.25), |s| s.parse())?,
-        through_tolerance_rad: args.get(4).map_or(Ok(0.035), |s| s.parse())?,
-    };
+/// The museum with `people` visitors around the exhibits, its localizer
+/// tracking without judging by contradiction (the source's rule, no
+/// recovery), so that its estimates are those of plain tracking.
+fn museum_setup(people: usize) -> Result<MissionSetup> {
     let mut setup = MissionSetup::new(museum()?, MISSION_TIME_LIMIT_S);
-    // The localizer tracks without judging by contradiction (the source's
-    // rule, no recovery), so its estimates are those of plain tracking.
     setup.guide.mcl.status = localization::StatusParams::explained();
     setup.prepare()?;
     if people > 0 {
@@ -59,6 +53,64 @@ fn main() -> Result<()> {
             keep_clear_m: 1.0,
         });
     }
+    Ok(setup)
+}
+
+/// The scores gathered over the missions: per offset the contradictions
+/// and evidence beams, the unmapped objects at the truth, and the time the
+/// scoring took.
+struct Scores {
+    contradiction: Vec<Vec<f64>>,
+    evidence: Vec<Vec<f64>>,
+    objects: Vec<f64>,
+    timing: std::time::Duration,
+    evaluations: u32,
+}
+
+/// Prints the time per score, the unmapped objects at the truth, and per
+/// offset the quantiles of the contradiction and the evidence and how
+/// often the contradiction exceeds each threshold.
+fn report(people: usize, missions: u32, offsets: &[(&str, f64, f64)], scores: &mut Scores) {
+    let Scores {
+        contradiction,
+        evidence,
+        objects,
+        timing,
+        evaluations,
+    } = scores;
+    println!(
+        "{people} visitors, {missions} missions, {} scans; one score {:.1} µs",
+        contradiction[0].len(),
+        timing.as_secs_f64() * 1e6 / f64::from((*evaluations).max(1))
+    );
+    println!("unmapped objects at the truth: {}", quantiles(objects));
+    for (k, (name, _, _)) in offsets.iter().enumerate() {
+        let above = |x: f64| {
+            contradiction[k].iter().filter(|&&c| c > x).count() as f64 / contradiction[k].len() as f64
+        };
+        println!(
+            "{name:6} contradiction {} | evidence {} | > 0.05: {:.3} > 0.1: {:.3} > 0.15: {:.3} > 0.2: {:.3} > 0.3: {:.3}",
+            quantiles(&mut contradiction[k].clone()),
+            quantiles(&mut evidence[k]),
+            above(0.05),
+            above(0.1),
+            above(0.15),
+            above(0.2),
+            above(0.3)
+        );
+    }
+}
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let people: usize = args.first().map_or(Ok(60), |s| s.parse()).context("visitors")?;
+    let missions: u32 = args.get(1).map_or(Ok(6), |s| s.parse()).context("missions")?;
+    let tol = ConsistencyTolerances {
+        hit_within_m: args.get(2).map_or(Ok(0.1), |s| s.parse())?,
+        through_tolerance_m: args.get(3).map_or(Ok(0.25), |s| s.parse())?,
+        through_tolerance_rad: args.get(4).map_or(Ok(0.035), |s| s.parse())?,
+    };
+    let setup = museum_setup(people)?;
     let field = LikelihoodField::new(&setup.world.grid().grid_map(), 2.0);
     let density = match people {
         0 => "empty",
@@ -143,26 +195,17 @@ fn main() -> Result<()> {
         }
         eprintln!("mission {m}: {:?}", leg.result.outcome);
     }
-    println!(
-        "{people} visitors, {missions} missions, {} scans; one score {:.1} µs",
-        contradiction[0].len(),
-        timing.as_secs_f64() * 1e6 / f64::from(evaluations.max(1))
+    report(
+        people,
+        missions,
+        &offsets,
+        &mut Scores {
+            contradiction,
+            evidence,
+            objects,
+            timing,
+            evaluations,
+        },
     );
-    println!("unmapped objects at the truth: {}", quantiles(&mut objects));
-    for (k, (name, _, _)) in offsets.iter().enumerate() {
-        let above = |x: f64| {
-            contradiction[k].iter().filter(|&&c| c > x).count() as f64 / contradiction[k].len() as f64
-        };
-        println!(
-            "{name:6} contradiction {} | evidence {} | > 0.05: {:.3} > 0.1: {:.3} > 0.15: {:.3} > 0.2: {:.3} > 0.3: {:.3}",
-            quantiles(&mut contradiction[k].clone()),
-            quantiles(&mut evidence[k]),
-            above(0.05),
-            above(0.1),
-            above(0.15),
-            above(0.2),
-            above(0.3)
-        );
-    }
     Ok(())
 }

@@ -481,6 +481,56 @@ fn command_value(c: Option<robot::Command>) -> Value {
     }
 }
 
+/// What topics a replay has beyond the fixed ones: its lasers, whether it
+/// has range sensors and people, its point clouds (in order of first
+/// appearance).
+struct Topics {
+    lasers: usize,
+    ranges: bool,
+    people: bool,
+    clouds: Vec<&'static str>,
+}
+
+impl Topics {
+    /// The topics of `ticks`.
+    fn of(ticks: &[sim::TraceTick]) -> Topics {
+        let lasers = ticks
+            .iter()
+            .filter_map(|t| t.perception.as_ref())
+            .map(|p| p.lasers.len())
+            .max()
+            .unwrap_or(0);
+        let ranges = ticks
+            .iter()
+            .filter_map(|t| t.perception.as_ref())
+            .any(|p| !p.sonar.is_empty() || !p.ir.is_empty());
+        let people = ticks.iter().any(|t| !t.people.is_empty());
+        let mut clouds: Vec<&'static str> = Vec::new();
+        for t in ticks {
+            for (name, _) in &t.clouds {
+                if !clouds.contains(name) {
+                    clouds.push(name);
+                }
+            }
+        }
+        Topics {
+            lasers,
+            ranges,
+            people,
+            clouds,
+        }
+    }
+}
+
+/// The topic of laser `k`: `/scan`, `/scan1`, …
+fn scan_topic(k: usize) -> String {
+    if k == 0 {
+        "/scan".to_string()
+    } else {
+        format!("/scan{k}")
+    }
+}
+
 /// Writes `replay` as MCAP to `out` (see the module docs for the topics).
 /// Returns the messages written per topic and `out`, flushed by the MCAP
 /// writer (a `BufWriter` still holds what it buffered).
@@ -504,78 +554,8 @@ pub fn write<W: Write + Seek>(
         sequence: BTreeMap::new(),
         counts: BTreeMap::new(),
     };
-    let lasers = ticks
-        .iter()
-        .filter_map(|t| t.perception.as_ref())
-        .map(|p| p.lasers.len())
-        .max()
-        .unwrap_or(0);
-    let ranges = ticks
-        .iter()
-        .filter_map(|t| t.perception.as_ref())
-        .any(|p| !p.sonar.is_empty() || !p.ir.is_empty());
-    let people = ticks.iter().any(|t| !t.people.is_empty());
-    let scan_topic = |k: usize| {
-        if k == 0 {
-            "/scan".to_string()
-        } else {
-            format!("/scan{k}")
-        }
-    };
-
-    ch.add(&mut w, "/map", "foxglove.Grid", &schema::grid())?;
-    ch.add(
-        &mut w,
-        "/markers",
-        "foxglove.SceneUpdate",
-        &schema::scene_update(),
-    )?;
-    ch.add(
-        &mut w,
-        "/tf",
-        "foxglove.FrameTransform",
-        &schema::frame_transform(),
-    )?;
-    ch.add(&mut w, "/pose", "foxglove.PoseInFrame", &schema::pose_in_frame())?;
-    ch.add(
-        &mut w,
-        "/pose_estimate",
-        "foxglove.PoseInFrame",
-        &schema::pose_in_frame(),
-    )?;
-    for k in 0..lasers {
-        ch.add(
-            &mut w,
-            &scan_topic(k),
-            "foxglove.LaserScan",
-            &schema::laser_scan(),
-        )?;
-    }
-    if ranges {
-        ch.add(&mut w, "/ranges", "foxglove.SceneUpdate", &schema::scene_update())?;
-    }
-    if people {
-        ch.add(&mut w, "/people", "foxglove.SceneUpdate", &schema::scene_update())?;
-    }
-    let mut clouds: Vec<&'static str> = Vec::new();
-    for t in ticks {
-        for (name, _) in &t.clouds {
-            if !clouds.contains(name) {
-                clouds.push(name);
-            }
-        }
-    }
-    for name in &clouds {
-        ch.add(
-            &mut w,
-            &format!("/{name}"),
-            "foxglove.PosesInFrame",
-            &schema::poses_in_frame(),
-        )?;
-    }
-    ch.add(&mut w, "/notes", "petrinav.Notes", &schema::notes())?;
-    ch.add(&mut w, "/events", "foxglove.Log", &schema::log())?;
-
+    let topics = Topics::of(ticks);
+    add_channels(&mut ch, &mut w, &topics)?;
     w.write_metadata(&Metadata {
         name: "petrinav".into(),
         metadata: BTreeMap::from([
@@ -589,133 +569,203 @@ pub fn write<W: Write + Seek>(
     ch.write(&mut w, "/map", t0, &grid_message(replay))?;
     ch.write(&mut w, "/markers", t0, &markers_message(replay))?;
     for (n, t) in ticks.iter().enumerate() {
-        let ns = nanos(t.time_s);
-        let p = t.true_pose;
-        ch.write(
-            &mut w,
-            "/tf",
-            ns,
-            &json!({"timestamp": stamp(ns), "parent_frame_id": "map", "child_frame_id": "base_link",
-                    "translation": vec3(p.x_m, p.y_m, 0.0), "rotation": quat_yaw(p.theta_rad)}),
-        )?;
-        ch.write(
-            &mut w,
-            "/pose",
-            ns,
-            &json!({"timestamp": stamp(ns), "frame_id": "map", "pose": pose(p)}),
-        )?;
-        ch.write(
-            &mut w,
-            "/pose_estimate",
-            ns,
-            &json!({"timestamp": stamp(ns), "frame_id": "map", "pose": pose(t.estimated_pose)}),
-        )?;
-        if let Some(perception) = &t.perception {
-            for (k, l) in perception.lasers.iter().enumerate() {
-                let n_beams = l.ranges_m.len();
-                let ranges: Vec<f64> = l
-                    .ranges_m
-                    .iter()
-                    .map(|&r| {
-                        if r.is_finite() {
-                            (r * 1000.0).round() / 1000.0
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect();
-                ch.write(
-                    &mut w,
-                    &scan_topic(k),
-                    ns,
-                    &json!({"timestamp": stamp(ns), "frame_id": "base_link", "pose": pose(l.mount),
-                            "start_angle": l.angle_min_rad,
-                            "end_angle": l.angle_min_rad + l.angle_increment_rad * n_beams.saturating_sub(1) as f64,
-                            "ranges": ranges, "intensities": []}),
-                )?;
-            }
-            if ranges {
-                ch.write(&mut w, "/ranges", ns, &ranges_message(ns, perception))?;
-            }
-        }
-        for (name, cloud) in &t.clouds {
-            let poses: Vec<Value> = cloud.iter().map(|&q| pose(q)).collect();
-            ch.write(
-                &mut w,
-                &format!("/{name}"),
-                ns,
-                &json!({"timestamp": stamp(ns), "frame_id": "map", "poses": poses}),
-            )?;
-        }
-        if people {
-            let radius = crate::viewer::data::person_radius_m();
-            let discs: Vec<Value> = t
-                .people
-                .iter()
-                .map(|&q| cylinder(q, radius, 1.7, colour(0.94, 0.59, 0.12, 0.8)))
-                .collect();
-            ch.write(
-                &mut w,
-                "/people",
-                ns,
-                &scene(vec![entity(ns, "map", "people", false, &[("cylinders", discs)])]),
-            )?;
-        }
-        let values: serde_json::Map<String, Value> = t
-            .values
-            .iter()
-            .map(|(k, v)| (k.to_string(), finite(*v)))
-            .collect();
-        let events: Vec<Value> = t
-            .events
-            .iter()
-            .map(|e| {
-                let payload: serde_json::Map<String, Value> = e
-                    .payload
-                    .iter()
-                    .map(|(k, v)| (k.clone(), event_value(v)))
-                    .collect();
-                json!({"kind": e.kind, "time_s": e.time_s,
-                       "position": e.position.map(|q| json!({"x": q.x, "y": q.y})), "payload": payload})
-            })
-            .collect();
-        ch.write(
-            &mut w,
-            "/notes",
-            ns,
-            &json!({"timestamp": stamp(ns), "tick": n, "time_s": t.time_s, "behaviour": t.behaviour,
-                    "values": values, "events": events,
-                    "step": match t.step { sim::StepKind::Run => "run", sim::StepKind::Done => "done", sim::StepKind::GiveUp => "give_up" },
-                    "command": command_value(t.command),
-                    "wheels_mps": [t.wheels_mps.0, t.wheels_mps.1], "contact": t.contact,
-                    "request_radius_m": t.request.map(|r| match r { robot::Request::StepAside { radius_m } => radius_m })}),
-        )?;
-        for e in &t.events {
-            let payload: Vec<String> = e
-                .payload
-                .iter()
-                .map(|(k, v)| match v {
-                    EventValue::Bool(b) => format!("{k} {b}"),
-                    EventValue::Number(x) => format!("{k} {x}"),
-                    EventValue::Text(s) => format!("{k} {s}"),
-                })
-                .collect();
-            let message = if payload.is_empty() {
-                e.kind.clone()
-            } else {
-                format!("{}: {}", e.kind, payload.join(", "))
-            };
-            ch.write(
-                &mut w,
-                "/events",
-                ns,
-                &json!({"timestamp": stamp(ns), "level": 2, "message": message,
-                        "name": "controller", "file": "", "line": 0}),
-            )?;
-        }
+        write_tick(&mut ch, &mut w, &topics, n, t)?;
     }
     w.finish().context("finishing the MCAP file")?;
     Ok((ch.counts, w.into_inner()))
+}
+
+/// Adds the channels of the fixed topics and of `topics`, in the file's
+/// order.
+fn add_channels<W: Write + Seek>(ch: &mut Channels, w: &mut mcap::Writer<W>, topics: &Topics) -> Result<()> {
+    ch.add(w, "/map", "foxglove.Grid", &schema::grid())?;
+    ch.add(w, "/markers", "foxglove.SceneUpdate", &schema::scene_update())?;
+    ch.add(w, "/tf", "foxglove.FrameTransform", &schema::frame_transform())?;
+    ch.add(w, "/pose", "foxglove.PoseInFrame", &schema::pose_in_frame())?;
+    ch.add(
+        w,
+        "/pose_estimate",
+        "foxglove.PoseInFrame",
+        &schema::pose_in_frame(),
+    )?;
+    for k in 0..topics.lasers {
+        ch.add(w, &scan_topic(k), "foxglove.LaserScan", &schema::laser_scan())?;
+    }
+    if topics.ranges {
+        ch.add(w, "/ranges", "foxglove.SceneUpdate", &schema::scene_update())?;
+    }
+    if topics.people {
+        ch.add(w, "/people", "foxglove.SceneUpdate", &schema::scene_update())?;
+    }
+    for name in &topics.clouds {
+        ch.add(
+            w,
+            &format!("/{name}"),
+            "foxglove.PosesInFrame",
+            &schema::poses_in_frame(),
+        )?;
+    }
+    ch.add(w, "/notes", "petrinav.Notes", &schema::notes())?;
+    ch.add(w, "/events", "foxglove.Log", &schema::log())?;
+    Ok(())
+}
+
+/// Writes the messages of tick `n`, `t`: the frames, the poses, the
+/// scans, the ranges, the clouds, the people, the notes and the events.
+fn write_tick<W: Write + Seek>(
+    ch: &mut Channels,
+    w: &mut mcap::Writer<W>,
+    topics: &Topics,
+    n: usize,
+    t: &sim::TraceTick,
+) -> Result<()> {
+    let ns = nanos(t.time_s);
+    let p = t.true_pose;
+    ch.write(
+        w,
+        "/tf",
+        ns,
+        &json!({"timestamp": stamp(ns), "parent_frame_id": "map", "child_frame_id": "base_link",
+                "translation": vec3(p.x_m, p.y_m, 0.0), "rotation": quat_yaw(p.theta_rad)}),
+    )?;
+    ch.write(
+        w,
+        "/pose",
+        ns,
+        &json!({"timestamp": stamp(ns), "frame_id": "map", "pose": pose(p)}),
+    )?;
+    ch.write(
+        w,
+        "/pose_estimate",
+        ns,
+        &json!({"timestamp": stamp(ns), "frame_id": "map", "pose": pose(t.estimated_pose)}),
+    )?;
+    if let Some(perception) = &t.perception {
+        write_scans(ch, w, ns, perception)?;
+        if topics.ranges {
+            ch.write(w, "/ranges", ns, &ranges_message(ns, perception))?;
+        }
+    }
+    for (name, cloud) in &t.clouds {
+        let poses: Vec<Value> = cloud.iter().map(|&q| pose(q)).collect();
+        ch.write(
+            w,
+            &format!("/{name}"),
+            ns,
+            &json!({"timestamp": stamp(ns), "frame_id": "map", "poses": poses}),
+        )?;
+    }
+    if topics.people {
+        let radius = crate::viewer::data::person_radius_m();
+        let discs: Vec<Value> = t
+            .people
+            .iter()
+            .map(|&q| cylinder(q, radius, 1.7, colour(0.94, 0.59, 0.12, 0.8)))
+            .collect();
+        ch.write(
+            w,
+            "/people",
+            ns,
+            &scene(vec![entity(ns, "map", "people", false, &[("cylinders", discs)])]),
+        )?;
+    }
+    ch.write(w, "/notes", ns, &notes_message(n, ns, t))?;
+    write_events(ch, w, ns, t)
+}
+
+/// Writes the scans of `perception` at `ns`, ranges in millimetres.
+fn write_scans<W: Write + Seek>(
+    ch: &mut Channels,
+    w: &mut mcap::Writer<W>,
+    ns: u64,
+    perception: &robot::Perception,
+) -> Result<()> {
+    for (k, l) in perception.lasers.iter().enumerate() {
+        let n_beams = l.ranges_m.len();
+        let ranges: Vec<f64> = l
+            .ranges_m
+            .iter()
+            .map(|&r| {
+                if r.is_finite() {
+                    (r * 1000.0).round() / 1000.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        ch.write(
+            w,
+            &scan_topic(k),
+            ns,
+            &json!({"timestamp": stamp(ns), "frame_id": "base_link", "pose": pose(l.mount),
+                    "start_angle": l.angle_min_rad,
+                    "end_angle": l.angle_min_rad + l.angle_increment_rad * n_beams.saturating_sub(1) as f64,
+                    "ranges": ranges, "intensities": []}),
+        )?;
+    }
+    Ok(())
+}
+
+/// The `/notes` message of tick `n`, `t`: its values, events, step,
+/// command, wheels, contact and request.
+fn notes_message(n: usize, ns: u64, t: &sim::TraceTick) -> Value {
+    let values: serde_json::Map<String, Value> = t
+        .values
+        .iter()
+        .map(|(k, v)| (k.to_string(), finite(*v)))
+        .collect();
+    let events: Vec<Value> = t
+        .events
+        .iter()
+        .map(|e| {
+            let payload: serde_json::Map<String, Value> = e
+                .payload
+                .iter()
+                .map(|(k, v)| (k.clone(), event_value(v)))
+                .collect();
+            json!({"kind": e.kind, "time_s": e.time_s,
+                   "position": e.position.map(|q| json!({"x": q.x, "y": q.y})), "payload": payload})
+        })
+        .collect();
+    json!({"timestamp": stamp(ns), "tick": n, "time_s": t.time_s, "behaviour": t.behaviour,
+        "values": values, "events": events,
+        "step": match t.step { sim::StepKind::Run => "run", sim::StepKind::Done => "done", sim::StepKind::GiveUp => "give_up" },
+        "command": command_value(t.command),
+        "wheels_mps": [t.wheels_mps.0, t.wheels_mps.1], "contact": t.contact,
+        "request_radius_m": t.request.map(|r| match r { robot::Request::StepAside { radius_m } => radius_m })})
+}
+
+/// Writes the events of tick `t` as `/events` log lines at `ns`.
+fn write_events<W: Write + Seek>(
+    ch: &mut Channels,
+    w: &mut mcap::Writer<W>,
+    ns: u64,
+    t: &sim::TraceTick,
+) -> Result<()> {
+    for e in &t.events {
+        let payload: Vec<String> = e
+            .payload
+            .iter()
+            .map(|(k, v)| match v {
+                EventValue::Bool(b) => format!("{k} {b}"),
+                EventValue::Number(x) => format!("{k} {x}"),
+                EventValue::Text(s) => format!("{k} {s}"),
+            })
+            .collect();
+        let message = if payload.is_empty() {
+            e.kind.clone()
+        } else {
+            format!("{}: {}", e.kind, payload.join(", "))
+        };
+        ch.write(
+            w,
+            "/events",
+            ns,
+            &json!({"timestamp": stamp(ns), "level": 2, "message": message,
+                    "name": "controller", "file": "", "line": 0}),
+        )?;
+    }
+    Ok(())
 }
 
 /// Writes `replay` as MCAP to the file `path`.

@@ -164,41 +164,25 @@ pub fn parse_yaml(text: &str, source: &str) -> Result<MapYaml> {
         ),
         message: format!("invalid YAML: {}", e.info()),
     })?;
-    let format = |message: String| Error::Format {
-        location: source.to_string(),
-        message,
-    };
     let doc = match docs.as_slice() {
-        [] => return Err(format("empty file: expected the keys of a map_server map".into())),
+        [] => {
+            return Err(format_error(
+                source,
+                "empty file: expected the keys of a map_server map".into(),
+            ));
+        }
         [doc] => doc,
-        _ => return Err(format("more than one YAML document".into())),
+        _ => return Err(format_error(source, "more than one YAML document".into())),
     };
     if !matches!(doc, Yaml::Hash(_)) {
-        return Err(format(
+        return Err(format_error(
+            source,
             "expected a mapping of keys (image, resolution, origin, …)".into(),
         ));
     }
-    let key = |name: &str| -> Result<&Yaml> {
-        match &doc[name] {
-            Yaml::BadValue => Err(format(format!("missing key `{name}`"))),
-            v => Ok(v),
-        }
-    };
-    let number = |name: &str, v: &Yaml| -> Result<f64> {
-        let x = match v {
-            Yaml::Real(s) | Yaml::String(s) => s.trim().parse::<f64>().ok(),
-            Yaml::Integer(i) => Some(*i as f64),
-            _ => None,
-        };
-        match x {
-            Some(x) if x.is_finite() => Ok(x),
-            _ => Err(format(format!(
-                "key `{name}`: expected a finite number, got {}",
-                show(v)
-            ))),
-        }
-    };
-    let image = match key("image")? {
+    let keys = YamlKeys { doc, source };
+    let format = |message: String| format_error(source, message);
+    let image = match keys.key("image")? {
         Yaml::String(s) if !s.trim().is_empty() => PathBuf::from(s.trim()),
         v => {
             return Err(format(format!(
@@ -207,7 +191,7 @@ pub fn parse_yaml(text: &str, source: &str) -> Result<MapYaml> {
             )));
         }
     };
-    let resolution_m = number("resolution", key("resolution")?)?;
+    let resolution_m = keys.number("resolution", keys.key("resolution")?)?;
     if resolution_m <= 0.0 {
         return Err(Error::InvalidValue {
             what: format!("{source}: resolution"),
@@ -215,11 +199,11 @@ pub fn parse_yaml(text: &str, source: &str) -> Result<MapYaml> {
             value: resolution_m,
         });
     }
-    let origin = match key("origin")? {
+    let origin = match keys.key("origin")? {
         Yaml::Array(a) if a.len() == 3 => {
-            let x = number("origin", &a[0])?;
-            let y = number("origin", &a[1])?;
-            let yaw = number("origin", &a[2])?;
+            let x = keys.number("origin", &a[0])?;
+            let y = keys.number("origin", &a[1])?;
+            let yaw = keys.number("origin", &a[2])?;
             Pose::new(x, y, yaw)
         }
         v => {
@@ -229,46 +213,13 @@ pub fn parse_yaml(text: &str, source: &str) -> Result<MapYaml> {
             )));
         }
     };
-    let negate = match key("negate")? {
+    let negate = match keys.key("negate")? {
         Yaml::Integer(i) => *i != 0,
         Yaml::Boolean(b) => *b,
         v => return Err(format(format!("key `negate`: expected 0 or 1, got {}", show(v)))),
     };
-    let occupied_thresh = number("occupied_thresh", key("occupied_thresh")?)?;
-    let free_thresh = number("free_thresh", key("free_thresh")?)?;
-    for (name, value) in [("occupied_thresh", occupied_thresh), ("free_thresh", free_thresh)] {
-        if !(0.0..=1.0).contains(&value) {
-            return Err(Error::InvalidValue {
-                what: format!("{source}: {name}"),
-                requirement: "between 0 and 1",
-                value,
-            });
-        }
-    }
-    if free_thresh > occupied_thresh {
-        return Err(format(format!(
-            "free_thresh ({free_thresh}) is above occupied_thresh ({occupied_thresh})"
-        )));
-    }
-    let mode = match &doc["mode"] {
-        Yaml::BadValue => MapMode::Trinary,
-        Yaml::String(s) => match s.as_str() {
-            "trinary" => MapMode::Trinary,
-            "scale" => MapMode::Scale,
-            "raw" => MapMode::Raw,
-            other => {
-                return Err(format(format!(
-                    "key `mode`: expected trinary, scale or raw, got `{other}`"
-                )));
-            }
-        },
-        v => {
-            return Err(format(format!(
-                "key `mode`: expected trinary, scale or raw, got {}",
-                show(v)
-            )));
-        }
-    };
+    let (occupied_thresh, free_thresh) = keys.thresholds()?;
+    let mode = keys.mode()?;
     Ok(MapYaml {
         image,
         resolution_m,
@@ -278,6 +229,96 @@ pub fn parse_yaml(text: &str, source: &str) -> Result<MapYaml> {
         free_thresh,
         mode,
     })
+}
+
+/// A format error at `source`.
+fn format_error(source: &str, message: String) -> Error {
+    Error::Format {
+        location: source.to_string(),
+        message,
+    }
+}
+
+/// The keys of a map_server YAML document, read with errors that name the
+/// file.
+struct YamlKeys<'a> {
+    doc: &'a Yaml,
+    /// The file, for errors.
+    source: &'a str,
+}
+
+impl YamlKeys<'_> {
+    /// The value of a required key.
+    fn key(&self, name: &str) -> Result<&Yaml> {
+        match &self.doc[name] {
+            Yaml::BadValue => Err(format_error(self.source, format!("missing key `{name}`"))),
+            v => Ok(v),
+        }
+    }
+
+    /// The finite number `v` of key `name`.
+    fn number(&self, name: &str, v: &Yaml) -> Result<f64> {
+        let x = match v {
+            Yaml::Real(s) | Yaml::String(s) => s.trim().parse::<f64>().ok(),
+            Yaml::Integer(i) => Some(*i as f64),
+            _ => None,
+        };
+        match x {
+            Some(x) if x.is_finite() => Ok(x),
+            _ => Err(format_error(
+                self.source,
+                format!("key `{name}`: expected a finite number, got {}", show(v)),
+            )),
+        }
+    }
+
+    /// `occupied_thresh` and `free_thresh`, each between 0 and 1, the free
+    /// one not above the occupied one.
+    fn thresholds(&self) -> Result<(f64, f64)> {
+        let source = self.source;
+        let occupied_thresh = self.number("occupied_thresh", self.key("occupied_thresh")?)?;
+        let free_thresh = self.number("free_thresh", self.key("free_thresh")?)?;
+        for (name, value) in [("occupied_thresh", occupied_thresh), ("free_thresh", free_thresh)] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(Error::InvalidValue {
+                    what: format!("{source}: {name}"),
+                    requirement: "between 0 and 1",
+                    value,
+                });
+            }
+        }
+        if free_thresh > occupied_thresh {
+            return Err(format_error(
+                source,
+                format!("free_thresh ({free_thresh}) is above occupied_thresh ({occupied_thresh})"),
+            ));
+        }
+        Ok((occupied_thresh, free_thresh))
+    }
+
+    /// The optional `mode` (trinary by default).
+    fn mode(&self) -> Result<MapMode> {
+        let format = |message: String| format_error(self.source, message);
+        Ok(match &self.doc["mode"] {
+            Yaml::BadValue => MapMode::Trinary,
+            Yaml::String(s) => match s.as_str() {
+                "trinary" => MapMode::Trinary,
+                "scale" => MapMode::Scale,
+                "raw" => MapMode::Raw,
+                other => {
+                    return Err(format(format!(
+                        "key `mode`: expected trinary, scale or raw, got `{other}`"
+                    )));
+                }
+            },
+            v => {
+                return Err(format(format!(
+                    "key `mode`: expected trinary, scale or raw, got {}",
+                    show(v)
+                )));
+            }
+        })
+    }
 }
 
 /// A YAML value, briefly, for error messages.

@@ -105,6 +105,22 @@ use crate::world::World;
 /// Ratio of a person's top speed to their preferred speed (Helbing & Molnár).
 pub const MAX_SPEED_RATIO: f64 = 1.3;
 
+/// Least preferred speed, as a fraction of the mean (a draw below is
+/// raised to it).
+const PREFERRED_SPEED_MIN_RATIO: f64 = 0.2;
+
+/// Greatest preferred speed, as a multiple of the mean (a draw above is
+/// lowered to it).
+const PREFERRED_SPEED_MAX_RATIO: f64 = 1.8;
+
+/// The repulsions (people, robot, walls) are cut off beyond this many of
+/// their ranges `B` past contact (dimensionless; `e^-4` ≈ 2 %).
+const FORCE_CUTOFF_RANGES: f64 = 4.0;
+
+/// A walker follows the route until within this far beyond the gather
+/// radius of its exhibit, metres; then straight at the target.
+const ROUTE_BEYOND_GATHER_M: f64 = 1.0;
+
 /// What a person is doing.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub enum Activity {
@@ -402,8 +418,10 @@ impl Crowd {
     fn person(world: &World, place: &mut RandomStream, position: Vec2) -> Person {
         let p = world.crowd();
         let z = place.normal();
-        let preferred_speed_mps =
-            (p.speed_mean_mps + p.speed_sigma_mps * z).clamp(0.2 * p.speed_mean_mps, 1.8 * p.speed_mean_mps);
+        let preferred_speed_mps = (p.speed_mean_mps + p.speed_sigma_mps * z).clamp(
+            PREFERRED_SPEED_MIN_RATIO * p.speed_mean_mps,
+            PREFERRED_SPEED_MAX_RATIO * p.speed_mean_mps,
+        );
         let (target, waypoint) = pick_target(world, place, position, None);
         let activity = if place.chance(p.linger_probability) {
             Activity::Lingering {
@@ -426,7 +444,7 @@ impl Crowd {
 
     /// Range beyond which people do not push each other: `2r + 4B`.
     fn reach_m(p: &CrowdParams) -> f64 {
-        2.0 * p.radius_m + 4.0 * p.person_range_m
+        2.0 * p.radius_m + FORCE_CUTOFF_RANGES * p.person_range_m
     }
 
     /// The people, in a fixed order.
@@ -597,12 +615,9 @@ impl Crowd {
         }
         let p = world.crowd();
         let r = self.radius_m;
-        let reach = Self::reach_m(p);
-        let field = world.distance_field();
         // People move at most this far in a step: query with that slack so
         // the buckets (built at the start) stay a superset.
-        let slack = 2.0 * MAX_SPEED_RATIO * 1.8 * p.speed_mean_mps * dt_s;
-        let wall_reach = r + 4.0 * p.wall_range_m;
+        let slack = 2.0 * MAX_SPEED_RATIO * PREFERRED_SPEED_MAX_RATIO * p.speed_mean_mps * dt_s;
         // Probability that a person takes an interest in the robot in this
         // step: 1 − exp(−rate Δt).
         let interest = if p.robot_interest_rate_per_s > 0.0 {
@@ -610,250 +625,329 @@ impl Crowd {
         } else {
             0.0
         };
+        let ctx = StepContext {
+            world,
+            p,
+            robot,
+            time_s,
+            dt_s,
+            r,
+            reach: Self::reach_m(p),
+            slack,
+            wall_reach: r + FORCE_CUTOFF_RANGES * p.wall_range_m,
+            interest,
+        };
         for i in 0..self.people.len() {
             let mut me = self.people[i];
-            // Part of a curious group ([`Crowd::surround`]) until when?
-            let group_over = me.curious_until_s.is_some_and(|u| time_s >= u);
-            if group_over {
-                me.curious_until_s = None;
-            }
-            let curious = me.curious_until_s.is_some();
-            // Asked to step aside, and time to move?
-            if let Some(asked) = me.asked
-                && time_s >= asked.react_at_s
-            {
-                me.target = Self::aside_target(world, &mut self.rng, &me, &asked);
-                me.waypoint = None;
-                me.activity = Activity::Walking {
-                    since_s: time_s,
-                    checkpoint: me.position,
-                    checkpoint_s: time_s,
-                    stepping_aside: true,
-                };
-                me.asked = None;
-            }
-            // Taking an interest in the robot (in sight, within range)?
-            if interest > 0.0
-                && let Some((c, rr)) = robot
-                && !me.activity.with_robot()
-                && me.asked.is_none()
-                && !matches!(
-                    me.activity,
-                    Activity::Walking {
-                        stepping_aside: true,
-                        ..
-                    }
-                )
-                && dist(me.position, c) <= p.robot_interest_range_m
-                && self.rng.chance(interest)
-            {
-                let spot = spot_by_robot(me.position, c, gather_distance_m(p, r, rr));
-                if walkable(world, me.position, spot, r) {
-                    me.target = spot;
-                    me.waypoint = None;
-                    me.activity = Activity::coming_to_robot(me.position, time_s);
-                }
-            }
-            // What to do.
-            let mut new_target = false;
-            match me.activity {
-                // A curious group's time is up (some may not have arrived
-                // yet): they go, as after any visit.
-                Activity::ComingToRobot { .. } | Activity::AtRobot { .. } if group_over => new_target = true,
-                Activity::Lingering { until_s } => new_target = time_s >= until_s,
-                Activity::Walking {
-                    since_s,
-                    checkpoint,
-                    checkpoint_s,
-                    stepping_aside,
-                } => {
-                    if dist(me.position, me.target) <= p.arrival_tolerance_m {
-                        if self.rng.chance(p.linger_probability) {
-                            me.activity = Activity::Lingering {
-                                until_s: time_s + self.rng.exponential(p.linger_mean_s),
-                            };
-                        } else {
-                            new_target = true;
-                        }
-                    } else if time_s - checkpoint_s >= p.stuck_timeout_s {
-                        // Progress check: stuck behind something?
-                        new_target = dist(me.position, checkpoint) < r;
-                        me.activity = Activity::Walking {
-                            since_s,
-                            checkpoint: me.position,
-                            checkpoint_s: time_s,
-                            stepping_aside,
-                        };
-                    }
-                    new_target |= time_s - since_s > p.target_timeout_s;
-                }
-                Activity::ComingToRobot {
-                    since_s,
-                    checkpoint,
-                    checkpoint_s,
-                } => match robot {
-                    Some((c, rr)) if curious || dist(me.position, c) <= p.robot_interest_range_m => {
-                        let by = gather_distance_m(p, r, rr);
-                        me.target = spot_by_robot(me.position, c, by);
-                        if dist(me.position, c) <= by {
-                            let until_s = match me.curious_until_s {
-                                Some(u) => u,
-                                None => time_s + self.rng.exponential(p.robot_linger_mean_s),
-                            };
-                            me.activity = Activity::AtRobot { until_s };
-                        } else if !curious {
-                            // Progress check and time out, as for any walk.
-                            if time_s - checkpoint_s >= p.stuck_timeout_s {
-                                new_target = dist(me.position, checkpoint) < r;
-                                me.activity = Activity::ComingToRobot {
-                                    since_s,
-                                    checkpoint: me.position,
-                                    checkpoint_s: time_s,
-                                };
-                            }
-                            new_target |= time_s - since_s > p.target_timeout_s;
-                        }
-                    }
-                    // The robot has gone out of range.
-                    _ => new_target = true,
-                },
-                Activity::AtRobot { until_s } => match robot {
-                    Some((c, rr))
-                        if time_s < until_s
-                            && (curious || dist(me.position, c) <= p.robot_interest_range_m) =>
-                    {
-                        me.target = spot_by_robot(me.position, c, gather_distance_m(p, r, rr));
-                    }
-                    // Time to go, or the robot has gone out of range.
-                    _ => new_target = true,
-                },
-            }
-            if new_target {
-                (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
-                me.activity = Activity::walking(me.position, time_s);
-                me.curious_until_s = None;
-            }
-            // Forces.
-            let desired = match me.activity {
-                Activity::Walking { .. } => {
-                    // Far from the exhibit: follow the route; near it (or
-                    // wandering): straight at the target.
-                    let routed = me.waypoint.and_then(|k| {
-                        (world.routes().distance_m(k, me.position) > p.gather_radius_m + 1.0)
-                            .then(|| world.routes().direction(k, me.position))
-                            .flatten()
-                    });
-                    let to = me.target - me.position;
-                    let d = norm(to);
-                    match routed {
-                        Some(u) => u.scale(me.preferred_speed_mps),
-                        None if d > 1e-9 => to.scale(me.preferred_speed_mps / d),
-                        None => Vec2::default(),
-                    }
-                }
-                Activity::Lingering { .. } => Vec2::default(),
-                Activity::ComingToRobot { .. } => {
-                    let to = me.target - me.position;
-                    let d = norm(to);
-                    if d > 1e-9 {
-                        to.scale(me.preferred_speed_mps / d)
-                    } else {
-                        Vec2::default()
-                    }
-                }
-                Activity::AtRobot { .. } => {
-                    // Back to the gather distance (either way), the faster
-                    // the farther, at most at the preferred speed.
-                    let to = me.target - me.position;
-                    let d = norm(to);
-                    if d > 1e-9 {
-                        let speed = (d / p.relaxation_time_s).min(me.preferred_speed_mps);
-                        to.scale(speed / d)
-                    } else {
-                        Vec2::default()
-                    }
-                }
-            };
-            let mut force = (desired - me.velocity).scale(1.0 / p.relaxation_time_s);
-            let heading = {
-                let h = if norm(desired) > 0.0 { desired } else { me.velocity };
-                let n = norm(h);
-                if n > 1e-9 { Some(h.scale(1.0 / n)) } else { None }
-            };
-            let fov = |n: Vec2| match heading {
-                Some(e) => p.anisotropy + (1.0 - p.anisotropy) * 0.5 * (1.0 - e.dot(n)),
-                None => 1.0,
-            };
-            let people = &self.people;
-            self.hash.for_each_near(me.position, reach + slack, |j| {
-                if j == i {
-                    return;
-                }
-                let n = me.position - people[j].position;
-                let d2 = n.dot(n);
-                if d2 >= reach * reach || d2 <= 1e-24 {
-                    return;
-                }
-                let d = d2.sqrt();
-                let u = n.scale(1.0 / d);
-                let mag = p.person_repulsion_mps2 * ((2.0 * r - d) / p.person_range_m).exp();
-                force = force + u.scale(mag * fov(u));
-            });
-            // People who came to see the robot do not shy away from it.
-            if let Some((c, rr)) = robot
-                && !me.activity.with_robot()
-            {
-                let n = me.position - c;
-                let d = norm(n);
-                if d > 1e-12 && d < r + rr + 4.0 * p.person_range_m {
-                    let u = n.scale(1.0 / d);
-                    let mag = p.robot_repulsion_mps2 * ((r + rr - d) / p.person_range_m).exp();
-                    force = force + u.scale(mag * fov(u));
-                }
-            }
-            // Walls (the free radius, one look-up, rules most people out).
-            if field.free_radius_m(me.position) < wall_reach {
-                let wall = field.nearest(me.position);
-                if wall.distance_m > 1e-12 && wall.distance_m < wall_reach {
-                    let u = (me.position - wall.point).scale(1.0 / wall.distance_m);
-                    let mag = p.wall_repulsion_mps2 * ((r - wall.distance_m) / p.wall_range_m).exp();
-                    force = force + u.scale(mag);
-                }
-            }
-            // Integrate, capped, without interpenetration.
-            let mut v = me.velocity + force.scale(dt_s);
-            let vmax = MAX_SPEED_RATIO * me.preferred_speed_mps;
-            let speed = norm(v);
-            if speed > vmax {
-                v = v.scale(vmax / speed);
-            }
-            let next = me.position + v.scale(dt_s);
-            let mut free = field.free_radius_m(next) >= r || field.distance_m(next) >= r;
-            if let Some((c, rr)) = robot {
-                // Not closer than the clearance, unless already closer and
-                // moving away.
-                let keep = r + rr + p.robot_clearance_m;
-                let d = dist(next, c);
-                free &= d >= keep || d > dist(me.position, c);
-            }
-            if free {
-                let contact2 = 4.0 * r * r;
-                self.hash.for_each_near(next, 2.0 * r + slack, |j| {
-                    let n = people[j].position - next;
-                    if j != i && n.dot(n) < contact2 {
-                        free = false;
-                    }
-                });
-            }
-            if free {
-                me.position = next;
-                me.velocity = v;
-            } else {
-                me.velocity = Vec2::default();
-            }
+            self.decide(&ctx, &mut me);
+            let desired = desired_velocity(world, p, &me);
+            let force = self.force_on(&ctx, i, &me, desired);
+            self.integrate(&ctx, i, &mut me, force);
             self.people[i] = me;
         }
         self.hash.rebuild(self.people.iter().map(|q| q.position));
+    }
+
+    /// What a person does this step: steps aside when asked, takes an
+    /// interest in the robot, and goes on with (or ends) their activity,
+    /// picking a new target when it is over.
+    fn decide(&mut self, ctx: &StepContext<'_>, me: &mut Person) {
+        let (world, p, time_s) = (ctx.world, ctx.p, ctx.time_s);
+        // Part of a curious group ([`Crowd::surround`]) until when?
+        let group_over = me.curious_until_s.is_some_and(|u| time_s >= u);
+        if group_over {
+            me.curious_until_s = None;
+        }
+        let curious = me.curious_until_s.is_some();
+        // Asked to step aside, and time to move?
+        if let Some(asked) = me.asked
+            && time_s >= asked.react_at_s
+        {
+            me.target = Self::aside_target(world, &mut self.rng, me, &asked);
+            me.waypoint = None;
+            me.activity = Activity::Walking {
+                since_s: time_s,
+                checkpoint: me.position,
+                checkpoint_s: time_s,
+                stepping_aside: true,
+            };
+            me.asked = None;
+        }
+        // Taking an interest in the robot (in sight, within range)?
+        if ctx.interest > 0.0
+            && let Some((c, rr)) = ctx.robot
+            && !me.activity.with_robot()
+            && me.asked.is_none()
+            && !matches!(
+                me.activity,
+                Activity::Walking {
+                    stepping_aside: true,
+                    ..
+                }
+            )
+            && dist(me.position, c) <= p.robot_interest_range_m
+            && self.rng.chance(ctx.interest)
+        {
+            let spot = spot_by_robot(me.position, c, gather_distance_m(p, ctx.r, rr));
+            if walkable(world, me.position, spot, ctx.r) {
+                me.target = spot;
+                me.waypoint = None;
+                me.activity = Activity::coming_to_robot(me.position, time_s);
+            }
+        }
+        if self.activity_over(ctx, me, group_over, curious) {
+            (me.target, me.waypoint) = pick_target(world, &mut self.rng, me.position, me.waypoint);
+            me.activity = Activity::walking(me.position, time_s);
+            me.curious_until_s = None;
+        }
+    }
+
+    /// Goes on with a person's activity (arrivals, lingering, progress
+    /// checks, time-outs, the robot's spot); whether it is over and a new
+    /// target is wanted.
+    fn activity_over(
+        &mut self,
+        ctx: &StepContext<'_>,
+        me: &mut Person,
+        group_over: bool,
+        curious: bool,
+    ) -> bool {
+        let (p, r, time_s) = (ctx.p, ctx.r, ctx.time_s);
+        let mut new_target = false;
+        match me.activity {
+            // A curious group's time is up (some may not have arrived
+            // yet): they go, as after any visit.
+            Activity::ComingToRobot { .. } | Activity::AtRobot { .. } if group_over => new_target = true,
+            Activity::Lingering { until_s } => new_target = time_s >= until_s,
+            Activity::Walking {
+                since_s,
+                checkpoint,
+                checkpoint_s,
+                stepping_aside,
+            } => {
+                if dist(me.position, me.target) <= p.arrival_tolerance_m {
+                    if self.rng.chance(p.linger_probability) {
+                        me.activity = Activity::Lingering {
+                            until_s: time_s + self.rng.exponential(p.linger_mean_s),
+                        };
+                    } else {
+                        new_target = true;
+                    }
+                } else if time_s - checkpoint_s >= p.stuck_timeout_s {
+                    // Progress check: stuck behind something?
+                    new_target = dist(me.position, checkpoint) < r;
+                    me.activity = Activity::Walking {
+                        since_s,
+                        checkpoint: me.position,
+                        checkpoint_s: time_s,
+                        stepping_aside,
+                    };
+                }
+                new_target |= time_s - since_s > p.target_timeout_s;
+            }
+            Activity::ComingToRobot {
+                since_s,
+                checkpoint,
+                checkpoint_s,
+            } => match ctx.robot {
+                Some((c, rr)) if curious || dist(me.position, c) <= p.robot_interest_range_m => {
+                    let by = gather_distance_m(p, r, rr);
+                    me.target = spot_by_robot(me.position, c, by);
+                    if dist(me.position, c) <= by {
+                        let until_s = match me.curious_until_s {
+                            Some(u) => u,
+                            None => time_s + self.rng.exponential(p.robot_linger_mean_s),
+                        };
+                        me.activity = Activity::AtRobot { until_s };
+                    } else if !curious {
+                        // Progress check and time out, as for any walk.
+                        if time_s - checkpoint_s >= p.stuck_timeout_s {
+                            new_target = dist(me.position, checkpoint) < r;
+                            me.activity = Activity::ComingToRobot {
+                                since_s,
+                                checkpoint: me.position,
+                                checkpoint_s: time_s,
+                            };
+                        }
+                        new_target |= time_s - since_s > p.target_timeout_s;
+                    }
+                }
+                // The robot has gone out of range.
+                _ => new_target = true,
+            },
+            Activity::AtRobot { until_s } => match ctx.robot {
+                Some((c, rr))
+                    if time_s < until_s && (curious || dist(me.position, c) <= p.robot_interest_range_m) =>
+                {
+                    me.target = spot_by_robot(me.position, c, gather_distance_m(p, r, rr));
+                }
+                // Time to go, or the robot has gone out of range.
+                _ => new_target = true,
+            },
+        }
+        new_target
+    }
+
+    /// The social force on person `i` (`me`, wanting to go at `desired`):
+    /// relaxation to `desired`, and repulsion by the other people (within
+    /// the field of view's weighting), the robot and the walls.
+    fn force_on(&self, ctx: &StepContext<'_>, i: usize, me: &Person, desired: Vec2) -> Vec2 {
+        let (p, r, reach) = (ctx.p, ctx.r, ctx.reach);
+        let mut force = (desired - me.velocity).scale(1.0 / p.relaxation_time_s);
+        let heading = {
+            let h = if norm(desired) > 0.0 { desired } else { me.velocity };
+            let n = norm(h);
+            if n > 1e-9 { Some(h.scale(1.0 / n)) } else { None }
+        };
+        let fov = |n: Vec2| match heading {
+            Some(e) => p.anisotropy + (1.0 - p.anisotropy) * 0.5 * (1.0 - e.dot(n)),
+            None => 1.0,
+        };
+        let people = &self.people;
+        self.hash.for_each_near(me.position, reach + ctx.slack, |j| {
+            if j == i {
+                return;
+            }
+            let n = me.position - people[j].position;
+            let d2 = n.dot(n);
+            if d2 >= reach * reach || d2 <= 1e-24 {
+                return;
+            }
+            let d = d2.sqrt();
+            let u = n.scale(1.0 / d);
+            let mag = p.person_repulsion_mps2 * ((2.0 * r - d) / p.person_range_m).exp();
+            force = force + u.scale(mag * fov(u));
+        });
+        // People who came to see the robot do not shy away from it.
+        if let Some((c, rr)) = ctx.robot
+            && !me.activity.with_robot()
+        {
+            let n = me.position - c;
+            let d = norm(n);
+            if d > 1e-12 && d < r + rr + FORCE_CUTOFF_RANGES * p.person_range_m {
+                let u = n.scale(1.0 / d);
+                let mag = p.robot_repulsion_mps2 * ((r + rr - d) / p.person_range_m).exp();
+                force = force + u.scale(mag * fov(u));
+            }
+        }
+        // Walls (the free radius, one look-up, rules most people out).
+        let field = ctx.world.distance_field();
+        if field.free_radius_m(me.position) < ctx.wall_reach {
+            let wall = field.nearest(me.position);
+            if wall.distance_m > 1e-12 && wall.distance_m < ctx.wall_reach {
+                let u = (me.position - wall.point).scale(1.0 / wall.distance_m);
+                let mag = p.wall_repulsion_mps2 * ((r - wall.distance_m) / p.wall_range_m).exp();
+                force = force + u.scale(mag);
+            }
+        }
+        force
+    }
+
+    /// Integrates person `i` (`me`) under `force` for one step, the speed
+    /// capped, without interpenetration (a blocked move stops them).
+    fn integrate(&self, ctx: &StepContext<'_>, i: usize, me: &mut Person, force: Vec2) {
+        let (p, r, dt_s) = (ctx.p, ctx.r, ctx.dt_s);
+        let field = ctx.world.distance_field();
+        let mut v = me.velocity + force.scale(dt_s);
+        let vmax = MAX_SPEED_RATIO * me.preferred_speed_mps;
+        let speed = norm(v);
+        if speed > vmax {
+            v = v.scale(vmax / speed);
+        }
+        let next = me.position + v.scale(dt_s);
+        let mut free = field.free_radius_m(next) >= r || field.distance_m(next) >= r;
+        if let Some((c, rr)) = ctx.robot {
+            // Not closer than the clearance, unless already closer and
+            // moving away.
+            let keep = r + rr + p.robot_clearance_m;
+            let d = dist(next, c);
+            free &= d >= keep || d > dist(me.position, c);
+        }
+        if free {
+            let people = &self.people;
+            let contact2 = 4.0 * r * r;
+            self.hash.for_each_near(next, 2.0 * r + ctx.slack, |j| {
+                let n = people[j].position - next;
+                if j != i && n.dot(n) < contact2 {
+                    free = false;
+                }
+            });
+        }
+        if free {
+            me.position = next;
+            me.velocity = v;
+        } else {
+            me.velocity = Vec2::default();
+        }
+    }
+}
+
+/// What every person's part of one [`Crowd::step`] shares: the world, the
+/// robot, the time and the step's derived distances.
+struct StepContext<'a> {
+    world: &'a World,
+    p: &'a CrowdParams,
+    /// The robot's footprint `(centre, radius)`, if any.
+    robot: Option<(Vec2, f64)>,
+    /// The time at the end of the step, seconds.
+    time_s: f64,
+    /// The step, seconds.
+    dt_s: f64,
+    /// A person's radius, metres.
+    r: f64,
+    /// Range beyond which people do not push each other, metres.
+    reach: f64,
+    /// How far people move at most in a step, twice, metres.
+    slack: f64,
+    /// Range beyond which walls do not push, metres.
+    wall_reach: f64,
+    /// Probability that a person takes an interest in the robot in this step.
+    interest: f64,
+}
+
+/// The velocity a person wants: along the route or at the target while
+/// walking, at the robot's spot when coming to it, back to the gather
+/// distance at the robot, none while lingering.
+fn desired_velocity(world: &World, p: &CrowdParams, me: &Person) -> Vec2 {
+    match me.activity {
+        Activity::Walking { .. } => {
+            // Far from the exhibit: follow the route; near it (or
+            // wandering): straight at the target.
+            let routed = me.waypoint.and_then(|k| {
+                (world.routes().distance_m(k, me.position) > p.gather_radius_m + ROUTE_BEYOND_GATHER_M)
+                    .then(|| world.routes().direction(k, me.position))
+                    .flatten()
+            });
+            let to = me.target - me.position;
+            let d = norm(to);
+            match routed {
+                Some(u) => u.scale(me.preferred_speed_mps),
+                None if d > 1e-9 => to.scale(me.preferred_speed_mps / d),
+                None => Vec2::default(),
+            }
+        }
+        Activity::Lingering { .. } => Vec2::default(),
+        Activity::ComingToRobot { .. } => {
+            let to = me.target - me.position;
+            let d = norm(to);
+            if d > 1e-9 {
+                to.scale(me.preferred_speed_mps / d)
+            } else {
+                Vec2::default()
+            }
+        }
+        Activity::AtRobot { .. } => {
+            // Back to the gather distance (either way), the faster
+            // the farther, at most at the preferred speed.
+            let to = me.target - me.position;
+            let d = norm(to);
+            if d > 1e-9 {
+                let speed = (d / p.relaxation_time_s).min(me.preferred_speed_mps);
+                to.scale(speed / d)
+            } else {
+                Vec2::default()
+            }
+        }
     }
 }
 

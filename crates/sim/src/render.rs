@@ -299,7 +299,6 @@ impl<'a> Picture<'a> {
     /// The picture as an SVG document.
     pub fn to_svg(&self) -> Result<String> {
         let v = self.view()?;
-        let g = self.grid;
         let mut s = String::new();
         let _ = writeln!(
             s,
@@ -312,8 +311,20 @@ impl<'a> Picture<'a> {
             "<rect width=\"100%\" height=\"100%\" fill=\"{}\"/>",
             hex(UNKNOWN)
         );
-        // The grid: one PNG pixel per cell, top row first, placed at the
-        // map's top-left corner and turned with the map.
+        self.svg_grid(&mut s, &v)?;
+        let line_w = (v.s * 0.04).clamp(1.0, 4.0);
+        for item in &self.items {
+            self.svg_item(&mut s, &v, item, line_w);
+        }
+        self.svg_legend(&mut s);
+        s.push_str("</svg>\n");
+        Ok(s)
+    }
+
+    /// The grid into the SVG document `s`: one PNG pixel per cell, top row
+    /// first, placed at the map's top-left corner and turned with the map.
+    fn svg_grid(&self, s: &mut String, v: &View) -> Result<()> {
+        let g = self.grid;
         let o = g.origin();
         let (ox, oy) = v.px(o.position());
         let (gw, gh) = (
@@ -332,141 +343,110 @@ impl<'a> Picture<'a> {
             f(gh),
             base64(&grid_png(g)?)
         );
-        let line_w = (v.s * 0.04).clamp(1.0, 4.0);
-        for item in &self.items {
-            match item {
-                Item::Trajectory { points, labels } => {
-                    // One polyline per run of equal labels.
-                    let mut k = 0;
-                    while k + 1 < points.len() {
-                        let mut end = k + 1;
-                        while end + 1 < points.len() && labels[end] == labels[k] {
-                            end += 1;
-                        }
-                        let pts: Vec<String> = points[k..=end]
-                            .iter()
-                            .map(|p| {
-                                let (x, y) = v.px(*p);
-                                format!("{},{}", f(x), f(y))
-                            })
-                            .collect();
-                        let _ = writeln!(
-                            s,
-                            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" \
-                             stroke-linejoin=\"round\" stroke-linecap=\"round\"/>",
-                            pts.join(" "),
-                            hex(self.label_colour(labels[k])),
-                            f(line_w)
-                        );
-                        k = end;
-                    }
-                }
-                Item::Robot { pose, radius_m } => {
-                    let (x, y) = v.px(pose.position());
-                    let tip = pose.transform(Vec2::new(*radius_m, 0.0));
-                    let (tx, ty) = v.px(tip);
-                    let _ = writeln!(
-                        s,
-                        "<g stroke=\"{c}\" stroke-width=\"{w}\"><circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{c}\" \
-                         fill-opacity=\"0.25\"/><line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/></g>",
-                        f(x),
-                        f(y),
-                        f(radius_m * v.s),
-                        f(x),
-                        f(y),
-                        f(tx),
-                        f(ty),
-                        c = hex(ROBOT),
-                        w = f(line_w)
-                    );
-                }
-                Item::Ray { from, to } => {
-                    let ((x1, y1), (x2, y2)) = (v.px(*from), v.px(*to));
-                    let _ = writeln!(
-                        s,
-                        "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" stroke-opacity=\"0.6\" \
-                         stroke-width=\"1\"/>",
-                        f(x1),
-                        f(y1),
-                        f(x2),
-                        f(y2),
-                        hex(RAY)
-                    );
-                }
-                Item::Person { center, radius_m } => {
-                    let (x, y) = v.px(*center);
-                    let _ = writeln!(
-                        s,
-                        "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>",
-                        f(x),
-                        f(y),
-                        f(radius_m * v.s),
-                        hex(PERSON)
-                    );
-                }
-                Item::Marker { at, kind } => {
-                    let (x, y) = v.px(*at);
-                    let r = marker_radius_px(v.s);
-                    let _ = match kind {
-                        MarkerKind::Start => writeln!(
-                            s,
-                            "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#2ca02c\" stroke=\"white\"/>",
-                            f(x),
-                            f(y),
-                            f(r)
-                        ),
-                        MarkerKind::Goal => writeln!(
-                            s,
-                            "<g stroke=\"#d62728\" stroke-width=\"2\" fill=\"none\"><circle cx=\"{x}\" cy=\"{y}\" \
-                             r=\"{r}\"/><path d=\"M{a} {b}L{c} {d}M{a} {d}L{c} {b}\"/></g>",
-                            x = f(x),
-                            y = f(y),
-                            r = f(r),
-                            a = f(x - r * 0.6),
-                            b = f(y - r * 0.6),
-                            c = f(x + r * 0.6),
-                            d = f(y + r * 0.6)
-                        ),
-                        MarkerKind::Point => writeln!(
-                            s,
-                            "<rect x=\"{}\" y=\"{}\" width=\"{w}\" height=\"{w}\" fill=\"#1f77b4\"/>",
-                            f(x - r * 0.5),
-                            f(y - r * 0.5),
-                            w = f(r)
-                        ),
-                        MarkerKind::Square(rgb) => writeln!(
-                            s,
-                            "<rect x=\"{}\" y=\"{}\" width=\"{w}\" height=\"{w}\" fill=\"{}\"/>",
-                            f(x - r * 0.5),
-                            f(y - r * 0.5),
-                            hex(*rgb),
-                            w = f(r)
-                        ),
-                        MarkerKind::Ring(rgb) => writeln!(
-                            s,
-                            "<g stroke=\"{c}\" stroke-width=\"2\" fill=\"none\"><circle cx=\"{x}\" cy=\"{y}\" \
-                             r=\"{r}\"/><circle cx=\"{x}\" cy=\"{y}\" r=\"{d}\" fill=\"{c}\"/></g>",
-                            c = hex(*rgb),
-                            x = f(x),
-                            y = f(y),
-                            r = f(r),
-                            d = f(r * 0.25)
-                        ),
-                    };
-                }
-                Item::Text { at, text } => {
-                    let (x, y) = v.px(*at);
-                    let _ = writeln!(
-                        s,
-                        "<text x=\"{}\" y=\"{}\" font-family=\"sans-serif\" font-size=\"12\" fill=\"{}\">{}</text>",
-                        f(x),
-                        f(y),
-                        hex(TEXT),
-                        xml_escape(text)
-                    );
-                }
+        Ok(())
+    }
+
+    /// One item into the SVG document `s`, lines `line_w` pixels wide.
+    fn svg_item(&self, s: &mut String, v: &View, item: &Item, line_w: f64) {
+        match item {
+            Item::Trajectory { points, labels } => self.svg_trajectory(s, v, points, labels, line_w),
+            Item::Robot { pose, radius_m } => {
+                let (x, y) = v.px(pose.position());
+                let tip = pose.transform(Vec2::new(*radius_m, 0.0));
+                let (tx, ty) = v.px(tip);
+                let _ = writeln!(
+                    s,
+                    "<g stroke=\"{c}\" stroke-width=\"{w}\"><circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{c}\" \
+                     fill-opacity=\"0.25\"/><line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/></g>",
+                    f(x),
+                    f(y),
+                    f(radius_m * v.s),
+                    f(x),
+                    f(y),
+                    f(tx),
+                    f(ty),
+                    c = hex(ROBOT),
+                    w = f(line_w)
+                );
+            }
+            Item::Ray { from, to } => {
+                let ((x1, y1), (x2, y2)) = (v.px(*from), v.px(*to));
+                let _ = writeln!(
+                    s,
+                    "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" stroke-opacity=\"0.6\" \
+                     stroke-width=\"1\"/>",
+                    f(x1),
+                    f(y1),
+                    f(x2),
+                    f(y2),
+                    hex(RAY)
+                );
+            }
+            Item::Person { center, radius_m } => {
+                let (x, y) = v.px(*center);
+                let _ = writeln!(
+                    s,
+                    "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>",
+                    f(x),
+                    f(y),
+                    f(radius_m * v.s),
+                    hex(PERSON)
+                );
+            }
+            Item::Marker { at, kind } => svg_marker(s, v, *at, kind),
+            Item::Text { at, text } => {
+                let (x, y) = v.px(*at);
+                let _ = writeln!(
+                    s,
+                    "<text x=\"{}\" y=\"{}\" font-family=\"sans-serif\" font-size=\"12\" fill=\"{}\">{}</text>",
+                    f(x),
+                    f(y),
+                    hex(TEXT),
+                    xml_escape(text)
+                );
             }
         }
+    }
+
+    /// A trajectory into the SVG document `s`: one polyline per run of
+    /// equal labels, in the label's colour.
+    fn svg_trajectory(
+        &self,
+        s: &mut String,
+        v: &View,
+        points: &[Vec2],
+        labels: &[Option<usize>],
+        line_w: f64,
+    ) {
+        // One polyline per run of equal labels.
+        let mut k = 0;
+        while k + 1 < points.len() {
+            let mut end = k + 1;
+            while end + 1 < points.len() && labels[end] == labels[k] {
+                end += 1;
+            }
+            let pts: Vec<String> = points[k..=end]
+                .iter()
+                .map(|p| {
+                    let (x, y) = v.px(*p);
+                    format!("{},{}", f(x), f(y))
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" \
+                 stroke-linejoin=\"round\" stroke-linecap=\"round\"/>",
+                pts.join(" "),
+                hex(self.label_colour(labels[k])),
+                f(line_w)
+            );
+            k = end;
+        }
+    }
+
+    /// The legend (the labels and their colours) into the SVG document
+    /// `s`, if there are labels.
+    fn svg_legend(&self, s: &mut String) {
         if !self.labels.is_empty() {
             let width = 30.0 + 7.0 * self.labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as f64;
             let _ = writeln!(
@@ -491,8 +471,6 @@ impl<'a> Picture<'a> {
             }
             s.push_str("</g>\n");
         }
-        s.push_str("</svg>\n");
-        Ok(s)
     }
 
     /// The picture as an RGB image.
@@ -814,6 +792,58 @@ impl Canvas {
             }
         }
     }
+}
+
+/// A marker at `at` (world frame) into the SVG document `s`.
+fn svg_marker(s: &mut String, v: &View, at: Vec2, kind: &MarkerKind) {
+    let (x, y) = v.px(at);
+    let r = marker_radius_px(v.s);
+    let _ = match kind {
+        MarkerKind::Start => writeln!(
+            s,
+            "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#2ca02c\" stroke=\"white\"/>",
+            f(x),
+            f(y),
+            f(r)
+        ),
+        MarkerKind::Goal => writeln!(
+            s,
+            "<g stroke=\"#d62728\" stroke-width=\"2\" fill=\"none\"><circle cx=\"{x}\" cy=\"{y}\" \
+             r=\"{r}\"/><path d=\"M{a} {b}L{c} {d}M{a} {d}L{c} {b}\"/></g>",
+            x = f(x),
+            y = f(y),
+            r = f(r),
+            a = f(x - r * 0.6),
+            b = f(y - r * 0.6),
+            c = f(x + r * 0.6),
+            d = f(y + r * 0.6)
+        ),
+        MarkerKind::Point => writeln!(
+            s,
+            "<rect x=\"{}\" y=\"{}\" width=\"{w}\" height=\"{w}\" fill=\"#1f77b4\"/>",
+            f(x - r * 0.5),
+            f(y - r * 0.5),
+            w = f(r)
+        ),
+        MarkerKind::Square(rgb) => writeln!(
+            s,
+            "<rect x=\"{}\" y=\"{}\" width=\"{w}\" height=\"{w}\" fill=\"{}\"/>",
+            f(x - r * 0.5),
+            f(y - r * 0.5),
+            hex(*rgb),
+            w = f(r)
+        ),
+        MarkerKind::Ring(rgb) => writeln!(
+            s,
+            "<g stroke=\"{c}\" stroke-width=\"2\" fill=\"none\"><circle cx=\"{x}\" cy=\"{y}\" \
+             r=\"{r}\"/><circle cx=\"{x}\" cy=\"{y}\" r=\"{d}\" fill=\"{c}\"/></g>",
+            c = hex(*rgb),
+            x = f(x),
+            y = f(y),
+            r = f(r),
+            d = f(r * 0.25)
+        ),
+    };
 }
 
 #[cfg(test)]

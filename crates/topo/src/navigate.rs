@@ -136,12 +136,14 @@ use rand_chacha::ChaCha8Rng;
 use robot::{Command, Controller, Event, Notes, Perception, Step};
 
 use super::TopoError;
+use super::builder::Arrival;
 use super::builder::MapBuilder;
 use super::explore::{TopoParams, Visit, place_event};
 use super::fpn::{FuzzyPetriNet, PlaceId, Strategy, ThresholdParams, TransitionId, Turn};
 use super::propagation::{Plan, PlanMode, plan};
+use super::strategy::Failure;
 use super::strategy::{Action, actions_at};
-use super::walker::{Walker, WalkerStep};
+use super::walker::{Leg, Walker, WalkerStep};
 
 /// Parameters of navigation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -629,6 +631,142 @@ impl RouteFollower {
         }
     }
 
+    /// Learns from a leg's end at `arrival`: the planned transition's
+    /// attempt (unless borrowed), and a transition that twice ended at the
+    /// same wrong place rejected. Whether the leg went as planned.
+    fn learn_from_arrival(
+        &mut self,
+        planned: Option<TransitionId>,
+        arrival: &Arrival,
+    ) -> Result<bool, TopoError> {
+        let borrowed = std::mem::take(&mut self.borrowed);
+        if std::mem::take(&mut self.homing_leg) {
+            self.homing_nearest_m = self.homing_nearest_m.min(self.walker.homing_nearest_m());
+        }
+        let map = self.walker.builder_mut().map_mut();
+        let as_planned = planned.is_some_and(|t| map.transition(t).to == arrival.place);
+        if let Some(t) = planned
+            && !borrowed
+        {
+            map.record_attempt(t, as_planned, &self.params.thresholds)?;
+        }
+        if let Some(t) = planned
+            && !as_planned
+        {
+            let again = self.wrong_ends.insert((t, borrowed), arrival.place) == Some(arrival.place);
+            if again && self.params.reject_repeated {
+                if borrowed {
+                    self.no_borrow.insert(t);
+                } else {
+                    map.set_lambda(t, 0.0)?;
+                    self.rejected_here.insert(t);
+                }
+            }
+        }
+        Ok(as_planned)
+    }
+
+    /// A leg arrived at a place: learns from it, records the visit, and
+    /// stops at a goal, gives up after `max_legs`, or starts the next leg
+    /// (facing the goal on the spot first, or retracing a wrong leg).
+    fn arrived(
+        &mut self,
+        p: &Perception,
+        leg: Leg,
+        arrival: Arrival,
+        transition: Option<TransitionId>,
+        notes: &mut Notes,
+    ) -> Result<Step, TopoError> {
+        let planned = self.expected.take();
+        let as_planned = self.learn_from_arrival(planned, &arrival)?;
+        let visit = Visit {
+            time_s: p.time_s,
+            place: arrival.place,
+            new: arrival.new,
+            recalibrated: arrival.recalibrated,
+            heading_recalibrated: arrival.heading_recalibrated,
+            tolerance_m: arrival.tolerance_m,
+            map_pose: arrival.map_pose,
+            odometry: p.odometry,
+            from: leg.from,
+            action: leg.action,
+            transition,
+        };
+        if notes.is_enabled() {
+            notes.event(place_event(self.map(), &visit).with("as_planned", as_planned));
+        }
+        self.legs.push(NavLeg {
+            visit,
+            planned,
+            as_planned,
+        });
+        self.stats.legs += 1;
+        if as_planned {
+            self.stats.as_planned += 1;
+        }
+        if self.goals.contains(&arrival.place) {
+            self.state = NavState::Arrived;
+            return Ok(Step::Done(Command::Stop));
+        }
+        if self.stats.legs >= self.params.max_legs {
+            self.state = NavState::GaveUp;
+            return Ok(Step::GiveUp);
+        }
+        if planned.is_some() && !as_planned {
+            self.stats.replans += 1;
+        }
+        // Not after a turn on the spot (a planned transition played
+        // as a turn, `exit_turn` straight): undoing a turn is no
+        // drive back.
+        self.retrace =
+            if planned.is_some() && !as_planned && arrival.new && leg.action.exit_turn != Turn::Straight {
+                self.retrace_of(arrival.place, leg.action.strategy, arrival.map_pose.theta_rad)
+            } else {
+                None
+            };
+        let faced = std::mem::take(&mut self.facing);
+        if self.params.face_goals
+            && !faced
+            && let Some(g) = self.goal_on_spot(arrival.place)
+        {
+            let heading = self.walker.builder().map().place(g).heading_rad;
+            self.expected = None;
+            self.facing = true;
+            self.stats.facings += 1;
+            self.walker.start_facing(heading, None);
+            return Ok(Step::Run(Command::Stop));
+        }
+        self.go_from(arrival.place);
+        Ok(Step::Run(Command::Stop))
+    }
+
+    /// A leg failed: counted and its attempt recorded (unless borrowed);
+    /// gives up after `max_legs`, or starts a leg from anywhere.
+    fn failed(&mut self, p: &Perception, failure: &Failure, notes: &mut Notes) -> Result<Step, TopoError> {
+        self.stats.legs += 1;
+        self.stats.failed_legs += 1;
+        let borrowed = std::mem::take(&mut self.borrowed);
+        self.facing = false;
+        self.homing_leg = false;
+        if let Some(t) = self.expected.take()
+            && !borrowed
+        {
+            self.walker
+                .builder_mut()
+                .map_mut()
+                .record_attempt(t, false, &self.params.thresholds)?;
+        }
+        if notes.is_enabled() {
+            notes.event(Event::new("leg_failed", p.time_s).with("why", format!("{failure:?}")));
+        }
+        if self.stats.legs >= self.params.max_legs {
+            self.state = NavState::GaveUp;
+            return Ok(Step::GiveUp);
+        }
+        self.walker.start_anywhere(Turn::Left);
+        Ok(Step::Run(Command::Stop))
+    }
+
     fn tick(&mut self, p: &Perception, notes: &mut Notes) -> Result<Step, TopoError> {
         match self.state {
             NavState::Arrived => return Ok(Step::Done(Command::Stop)),
@@ -658,119 +796,8 @@ impl RouteFollower {
                 arrival,
                 transition,
                 ..
-            } => {
-                let planned = self.expected.take();
-                let borrowed = std::mem::take(&mut self.borrowed);
-                if std::mem::take(&mut self.homing_leg) {
-                    self.homing_nearest_m = self.homing_nearest_m.min(self.walker.homing_nearest_m());
-                }
-                let map = self.walker.builder_mut().map_mut();
-                let as_planned = planned.is_some_and(|t| map.transition(t).to == arrival.place);
-                if let Some(t) = planned
-                    && !borrowed
-                {
-                    map.record_attempt(t, as_planned, &self.params.thresholds)?;
-                }
-                if let Some(t) = planned
-                    && !as_planned
-                {
-                    let again = self.wrong_ends.insert((t, borrowed), arrival.place) == Some(arrival.place);
-                    if again && self.params.reject_repeated {
-                        if borrowed {
-                            self.no_borrow.insert(t);
-                        } else {
-                            map.set_lambda(t, 0.0)?;
-                            self.rejected_here.insert(t);
-                        }
-                    }
-                }
-                let visit = Visit {
-                    time_s: p.time_s,
-                    place: arrival.place,
-                    new: arrival.new,
-                    recalibrated: arrival.recalibrated,
-                    heading_recalibrated: arrival.heading_recalibrated,
-                    tolerance_m: arrival.tolerance_m,
-                    map_pose: arrival.map_pose,
-                    odometry: p.odometry,
-                    from: leg.from,
-                    action: leg.action,
-                    transition,
-                };
-                if notes.is_enabled() {
-                    notes.event(place_event(self.map(), &visit).with("as_planned", as_planned));
-                }
-                self.legs.push(NavLeg {
-                    visit,
-                    planned,
-                    as_planned,
-                });
-                self.stats.legs += 1;
-                if as_planned {
-                    self.stats.as_planned += 1;
-                }
-                if self.goals.contains(&arrival.place) {
-                    self.state = NavState::Arrived;
-                    return Ok(Step::Done(Command::Stop));
-                }
-                if self.stats.legs >= self.params.max_legs {
-                    self.state = NavState::GaveUp;
-                    return Ok(Step::GiveUp);
-                }
-                if planned.is_some() && !as_planned {
-                    self.stats.replans += 1;
-                }
-                // Not after a turn on the spot (a planned transition played
-                // as a turn, `exit_turn` straight): undoing a turn is no
-                // drive back.
-                self.retrace = if planned.is_some()
-                    && !as_planned
-                    && arrival.new
-                    && leg.action.exit_turn != Turn::Straight
-                {
-                    self.retrace_of(arrival.place, leg.action.strategy, arrival.map_pose.theta_rad)
-                } else {
-                    None
-                };
-                let faced = std::mem::take(&mut self.facing);
-                if self.params.face_goals
-                    && !faced
-                    && let Some(g) = self.goal_on_spot(arrival.place)
-                {
-                    let heading = self.walker.builder().map().place(g).heading_rad;
-                    self.expected = None;
-                    self.facing = true;
-                    self.stats.facings += 1;
-                    self.walker.start_facing(heading, None);
-                    return Ok(Step::Run(Command::Stop));
-                }
-                self.go_from(arrival.place);
-                Ok(Step::Run(Command::Stop))
-            }
-            WalkerStep::Failed { failure, .. } => {
-                self.stats.legs += 1;
-                self.stats.failed_legs += 1;
-                let borrowed = std::mem::take(&mut self.borrowed);
-                self.facing = false;
-                self.homing_leg = false;
-                if let Some(t) = self.expected.take()
-                    && !borrowed
-                {
-                    self.walker
-                        .builder_mut()
-                        .map_mut()
-                        .record_attempt(t, false, &self.params.thresholds)?;
-                }
-                if notes.is_enabled() {
-                    notes.event(Event::new("leg_failed", p.time_s).with("why", format!("{failure:?}")));
-                }
-                if self.stats.legs >= self.params.max_legs {
-                    self.state = NavState::GaveUp;
-                    return Ok(Step::GiveUp);
-                }
-                self.walker.start_anywhere(Turn::Left);
-                Ok(Step::Run(Command::Stop))
-            }
+            } => self.arrived(p, leg, arrival, transition, notes),
+            WalkerStep::Failed { failure, .. } => self.failed(p, &failure, notes),
             WalkerStep::Idle => {
                 self.walker.start_anywhere(Turn::Left);
                 Ok(Step::Run(Command::Stop))

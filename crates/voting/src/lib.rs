@@ -440,36 +440,23 @@ impl VotingController {
     }
 }
 
+/// Two teams' weighted votes for action `m` (a team without votes adds
+/// nothing).
 fn team_sum(w1: f64, v1: &[f64], w2: f64, v2: &[f64], m: usize) -> f64 {
     let a = if v1.is_empty() { 0.0 } else { w1 * v1[m] };
     let b = if v2.is_empty() { 0.0 } else { w2 * v2[m] };
     a + b
 }
 
-impl Controller for VotingController {
-    fn step(&mut self, perception: &Perception, notes: &mut Notes) -> Step {
+impl VotingController {
+    /// Each team's votes into the ballot (a team switched off gets none):
+    /// IR and sonar avoid obstacles (the sonar with the echoes it heard),
+    /// odometry votes for the goal's bearing, planning for the freest
+    /// bearing `temp_bearing`.
+    fn cast_votes(&mut self, perception: &Perception, goal_bearing: f64, temp_bearing: f64) {
         let n_actions = self.p.actions.len();
         let pose = perception.odometry;
         let t = self.p.teams;
-        let Some(goal) = perception.goal else {
-            return Step::Done(robot::Command::Stop);
-        };
-        let to_goal = goal - pose.position();
-        if to_goal.norm() <= self.p.arrive_m {
-            return Step::Done(robot::Command::Stop);
-        }
-        let goal_bearing = wrap_angle(self.steer.unwrap_or_else(|| to_goal.angle()) - pose.theta_rad);
-        let memory = self
-            .memory
-            .get_or_insert_with(|| SpatialMemory::new(self.p.memory, pose.position()));
-        memory.visit(pose.position());
-        let mark_sum = f64::from(memory.mark_sum(pose.position()));
-        let temp_bearing = if t.planning {
-            memory.freest_bearing(&pose, goal_bearing)
-        } else {
-            0.0
-        };
-
         let b = &mut self.ballot;
         let resize = |v: &mut Vec<f64>, on: bool| {
             v.clear();
@@ -522,7 +509,21 @@ impl Controller for VotingController {
         if t.planning {
             behaviours::goal_votes(&self.p.actions, temp_bearing, self.p.beta_rad, &mut b.plan);
         }
+    }
 
+    /// Fuses the teams' votes with the weights of the moment (obstacle
+    /// teams by the IR triggered, goal teams by the marks around) and
+    /// chooses the action; the ballot keeps it all.
+    fn fuse(
+        &mut self,
+        perception: &Perception,
+        mark_sum: f64,
+        goal_bearing: f64,
+        temp_bearing: f64,
+    ) -> usize {
+        let n_actions = self.p.actions.len();
+        let t = self.p.teams;
+        let b = &mut self.ballot;
         let triggered = perception.ir.iter().filter(|d| d.triggered).count();
         let obs = obstacle_weight(triggered, perception.ir.len());
         let (w_ir, w_sonar) = match (t.ir, t.sonar) {
@@ -559,45 +560,85 @@ impl Controller for VotingController {
         let b = &mut self.ballot;
         b.fused = fused;
         b.chosen = chosen;
+        chosen
+    }
 
-        // Escape's direction: the freer side, then the goal's side, then left.
-        let (mut left, mut right) = (0, 0);
-        for d in &perception.ir {
-            if d.triggered {
-                if d.mount.theta_rad > 0.0 {
-                    left += 1;
-                } else if d.mount.theta_rad < 0.0 {
-                    right += 1;
-                }
+    /// The ballot's weights, bearings and votes, and the chosen action, for
+    /// traces.
+    fn note_ballot(&self, chosen: usize, notes: &mut Notes) {
+        let b = &self.ballot;
+        let a = &self.p.actions.actions[chosen];
+        notes.behaviour(static_name(&a.name));
+        let w = b.weights;
+        for (k, v) in [
+            ("W_ir", w.ir),
+            ("W_sonar", w.sonar),
+            ("W_odo", w.odo),
+            ("W_plan", w.plan),
+            ("W_obs", w.obs),
+            ("W_goal", w.goal),
+            ("mark_sum", b.mark_sum),
+            ("goal_bearing_rad", b.goal_bearing_rad),
+            ("temp_bearing_rad", b.temp_bearing_rad),
+        ] {
+            notes.value(k, v);
+        }
+        for (m, v) in b.fused.iter().enumerate() {
+            notes.value(VOTE_NAMES.get(m).copied().unwrap_or("V(?)"), *v);
+        }
+    }
+}
+
+/// Escape's direction: the side with fewer IR sensors triggered, then the
+/// goal's side, then left. Whether it is left.
+fn escape_left(perception: &Perception, goal_bearing: f64) -> bool {
+    let (mut left, mut right) = (0, 0);
+    for d in &perception.ir {
+        if d.triggered {
+            if d.mount.theta_rad > 0.0 {
+                left += 1;
+            } else if d.mount.theta_rad < 0.0 {
+                right += 1;
             }
         }
-        let turn_left = match left.cmp(&right) {
-            std::cmp::Ordering::Less => true,
-            std::cmp::Ordering::Greater => false,
-            std::cmp::Ordering::Equal => goal_bearing >= 0.0,
-        };
-        let command = self.p.actions.command(chosen, turn_left);
+    }
+    match left.cmp(&right) {
+        std::cmp::Ordering::Less => true,
+        std::cmp::Ordering::Greater => false,
+        std::cmp::Ordering::Equal => goal_bearing >= 0.0,
+    }
+}
 
+impl Controller for VotingController {
+    fn step(&mut self, perception: &Perception, notes: &mut Notes) -> Step {
+        let pose = perception.odometry;
+        let t = self.p.teams;
+        let Some(goal) = perception.goal else {
+            return Step::Done(robot::Command::Stop);
+        };
+        let to_goal = goal - pose.position();
+        if to_goal.norm() <= self.p.arrive_m {
+            return Step::Done(robot::Command::Stop);
+        }
+        let goal_bearing = wrap_angle(self.steer.unwrap_or_else(|| to_goal.angle()) - pose.theta_rad);
+        let memory = self
+            .memory
+            .get_or_insert_with(|| SpatialMemory::new(self.p.memory, pose.position()));
+        memory.visit(pose.position());
+        let mark_sum = f64::from(memory.mark_sum(pose.position()));
+        let temp_bearing = if t.planning {
+            memory.freest_bearing(&pose, goal_bearing)
+        } else {
+            0.0
+        };
+        self.cast_votes(perception, goal_bearing, temp_bearing);
+        let chosen = self.fuse(perception, mark_sum, goal_bearing, temp_bearing);
+        let command = self
+            .p
+            .actions
+            .command(chosen, escape_left(perception, goal_bearing));
         if notes.is_enabled() {
-            let a = &self.p.actions.actions[chosen];
-            notes.behaviour(static_name(&a.name));
-            let w = b.weights;
-            for (k, v) in [
-                ("W_ir", w.ir),
-                ("W_sonar", w.sonar),
-                ("W_odo", w.odo),
-                ("W_plan", w.plan),
-                ("W_obs", w.obs),
-                ("W_goal", w.goal),
-                ("mark_sum", mark_sum),
-                ("goal_bearing_rad", goal_bearing),
-                ("temp_bearing_rad", temp_bearing),
-            ] {
-                notes.value(k, v);
-            }
-            for (m, v) in b.fused.iter().enumerate() {
-                notes.value(VOTE_NAMES.get(m).copied().unwrap_or("V(?)"), *v);
-            }
+            self.note_ballot(chosen, notes);
         }
         Step::Run(command)
     }

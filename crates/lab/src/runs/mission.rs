@@ -338,20 +338,18 @@ pub struct LegSpec<'a> {
     pub trace: TraceParams,
 }
 
-/// Runs one leg (module docs).
-pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
+/// A leg that cannot be run (AutoMove finds no way to the goal): its
+/// result, with the reason as an event.
+fn unreachable(leg: &LegSpec<'_>, why: String) -> LegRun {
     let LegSpec {
         from,
         to,
         start,
         believed,
         goal,
-        ref policy,
-        seed,
-        trace: sim_trace,
+        ..
     } = *leg;
-    let map = setup.world.grid().grid_map();
-    let unreachable = |why: String| LegRun {
+    LegRun {
         result: LegResult {
             from: from.to_string(),
             to: to.to_string(),
@@ -372,30 +370,20 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
         },
         sim: None,
         disturbances: Vec::new(),
-    };
-    let prepared = match &setup.prepared {
-        Some(m) if m.is_for(&map, &setup.guide) => Ok(std::borrow::Cow::Borrowed(&**m)),
-        _ => GuideMap::new(&map, setup.guide.clone()).map(std::borrow::Cow::Owned),
-    };
-    let started = prepared.and_then(|m| {
-        GuideController::on_map(&m, believed, goal, policy.clone(), seed ^ 0x6c6f_6361_6c69_7a65)
-    });
-    let mut controller = match started {
-        Ok(c) => c,
-        Err(GuideError::AutoMove(e)) => return Ok(unreachable(e.to_string())),
-        Err(e) => return Err(e).context("starting the guide controller"),
-    };
-    let run = RunParams {
-        time_limit_s: setup.time_limit_s,
-        goal_tolerance_m: setup.goal_tolerance_m,
-        trace: sim_trace,
-        ..RunParams::default()
-    };
-    let task = Task {
+    }
+}
+
+/// The leg's world: the setup's, with its people placed around the
+/// anchors near the start when the setup has a plan for them.
+fn leg_world<'w>(setup: &'w MissionSetup, leg: &LegSpec<'_>) -> Result<std::borrow::Cow<'w, World>> {
+    let LegSpec {
+        from,
+        to,
         start,
-        goal: Some(goal),
-    };
-    let world = match &setup.people {
+        seed,
+        ..
+    } = *leg;
+    Ok(match &setup.people {
         Some(plan) => {
             let radius = setup.robot.drive.radius_m;
             let at = crowd_near(
@@ -417,18 +405,35 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
             std::borrow::Cow::Owned(setup.world.with_positions(at)?)
         }
         None => std::borrow::Cow::Borrowed(&setup.world),
-    };
-    let mut sim = Simulation::new(&world, setup.robot.clone(), run, task, seed)
-        .and_then(|s| s.with_disturbances(setup.disturbances.clone()))
-        .with_context(|| format!("leg {from} → {to}"))?;
+    })
+}
+
+/// What driving a leg leaves: the trace, the estimate's error each tick,
+/// whether the estimate was far from the truth for too long, and the time
+/// spent lost, warning or fine.
+struct Driven {
+    trace: LegTrace,
+    errors: Vec<f64>,
+    lost: bool,
+    truth_watch: TruthWatch,
+}
+
+/// Drives the leg to its end (or until the estimate has been farther than
+/// `lost_error_m` from the truth for `lost_after_s`), a tick of `period`
+/// seconds at a time, tracing it.
+fn drive(
+    setup: &MissionSetup,
+    sim: &mut Simulation,
+    controller: &mut GuideController,
+    period: f64,
+) -> Driven {
     let mut trace = LegTrace::default();
     let mut errors = Vec::new();
     let mut far_since: Option<f64> = None;
     let mut lost = false;
-    let period = run.control_period_s;
     let mut truth_watch = TruthWatch::default();
     let mut watch = Watch {
-        inner: &mut controller,
+        inner: controller,
         notes: Notes::enabled(),
     };
     loop {
@@ -480,7 +485,59 @@ pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
             far_since = None;
         }
     }
-    drop(watch);
+    Driven {
+        trace,
+        errors,
+        lost,
+        truth_watch,
+    }
+}
+
+/// Runs one leg (module docs).
+pub fn run_leg(setup: &MissionSetup, leg: &LegSpec<'_>) -> Result<LegRun> {
+    let LegSpec {
+        from,
+        to,
+        start,
+        believed,
+        goal,
+        ref policy,
+        seed,
+        trace: sim_trace,
+    } = *leg;
+    let map = setup.world.grid().grid_map();
+    let prepared = match &setup.prepared {
+        Some(m) if m.is_for(&map, &setup.guide) => Ok(std::borrow::Cow::Borrowed(&**m)),
+        _ => GuideMap::new(&map, setup.guide.clone()).map(std::borrow::Cow::Owned),
+    };
+    let started = prepared.and_then(|m| {
+        GuideController::on_map(&m, believed, goal, policy.clone(), seed ^ 0x6c6f_6361_6c69_7a65)
+    });
+    let mut controller = match started {
+        Ok(c) => c,
+        Err(GuideError::AutoMove(e)) => return Ok(unreachable(leg, e.to_string())),
+        Err(e) => return Err(e).context("starting the guide controller"),
+    };
+    let run = RunParams {
+        time_limit_s: setup.time_limit_s,
+        goal_tolerance_m: setup.goal_tolerance_m,
+        trace: sim_trace,
+        ..RunParams::default()
+    };
+    let task = Task {
+        start,
+        goal: Some(goal),
+    };
+    let world = leg_world(setup, leg)?;
+    let mut sim = Simulation::new(&world, setup.robot.clone(), run, task, seed)
+        .and_then(|s| s.with_disturbances(setup.disturbances.clone()))
+        .with_context(|| format!("leg {from} → {to}"))?;
+    let Driven {
+        trace,
+        mut errors,
+        lost,
+        truth_watch,
+    } = drive(setup, &mut sim, &mut controller, run.control_period_s);
     let r = sim.result();
     let outcome = if lost {
         LegOutcome::Lost
