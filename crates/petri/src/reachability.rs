@@ -314,19 +314,8 @@ impl ReachabilityGraph {
                 }
             }
             i = end;
-            let marking_bytes = (store.len() * store.layout().words() * 8) as u64;
-            let generation = marking_bytes
-                + (store.index_bytes() + graph_len_bytes(&offsets, &vanishing, &targets, coeffs.as_ref()))
-                    as u64;
-            let estimate = guard_bytes(generation, marking_bytes, store.len(), targets.len());
-            if estimate > params.max_memory {
-                return Err(Error::MemoryLimit {
-                    estimate,
-                    limit: params.max_memory,
-                    markings: store.len(),
-                    edges: targets.len(),
-                });
-            }
+            let graph_bytes = graph_len_bytes(&offsets, &vanishing, &targets, coeffs.as_ref());
+            check_memory(&store, graph_bytes, targets.len(), params.max_memory)?;
         }
         stop.generated(store.len(), targets.len());
         // Vec growth leaves up to half of each array unused; large blocks are
@@ -567,6 +556,23 @@ impl Batch {
         );
         Ok(None)
     }
+}
+
+/// The memory guard after a round: [`guard_bytes`] of the store and of a
+/// graph of `graph_bytes` (by length) with `edges` edges against `limit`.
+fn check_memory(store: &MarkingStore, graph_bytes: usize, edges: usize, limit: u64) -> Result<()> {
+    let marking_bytes = (store.len() * store.layout().words() * 8) as u64;
+    let generation = marking_bytes + (store.index_bytes() + graph_bytes) as u64;
+    let estimate = guard_bytes(generation, marking_bytes, store.len(), edges);
+    if estimate > limit {
+        return Err(Error::MemoryLimit {
+            estimate,
+            limit,
+            markings: store.len(),
+            edges,
+        });
+    }
+    Ok(())
 }
 
 /// The largest count of each place over the successors of the markings
