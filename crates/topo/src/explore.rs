@@ -25,13 +25,13 @@ use rand_chacha::ChaCha8Rng;
 use robot::{Command, Controller, Event, Notes, Perception, Pose, Step, Vec2};
 
 use super::TopoError;
-use super::builder::MapBuilder;
+use super::builder::{Arrival, MapBuilder};
 use super::fpn::{FuzzyPetriNet, PlaceId, TransitionId, Turn};
 use super::propagation::{PlanMode, plan};
 use super::recognition::RecognitionParams;
 use super::situation::SituationParams;
 use super::strategy::{Action, StrategyParams, actions_at};
-use super::walker::{Walker, WalkerStep};
+use super::walker::{Leg, Walker, WalkerStep};
 
 /// Everything that shapes the topological layer's driving and mapping.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -70,6 +70,31 @@ pub struct Visit {
     pub action: Action,
     /// The transition recorded.
     pub transition: Option<TransitionId>,
+}
+
+impl Visit {
+    /// The stop that ended `leg` at `arrival`, perceived in `p`, with the
+    /// transition recorded for it.
+    pub fn of_arrival(
+        p: &Perception,
+        leg: &Leg,
+        arrival: &Arrival,
+        transition: Option<TransitionId>,
+    ) -> Visit {
+        Visit {
+            time_s: p.time_s,
+            place: arrival.place,
+            new: arrival.new,
+            recalibrated: arrival.recalibrated,
+            heading_recalibrated: arrival.heading_recalibrated,
+            tolerance_m: arrival.tolerance_m,
+            map_pose: arrival.map_pose,
+            odometry: p.odometry,
+            from: leg.from,
+            action: leg.action,
+            transition,
+        }
+    }
 }
 
 /// The place event a controller of this module emits (`kind` "place";
@@ -201,19 +226,7 @@ impl Explorer {
                 transition,
                 ..
             } => {
-                let visit = Visit {
-                    time_s: p.time_s,
-                    place: arrival.place,
-                    new: arrival.new,
-                    recalibrated: arrival.recalibrated,
-                    heading_recalibrated: arrival.heading_recalibrated,
-                    tolerance_m: arrival.tolerance_m,
-                    map_pose: arrival.map_pose,
-                    odometry: p.odometry,
-                    from: leg.from,
-                    action: leg.action,
-                    transition,
-                };
+                let visit = Visit::of_arrival(p, &leg, &arrival, transition);
                 if notes.is_enabled() {
                     notes.event(place_event(self.map(), &visit));
                 }

@@ -679,19 +679,7 @@ impl RouteFollower {
     ) -> Result<Step, TopoError> {
         let planned = self.expected.take();
         let as_planned = self.learn_from_arrival(planned, &arrival)?;
-        let visit = Visit {
-            time_s: p.time_s,
-            place: arrival.place,
-            new: arrival.new,
-            recalibrated: arrival.recalibrated,
-            heading_recalibrated: arrival.heading_recalibrated,
-            tolerance_m: arrival.tolerance_m,
-            map_pose: arrival.map_pose,
-            odometry: p.odometry,
-            from: leg.from,
-            action: leg.action,
-            transition,
-        };
+        let visit = Visit::of_arrival(p, &leg, &arrival, transition);
         if notes.is_enabled() {
             notes.event(place_event(self.map(), &visit).with("as_planned", as_planned));
         }
