@@ -318,73 +318,63 @@ fn scatter<O: Offset>(outgoing: &Rows, cursors: &mut [O], mut put: impl FnMut(us
     cursors[0] = O::ZERO;
 }
 
-/// The incoming rows of `outgoing`, self-loops left out (see
-/// [`incoming_counts`]), each row sorted by source. Both directions exist
-/// at the end: 12 bytes per entry.
+/// The outgoing rows a transposition reads: kept by a chain that is not
+/// irreducible, or given up on the way by one that is.
+enum Outgoing<'a> {
+    Kept(&'a Rows),
+    Released(Rows),
+}
+
+/// The incoming rows of the outgoing ones, self-loops left out (see
+/// [`incoming_counts`]), each row sorted by source. Kept outgoing rows are
+/// scattered in one pass (both directions whole at the end: 12 bytes per
+/// entry); released ones in two, the value ids first and freed, then the
+/// sources (the same rows at a peak of 10 bytes per entry: the outgoing
+/// indices and the incoming indices and value ids).
 fn transpose<O: Offset>(
-    outgoing: &Rows,
+    outgoing: Outgoing<'_>,
     dictionary_len: usize,
     self_loops: &mut Vec<(u32, u32)>,
 ) -> (Vec<O>, Vec<u32>, Ids) {
-    let mut in_offsets = incoming_counts::<O>(outgoing, self_loops);
-    let m = in_offsets[outgoing.len()].to();
-    let mut in_src = vec![0u32; m];
+    let rows = match &outgoing {
+        Outgoing::Kept(rows) => *rows,
+        Outgoing::Released(rows) => rows,
+    };
+    let mut in_offsets = incoming_counts::<O>(rows, self_loops);
+    let m = in_offsets[rows.len()].to();
     let mut in_ids = Ids::zeros(m, dictionary_len);
-    scatter(outgoing, &mut in_offsets, |pos, s, k| {
-        in_src[pos] = s;
-        in_ids.set(pos, outgoing.ids.get(k));
-    });
+    let mut in_src;
+    match outgoing {
+        Outgoing::Kept(out) => {
+            in_src = vec![0u32; m];
+            scatter(out, &mut in_offsets, |pos, s, k| {
+                in_src[pos] = s;
+                in_ids.set(pos, out.ids.get(k));
+            });
+        }
+        Outgoing::Released(mut out) => {
+            let ids = std::mem::replace(&mut out.ids, Ids::zeros(0, dictionary_len));
+            scatter(&out, &mut in_offsets, |pos, _, k| in_ids.set(pos, ids.get(k)));
+            drop(ids);
+            in_src = vec![0u32; m];
+            scatter(&out, &mut in_offsets, |pos, s, _| in_src[pos] = s);
+        }
+    }
     (in_offsets, in_src, in_ids)
 }
 
-/// [`transpose`], giving up the outgoing rows on the way: the value ids are
-/// scattered first and released, then the sources. The same incoming rows,
-/// at a peak of 10 bytes per entry instead of 12 (the outgoing indices,
-/// the incoming indices and value ids).
-fn transpose_releasing<O: Offset>(
-    mut outgoing: Rows,
-    dictionary_len: usize,
-    self_loops: &mut Vec<(u32, u32)>,
-) -> (Vec<O>, Vec<u32>, Ids) {
-    let mut in_offsets = incoming_counts::<O>(&outgoing, self_loops);
-    let m = in_offsets[outgoing.len()].to();
-    let mut in_ids = Ids::zeros(m, dictionary_len);
-    let ids = std::mem::replace(&mut outgoing.ids, Ids::zeros(0, dictionary_len));
-    scatter(&outgoing, &mut in_offsets, |pos, _, k| {
-        in_ids.set(pos, ids.get(k))
-    });
-    drop(ids);
-    let mut in_src = vec![0u32; m];
-    scatter(&outgoing, &mut in_offsets, |pos, s, _| in_src[pos] = s);
-    (in_offsets, in_src, in_ids)
-}
-
-/// The incoming rows of `outgoing` ([`transpose`]), with 4-byte offsets
-/// up to 2³² entries, 8-byte beyond.
-fn incoming_rows(outgoing: &Rows, dictionary_len: usize, self_loops: &mut Vec<(u32, u32)>) -> Rows {
-    let (offsets, index, ids) = if outgoing.index.len() <= u32::MAX as usize {
+/// The incoming rows ([`transpose`]), with 4-byte offsets up to 2³²
+/// entries, 8-byte beyond.
+fn incoming_rows(outgoing: Outgoing<'_>, dictionary_len: usize, self_loops: &mut Vec<(u32, u32)>) -> Rows {
+    let entries = match &outgoing {
+        Outgoing::Kept(rows) => rows.index.len(),
+        Outgoing::Released(rows) => rows.index.len(),
+    };
+    let (offsets, index, ids) = if entries <= u32::MAX as usize {
         let (o, s, i) = transpose::<u32>(outgoing, dictionary_len, self_loops);
         (Offsets::U32(o), s, i)
     } else {
         let (o, s, i) = transpose::<u64>(outgoing, dictionary_len, self_loops);
-        (Offsets::U64(o), s, i)
-    };
-    Rows {
-        offsets,
-        index,
-        ids,
-        below: Vec::new(),
-    }
-}
-
-/// [`incoming_rows`] by [`transpose_releasing`]: the same rows, the
-/// outgoing ones given up on the way.
-fn incoming_rows_releasing(outgoing: Rows, dictionary_len: usize, self_loops: &mut Vec<(u32, u32)>) -> Rows {
-    let (offsets, index, ids) = if outgoing.index.len() <= u32::MAX as usize {
-        let (o, s, i) = transpose_releasing::<u32>(outgoing, dictionary_len, self_loops);
-        (Offsets::U32(o), s, i)
-    } else {
-        let (o, s, i) = transpose_releasing::<u64>(outgoing, dictionary_len, self_loops);
         (Offsets::U64(o), s, i)
     };
     Rows {
@@ -632,11 +622,15 @@ impl CompiledGspn {
         let mut self_loops = Vec::new();
         let (mut incoming, outgoing, transposed_bytes) = if ergodic {
             let held = outgoing.offsets.bytes() + outgoing.index.capacity() * 4;
-            (incoming_rows_releasing(outgoing, dl, &mut self_loops), None, held)
+            (
+                incoming_rows(Outgoing::Released(outgoing), dl, &mut self_loops),
+                None,
+                held,
+            )
         } else {
             let held = outgoing.heap_bytes();
             (
-                incoming_rows(&outgoing, dl, &mut self_loops),
+                incoming_rows(Outgoing::Kept(&outgoing), dl, &mut self_loops),
                 Some(outgoing),
                 held,
             )

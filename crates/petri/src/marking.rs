@@ -411,7 +411,7 @@ impl MarkingStore {
         let mut largest = pending();
         let mut m = vec![0u32; old.width.len()];
         for i in 0..self.len {
-            old.decode(&self.data[i * old.words..(i + 1) * old.words], &mut m);
+            self.decode(i, &mut m);
             for (l, &c) in largest.iter_mut().zip(&m) {
                 *l = (*l).max(c);
             }
