@@ -683,12 +683,13 @@ pub fn shortest_path_m(grid: &OccupancyGrid, a: Vec2, b: Vec2, radius_m: f64) ->
             field.distance_m(grid.cell_center(c)) > radius_m
         })
         .collect();
-    let (ca, cb) = (grid.cell_of(a), grid.cell_of(b));
-    let index = |c: sim::CellIndex| {
-        (grid.contains(c) && passable[c.j as usize * w + c.i as usize])
-            .then(|| c.j as usize * w + c.i as usize)
+    // No path from or to a point off the grid or where the disc does not fit.
+    let node = |p: Vec2| {
+        let c = grid.cell_of(p);
+        let k = c.j as usize * w + c.i as usize;
+        (grid.contains(c) && passable[k]).then_some(k)
     };
-    let (ia, ib) = (index(ca)?, index(cb)?);
+    let (ia, ib) = (node(a)?, node(b)?);
     let lattice = Lattice {
         width: w,
         height: h,
