@@ -37,7 +37,8 @@ fn walk(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
     for p in entries {
         let name = p.file_name().unwrap().to_string_lossy().into_owned();
         if p.is_dir() {
-            if !skipped_dir(&name) {
+            // docs/book/ is the built book (`mdbook build docs`), not a source.
+            if !skipped_dir(&name) && !p.ends_with("docs/book") {
                 walk(&p, exts, out);
             }
         } else if p.extension().is_some_and(|e| exts.iter().any(|x| e == *x)) {
@@ -515,7 +516,6 @@ fn anchors(text: &str) -> BTreeSet<String> {
 fn book_and_readme(root: &Path) -> Vec<PathBuf> {
     let mut files = Vec::new();
     walk(&root.join("docs"), &["md"], &mut files);
-    files.retain(|f| !f.starts_with(root.join("docs/book")));
     files.push(root.join("README.md"));
     files
 }
