@@ -280,23 +280,11 @@ fn unique_keys(keys: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// Runs `run` on every job not yet in the results file, appending one JSON
-/// record per finished run (the record gets `key`, `scenario`, `run` and
-/// `seed` fields added), then rewrites the file in job order.
-///
-/// `run(job, earlier)` gets the complete results lines of the campaign's
-/// earlier runs, in order — the lines as written to the file and parsed
-/// back, whether they were run now or read on resume, so a campaign's state
-/// is the same either way, to the last bit.
-pub fn run_batch<F>(campaigns: &[Campaign], params: &BatchParams, run: F) -> Result<BatchSummary>
-where
-    F: Fn(&Job, &[Value]) -> Result<Value> + Sync,
-{
-    let keys = keys(campaigns);
-    unique_keys(&keys)?;
-    if let Some(dir) = params.results.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+/// The runs already in the results file, by key (empty for a new file).
+/// Refuses a file that holds results unless `--resume` was given, drops a
+/// line cut mid-write, and refuses a campaign whose runs on file do not
+/// form a prefix of it.
+fn runs_on_file(campaigns: &[Campaign], params: &BatchParams) -> Result<HashMap<String, Value>> {
     let exists = params.results.exists() && std::fs::metadata(&params.results)?.len() > 0;
     let mut done: HashMap<String, Value> = HashMap::new();
     if exists {
@@ -331,6 +319,27 @@ where
             );
         }
     }
+    Ok(done)
+}
+
+/// Runs `run` on every job not yet in the results file, appending one JSON
+/// record per finished run (the record gets `key`, `scenario`, `run` and
+/// `seed` fields added), then rewrites the file in job order.
+///
+/// `run(job, earlier)` gets the complete results lines of the campaign's
+/// earlier runs, in order — the lines as written to the file and parsed
+/// back, whether they were run now or read on resume, so a campaign's state
+/// is the same either way, to the last bit.
+pub fn run_batch<F>(campaigns: &[Campaign], params: &BatchParams, run: F) -> Result<BatchSummary>
+where
+    F: Fn(&Job, &[Value]) -> Result<Value> + Sync,
+{
+    let keys = keys(campaigns);
+    unique_keys(&keys)?;
+    if let Some(dir) = params.results.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let done = runs_on_file(campaigns, params)?;
     let todo = keys.iter().filter(|k| !done.contains_key(*k)).count();
     let skipped = keys.len() - todo;
     let file = OpenOptions::new()
