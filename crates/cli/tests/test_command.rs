@@ -110,7 +110,7 @@ impl Sandbox {
     /// The real tools the script runs once its checks pass (the checks
     /// themselves need none).
     fn real_tools_after_the_checks(&self) {
-        for tool in ["mktemp", "tee", "awk", "sed", "rm"] {
+        for tool in ["mktemp", "tee", "awk", "sed", "rm", "grep"] {
             self.real(tool);
         }
     }
@@ -286,5 +286,26 @@ fn a_failing_cargo_test_fails_it_and_says_so_in_the_summary() {
     assert!(
         stdout.contains("rust     FAILED  3 passed, 1 failed, 0 ignored"),
         "{stdout}"
+    );
+}
+
+#[test]
+fn a_test_skipped_here_is_named_in_the_summary() {
+    let sandbox = Sandbox::new("skipped");
+    sandbox.fake("chromium", "echo Chromium 1.0");
+    sandbox.fake(
+        "cargo",
+        "echo 'test a ... '\n\
+         echo 'skipped: slurm_cluster (a real Slurm cluster): needs root'\n\
+         echo 'ok'\n\
+         echo 'test result: ok. 1 passed; 0 failed; 0 ignored; 0 measured; 0 filtered out; finished in 0.01s'",
+    );
+    sandbox.real_tools_after_the_checks();
+    let (status, stdout, stderr, _) = sandbox.run(&[], &[]);
+    assert!(status.success(), "{stdout}\n{stderr}");
+    let summary = &stdout[stdout.find("== summary").expect("a summary")..];
+    assert!(
+        summary.contains("rust     skipped: slurm_cluster (a real Slurm cluster): needs root"),
+        "{summary}"
     );
 }
