@@ -36,7 +36,7 @@ pub struct SlurmArgs {
     /// CPUs per task, also each task's worker threads.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
     cpus_per_task: u32,
-    /// The array's job name (default: petrinav-<suite name>); the merge's adds `-merge`.
+    /// The array's job name (default: `petrinav-<suite name>`); the merge's adds `-merge`.
     #[arg(long)]
     job_name: Option<String>,
     /// Another #SBATCH option for both scripts, in long form (repeatable), e.g.

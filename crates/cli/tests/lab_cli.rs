@@ -489,13 +489,19 @@ fn three_merged_shards_equal_the_unsharded_batch() {
     let out = petrinav(&args);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("shard 2/3: 0 of 47 runs done, no part holds it"), "{err}");
+    assert!(
+        err.contains("shard 2/3: 0 of 47 runs done, no part holds it"),
+        "{err}"
+    );
     assert!(!partial.join("results.jsonl").exists());
     args.push("--partial");
     let out = petrinav(&args);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("47 runs are in no part (shard 2/3: 0 of 47 done)"), "{err}");
+    assert!(
+        err.contains("47 runs are in no part (shard 2/3: 0 of 47 done)"),
+        "{err}"
+    );
     let out = run_voting(&partial, "2", "2", &["--resume"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(

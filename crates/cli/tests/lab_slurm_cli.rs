@@ -105,37 +105,69 @@ fn the_scripts_run_as_plain_shell_and_an_incomplete_batch_is_named_then_complete
         assert!(!out.join("results.jsonl").exists());
     };
     let per_shard = 47; // of shard 2: 140 campaigns make shards of 47, 47 and 46
-    refused(&format!("shard 2/3: 0 of {per_shard} runs done, no part holds it"));
+    refused(&format!(
+        "shard 2/3: 0 of {per_shard} runs done, no part holds it"
+    ));
     std::fs::create_dir_all(out.join("part-2")).unwrap();
     refused("part-2: no results yet (no suite.json), left out");
     ok(bash(&shards, Some(2)));
     let part = out.join("part-2/results.jsonl");
     let text = std::fs::read_to_string(&part).unwrap();
     let kept: Vec<&str> = text.lines().take(10).collect();
-    std::fs::write(&part, format!("{}\n{}", kept.join("\n"), &text.lines().nth(10).unwrap()[..20])).unwrap();
+    std::fs::write(
+        &part,
+        format!("{}\n{}", kept.join("\n"), &text.lines().nth(10).unwrap()[..20]),
+    )
+    .unwrap();
     refused(&format!("shard 2/3: 10 of {per_shard} runs done, in {o}/part-2"));
     // The wrong shard in a part's folder is refused; the right one continues.
     let wrong = petrinav(&[
-        "lab", "run", "voting", "--runs", "2", "--shard", "3/3", "--resume", "--out",
+        "lab",
+        "run",
+        "voting",
+        "--runs",
+        "2",
+        "--shard",
+        "3/3",
+        "--resume",
+        "--out",
         out.join("part-2").to_str().unwrap(),
     ]);
     assert!(!wrong.status.success());
-    assert!(stderr(&wrong).contains("holds shard 2/3 of this batch, not shard 3/3"), "{}", stderr(&wrong));
+    assert!(
+        stderr(&wrong).contains("holds shard 2/3 of this batch, not shard 3/3"),
+        "{}",
+        stderr(&wrong)
+    );
     let again = ok(bash(&shards, Some(2)));
     assert!(
-        stderr(&again).contains(&format!("{per_shard} runs (10 already done, {} now", per_shard - 10)),
+        stderr(&again).contains(&format!(
+            "{per_shard} runs (10 already done, {} now",
+            per_shard - 10
+        )),
         "{}",
         stderr(&again)
     );
     assert_eq!(lines(&part), per_shard);
     let merged = ok(bash(&merge, None));
-    assert!(stderr(&merged).contains("140 runs merged from 3 folders"), "{}", stderr(&merged));
+    assert!(
+        stderr(&merged).contains("140 runs merged from 3 folders"),
+        "{}",
+        stderr(&merged)
+    );
     let results = std::fs::read(out.join("results.jsonl")).unwrap();
-    assert!(results == std::fs::read(whole.join("results.jsonl")).unwrap(), "merged ≠ unsharded");
+    assert!(
+        results == std::fs::read(whole.join("results.jsonl")).unwrap(),
+        "merged ≠ unsharded"
+    );
     assert!(out.join("index.html").exists());
     // The merge again: nothing to do, the file as it was.
     let twice = ok(bash(&merge, None));
-    assert!(stderr(&twice).contains("already holds these 140 runs"), "{}", stderr(&twice));
+    assert!(
+        stderr(&twice).contains("already holds these 140 runs"),
+        "{}",
+        stderr(&twice)
+    );
     assert!(std::fs::read(out.join("results.jsonl")).unwrap() == results);
 }
 
@@ -153,7 +185,10 @@ fn fake_sbatch(dir: &Path, fail: Option<&str>) -> PathBuf {
     let path = bin.join("sbatch");
     std::fs::write(
         &path,
-        format!("#!/bin/sh\ncalls='{}'\necho \"$@\" >> \"$calls\"\n{body}\n", calls.display()),
+        format!(
+            "#!/bin/sh\ncalls='{}'\necho \"$@\" >> \"$calls\"\n{body}\n",
+            calls.display()
+        ),
     )
     .unwrap();
     std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
@@ -180,8 +215,14 @@ fn submit_queues_the_array_then_the_merge_after_it() {
     let merge = out.join("slurm/merge.sbatch").display().to_string();
     let first = ok(slurm_with(&bin, &["--shards", "2", "-o", o, "--submit"]));
     let stdout = String::from_utf8_lossy(&first.stdout);
-    assert!(stdout.contains("array job 41 (tasks 1-2 of 2)\nmerge job 42 (after job 41)\n"), "{stdout}");
-    let again = ok(slurm_with(&bin, &["--shards", "2", "-o", o, "--submit", "--array", "2"]));
+    assert!(
+        stdout.contains("array job 41 (tasks 1-2 of 2)\nmerge job 42 (after job 41)\n"),
+        "{stdout}"
+    );
+    let again = ok(slurm_with(
+        &bin,
+        &["--shards", "2", "-o", o, "--submit", "--array", "2"],
+    ));
     assert!(String::from_utf8_lossy(&again.stdout).contains("array job 43 (tasks 2 of 2)"));
     // A task that is not in the array: refused before sbatch is called.
     let bad = slurm_with(&bin, &["--shards", "2", "-o", o, "--submit", "--array", "3"]);
@@ -197,20 +238,37 @@ fn submit_queues_the_array_then_the_merge_after_it() {
     );
     // --array only with --submit.
     let alone = slurm_with(&bin, &["--shards", "2", "-o", o, "--array", "2"]);
-    assert!(!alone.status.success() && stderr(&alone).contains("--submit"), "{}", stderr(&alone));
+    assert!(
+        !alone.status.success() && stderr(&alone).contains("--submit"),
+        "{}",
+        stderr(&alone)
+    );
     // sbatch's own refusal is passed on; no sbatch at all is explained.
     let failing = fresh("submit_fails");
     let bin = fake_sbatch(&failing, Some("sbatch: error: invalid partition specified: nope"));
-    let refused = slurm_with(&bin, &["--shards", "2", "-o", o, "--submit", "--partition", "nope"]);
+    let refused = slurm_with(
+        &bin,
+        &["--shards", "2", "-o", o, "--submit", "--partition", "nope"],
+    );
     assert!(!refused.status.success());
-    assert!(stderr(&refused).contains("invalid partition specified: nope"), "{}", stderr(&refused));
+    assert!(
+        stderr(&refused).contains("invalid partition specified: nope"),
+        "{}",
+        stderr(&refused)
+    );
     let nowhere = Command::new(env!("CARGO_BIN_EXE_petrinav"))
-        .args(["lab", "slurm", "voting", "--runs", "1", "--shards", "2", "-o", o, "--submit"])
+        .args([
+            "lab", "slurm", "voting", "--runs", "1", "--shards", "2", "-o", o, "--submit",
+        ])
         .env("PATH", failing.join("nothing"))
         .output()
         .unwrap();
     assert!(!nowhere.status.success());
-    assert!(stderr(&nowhere).contains("is this a Slurm login node?"), "{}", stderr(&nowhere));
+    assert!(
+        stderr(&nowhere).contains("is this a Slurm login node?"),
+        "{}",
+        stderr(&nowhere)
+    );
 }
 
 #[test]
@@ -222,10 +280,22 @@ fn bad_options_are_refused_before_anything_is_written() {
     for (args, says) in [
         (vec!["--shards", "2", "-o", o, "--time", "1h"], "Slurm's formats"),
         (vec!["--shards", "71", "-o", o], "at most --shards 70"),
-        (vec!["--shards", "2", "-o", o, "--sbatch-option=--array=1"], "set --array themselves"),
-        (vec!["--shards", "2", "-o", o, "--sbatch-option=--time=5"], "use lab slurm --time"),
-        (vec!["--shards", "2", "-o", o, "--partition", "a b"], "a partition name"),
-        (vec!["--shards", "2", "-o", spaced.to_str().unwrap()], "cannot hold spaces"),
+        (
+            vec!["--shards", "2", "-o", o, "--sbatch-option=--array=1"],
+            "set --array themselves",
+        ),
+        (
+            vec!["--shards", "2", "-o", o, "--sbatch-option=--time=5"],
+            "use lab slurm --time",
+        ),
+        (
+            vec!["--shards", "2", "-o", o, "--partition", "a b"],
+            "a partition name",
+        ),
+        (
+            vec!["--shards", "2", "-o", spaced.to_str().unwrap()],
+            "cannot hold spaces",
+        ),
         (vec!["--shards", "0", "-o", o], "0 is not in 1..="),
     ] {
         let mut all = vec!["lab", "slurm", "voting", "--runs", "1"];
@@ -272,7 +342,10 @@ fn scenario_files_and_the_output_go_into_the_script_as_absolute_paths() {
     let file = dir.join("mine/field03.toml");
     let binary = std::fs::canonicalize(env!("CARGO_BIN_EXE_petrinav")).unwrap();
     for line in [
-        format!("lab run {} --runs 2 --jobs \"${{SLURM_CPUS_PER_TASK:-2}}\"", file.display()),
+        format!(
+            "lab run {} --runs 2 --jobs \"${{SLURM_CPUS_PER_TASK:-2}}\"",
+            file.display()
+        ),
         format!("\nout={}\n", out.display()),
         format!("#SBATCH --chdir={}\n", out.display()),
         format!("\npetrinav={}\n", binary.display()),
@@ -289,6 +362,10 @@ fn scenario_files_and_the_output_go_into_the_script_as_absolute_paths() {
         .output()
         .unwrap();
     let task = ok(task);
-    assert!(stderr(&task).contains("2 runs (0 already done, 2 now"), "{}", stderr(&task));
+    assert!(
+        stderr(&task).contains("2 runs (0 already done, 2 now"),
+        "{}",
+        stderr(&task)
+    );
     assert_eq!(lines(&out.join("part-1/results.jsonl")), 2);
 }

@@ -17,11 +17,13 @@
 //! first (CI's fresh Debian machine). Elsewhere it is skipped, and says why
 //! on the terminal (past the test harness's capture) in a line that
 //! `scripts/test` repeats in its summary. The daemons listen on free ports
-//! and keep their files in a folder of their own under the temporary
-//! directory, so runs of this test in other checkouts do not meet; a guard
-//! stops them (jobs cancelled, then SIGTERM, then SIGKILL) however the
-//! test ends, and a later run kills those of a test process that died
-//! before its guard could, by their pid files. Its time is in
+//! and keep their files, with the batches' results, in a folder of the
+//! test process's own under the temporary directory, so runs of this test
+//! in other checkouts do not meet; a guard stops them (jobs cancelled,
+//! then SIGTERM, then SIGKILL) however the test ends, and removes the
+//! folder unless the test failed. A later run kills what a test process
+//! killed before its guard could left running, by the pid files and the
+//! command lines that name its folder. Its time is in
 //! `crates/lab/BENCHMARKS.md`.
 #![cfg(unix)]
 
@@ -103,7 +105,11 @@ fn tools() -> Result<HashMap<&'static str, PathBuf>, String> {
     };
     let mut tools = found();
     if tools.len() < TOOLS.len() {
-        let missing: Vec<&str> = TOOLS.iter().filter(|t| !tools.contains_key(*t)).copied().collect();
+        let missing: Vec<&str> = TOOLS
+            .iter()
+            .filter(|t| !tools.contains_key(*t))
+            .copied()
+            .collect();
         let Some(apt) = find_tool("apt-get") else {
             return Err(format!(
                 "{} missing and no apt-get to install them (Debian's packages: {})",
@@ -137,7 +143,11 @@ fn tools() -> Result<HashMap<&'static str, PathBuf>, String> {
             started.elapsed().as_secs_f64()
         ));
         tools = found();
-        let missing: Vec<&str> = TOOLS.iter().filter(|t| !tools.contains_key(*t)).copied().collect();
+        let missing: Vec<&str> = TOOLS
+            .iter()
+            .filter(|t| !tools.contains_key(*t))
+            .copied()
+            .collect();
         assert!(missing.is_empty(), "still missing after apt-get: {missing:?}");
     }
     Ok(tools)
@@ -183,9 +193,11 @@ fn signal(pid: u32, signal: &str) {
         .status();
 }
 
-/// Kills the daemons of clusters whose test process died before its guard
-/// stopped them (their folder's pid is gone), found by their pid files and
-/// recognised by their command line, and removes those folders.
+/// Kills what clusters whose test process died before its guard stopped
+/// them left running: the daemons named in their pid files, then any
+/// process whose command line names their folder (munged in the
+/// foreground writes no pid file; a job's `petrinav` writes into the
+/// folder); then removes those folders.
 fn clean_up_stale_clusters() {
     let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) else {
         return;
@@ -199,19 +211,47 @@ fn clean_up_stale_clusters() {
             continue;
         }
         let dir = entry.path();
+        let named = |pid: u32| cmdline(pid).is_some_and(|c| c.contains(&dir.display().to_string()));
+        let mut killed = Vec::new();
         for file in ["slurmd.pid", "slurmctld.pid", "munged.pid"] {
             let pid = std::fs::read_to_string(dir.join(file))
                 .ok()
                 .and_then(|p| p.trim().parse::<u32>().ok());
             if let Some(pid) = pid
-                && cmdline(pid).is_some_and(|c| c.contains(&dir.display().to_string()))
+                && named(pid)
             {
                 note(&format!("killing {file} {pid} left by test process {owner}"));
                 signal(pid, "KILL");
+                killed.push(pid);
             }
+        }
+        let others: Vec<u32> = std::fs::read_dir("/proc")
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+            .filter(|&pid| !killed.contains(&pid) && named(pid))
+            .collect();
+        for pid in others {
+            note(&format!(
+                "killing {pid} ({}) left by test process {owner}",
+                cmdline(pid).unwrap_or_default().trim()
+            ));
+            signal(pid, "KILL");
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// This test process's folder: the cluster's files and the batches'
+/// results (kept after a failure, for a look).
+fn own_dir() -> PathBuf {
+    clean_up_stale_clusters();
+    let dir = std::env::temp_dir().join(format!("{PREFIX}{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("results")).unwrap();
+    std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).unwrap();
+    dir
 }
 
 /// A one-node Slurm cluster on localhost; stopped on drop.
@@ -223,14 +263,11 @@ struct Cluster {
 }
 
 impl Cluster {
-    fn start(tools: HashMap<&'static str, PathBuf>) -> Cluster {
-        clean_up_stale_clusters();
-        let dir = std::env::temp_dir().join(format!("{PREFIX}{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+    /// Starts the daemons, their files in `dir` ([`own_dir`]).
+    fn start(dir: PathBuf, tools: HashMap<&'static str, PathBuf>) -> Cluster {
         for sub in ["munge", "state", "spool", "log"] {
             std::fs::create_dir_all(dir.join(sub)).unwrap();
         }
-        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).unwrap();
         let mut cluster = Cluster {
             conf: dir.join("slurm.conf"),
             dir,
@@ -341,7 +378,9 @@ impl Cluster {
     fn wait_for_the_node(&self) {
         self.wait("the node to be idle", Duration::from_secs(60), |c| {
             let out = c.slurm("sinfo", &["-h", "-o", "%T"]);
-            String::from_utf8_lossy(&out.stdout).lines().any(|l| l.trim() == "idle")
+            String::from_utf8_lossy(&out.stdout)
+                .lines()
+                .any(|l| l.trim() == "idle")
         });
     }
 
@@ -352,7 +391,11 @@ impl Cluster {
             for (name, child) in &self.daemons {
                 // A daemon that ended is an error whatever we wait for.
                 let pid = child.id();
-                assert!(alive(pid), "{name} ended while waiting for {what}\n{}", self.logs());
+                assert!(
+                    alive(pid),
+                    "{name} ended while waiting for {what}\n{}",
+                    self.logs()
+                );
             }
             assert!(
                 started.elapsed() < limit,
@@ -428,10 +471,19 @@ impl Cluster {
     /// The end of each daemon's log, for a failure's message.
     fn logs(&self) -> String {
         let mut text = String::new();
-        for f in ["log/slurmctld.log", "log/slurmd.log", "log/slurmctld.stderr", "log/slurmd.stderr", "munge/munged.log"] {
+        for f in [
+            "log/slurmctld.log",
+            "log/slurmd.log",
+            "log/slurmctld.stderr",
+            "log/slurmd.stderr",
+            "munge/munged.log",
+        ] {
             let body = std::fs::read_to_string(self.dir.join(f)).unwrap_or_default();
             let tail: Vec<&str> = body.lines().rev().take(15).collect();
-            text += &format!("--- {f} (end)\n{}\n", tail.into_iter().rev().collect::<Vec<_>>().join("\n"));
+            text += &format!(
+                "--- {f} (end)\n{}\n",
+                tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+            );
         }
         text
     }
@@ -514,14 +566,6 @@ fn state(jobs: &[HashMap<String, String>]) -> Vec<(String, String)> {
     states
 }
 
-/// The test's own folder of results (kept after it for a look).
-fn results_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("slurm_cluster");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 const BATCH: [&str; 6] = ["lab", "slurm", "voting", "--runs", "4", "--no-pictures"];
 
 #[test]
@@ -532,12 +576,21 @@ fn a_job_array_on_a_real_slurm_merges_to_the_unsharded_batch() {
         Err(reason) => return skip(&reason),
     };
     let installed = started.elapsed();
-    let base = results_dir();
+    let dir = own_dir();
+    let base = dir.join("results");
     // The unsharded batches, beside the cluster's start.
     let reference = |runs: usize| {
         let whole = base.join(format!("whole-{runs}"));
         let child = Command::new(env!("CARGO_BIN_EXE_petrinav"))
-            .args(["lab", "run", "voting", "--runs", &runs.to_string(), "--no-pictures", "--out"])
+            .args([
+                "lab",
+                "run",
+                "voting",
+                "--runs",
+                &runs.to_string(),
+                "--no-pictures",
+                "--out",
+            ])
             .arg(&whole)
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -552,7 +605,7 @@ fn a_job_array_on_a_real_slurm_merges_to_the_unsharded_batch() {
         }
     };
     let (short, long) = (reference(4), reference(LONG_RUNS));
-    let cluster = Cluster::start(tools);
+    let cluster = Cluster::start(dir, tools);
     let up = started.elapsed();
     let whole = short();
 
@@ -586,11 +639,18 @@ fn outcome_1_the_array_and_its_merge(cluster: &Cluster, base: &Path, whole: &[u8
     let tasks = cluster.jobs(&array);
     assert_eq!(
         state(&tasks),
-        (1..=4).map(|i| (i.to_string(), "COMPLETED".to_string())).collect::<Vec<_>>(),
+        (1..=4)
+            .map(|i| (i.to_string(), "COMPLETED".to_string()))
+            .collect::<Vec<_>>(),
         "{}",
         cluster.logs()
     );
-    assert_eq!(state(&merged), [(String::new(), "COMPLETED".into())], "{}", log(&out, "merge.log"));
+    assert_eq!(
+        state(&merged),
+        [(String::new(), "COMPLETED".into())],
+        "{}",
+        log(&out, "merge.log")
+    );
     assert!(
         std::fs::read(out.join("results.jsonl")).unwrap() == whole,
         "the merged results differ from the unsharded batch"
@@ -619,7 +679,11 @@ fn outcome_2_a_task_cancelled_and_submitted_again(cluster: &Cluster, base: &Path
     let part = out.join("part-2/results.jsonl");
     let started = Instant::now();
     while lines(&part) == 0 {
-        assert!(started.elapsed() < Duration::from_secs(120), "task 2 wrote nothing\n{}", cluster.logs());
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "task 2 wrote nothing\n{}",
+            cluster.logs()
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
     ok(&cluster.slurm("scancel", &[&format!("{array}_2")]), "scancel");
@@ -633,25 +697,43 @@ fn outcome_2_a_task_cancelled_and_submitted_again(cluster: &Cluster, base: &Path
     );
     assert_eq!(
         state(&tasks),
-        [("1", "COMPLETED"), ("2", "CANCELLED"), ("3", "COMPLETED"), ("4", "COMPLETED")]
-            .map(|(a, b)| (a.to_string(), b.to_string())),
+        [
+            ("1", "COMPLETED"),
+            ("2", "CANCELLED"),
+            ("3", "COMPLETED"),
+            ("4", "COMPLETED")
+        ]
+        .map(|(a, b)| (a.to_string(), b.to_string())),
         "{}",
         cluster.logs()
     );
     assert_eq!(state(&merged), [(String::new(), "FAILED".into())]);
     let merge_log = log(&out, "merge.log");
     assert!(
-        merge_log.contains(&format!("shard 2/4: {cut} of {} runs done, in {o}/part-2", per_task))
-            && merge_log.contains("resubmit the array tasks 2)"),
+        merge_log.contains(&format!(
+            "shard 2/4: {cut} of {} runs done, in {o}/part-2",
+            per_task
+        )) && merge_log.contains("resubmit the array tasks 2)"),
         "{merge_log}"
     );
-    assert!(!out.join("results.jsonl").exists(), "an incomplete merge wrote results");
+    assert!(
+        !out.join("results.jsonl").exists(),
+        "an incomplete merge wrote results"
+    );
     // Task 2 again, and a merge after it.
     args.extend(["--array", "2"]);
-    let (again, merge) = job_ids(&ok(&cluster.petrinav(base, &args), "lab slurm --submit --array 2"));
+    let (again, merge) = job_ids(&ok(
+        &cluster.petrinav(base, &args),
+        "lab slurm --submit --array 2",
+    ));
     let merged = cluster.wait_ended(&merge, Duration::from_secs(240));
     assert_eq!(state(&cluster.jobs(&again)), [("2".into(), "COMPLETED".into())]);
-    assert_eq!(state(&merged), [(String::new(), "COMPLETED".into())], "{}", log(&out, "merge.log"));
+    assert_eq!(
+        state(&merged),
+        [(String::new(), "COMPLETED".into())],
+        "{}",
+        log(&out, "merge.log")
+    );
     let shard_log = log(&out, "shard-2.log");
     assert_eq!(shard_log.matches("== shard 2/4").count(), 2, "{shard_log}");
     assert!(
@@ -684,7 +766,12 @@ fn outcome_3_partition_time_and_shellcheck(cluster: &Cluster, base: &Path, whole
     let merged = cluster.wait_ended(&merge, Duration::from_secs(240));
     let tasks = cluster.jobs(&array);
     for job in tasks.iter().chain(&merged) {
-        assert_eq!(job["JobState"], "COMPLETED", "{job:?}\n{}", log(&out, "merge.log"));
+        assert_eq!(
+            job["JobState"],
+            "COMPLETED",
+            "{job:?}\n{}",
+            log(&out, "merge.log")
+        );
         assert_eq!(job["Partition"], "campaign");
         assert_eq!(job["TimeLimit"], "00:05:00");
         assert_eq!(Path::new(&job["WorkDir"]), out);

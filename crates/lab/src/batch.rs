@@ -222,7 +222,10 @@ pub fn read_parts(dirs: &[PathBuf]) -> Result<Parts> {
     let Some(info) = info else {
         bail!(
             "no folder to merge holds results (none has a suite.json): {}",
-            dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ")
+            dirs.iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     };
     Ok(Parts { info, parts, empty })
@@ -267,7 +270,11 @@ fn incomplete_message(missing: &[String], runs: usize, shards: Option<&[ShardPro
         "the batch is incomplete, so nothing was merged: {} of {runs} runs are in no part",
         missing.len()
     );
-    let lagging: Vec<&ShardProgress> = shards.unwrap_or_default().iter().filter(|s| !s.complete()).collect();
+    let lagging: Vec<&ShardProgress> = shards
+        .unwrap_or_default()
+        .iter()
+        .filter(|s| !s.complete())
+        .collect();
     if lagging.is_empty() {
         let shown: Vec<&str> = missing.iter().take(5).map(String::as_str).collect();
         text += &format!(" (e.g. {})", shown.join(", "));
@@ -279,7 +286,10 @@ fn incomplete_message(missing: &[String], runs: usize, shards: Option<&[ShardPro
             let dirs: Vec<String> = s.parts.iter().map(|p| p.display().to_string()).collect();
             format!("in {}", dirs.join(", "))
         };
-        text += &format!("\n  shard {}: {} of {} runs done, {held}", s.shard, s.found, s.runs);
+        text += &format!(
+            "\n  shard {}: {} of {} runs done, {held}",
+            s.shard, s.found, s.runs
+        );
     }
     if !lagging.is_empty() {
         let indices: Vec<String> = lagging.iter().map(|s| s.shard.index.to_string()).collect();
@@ -330,7 +340,11 @@ pub fn merge(out: &Path, parts: &Parts, suite: &dyn Suite, partial: bool) -> Res
 /// names its shard and all with the same count.
 fn shard_progress(parts: &Parts, campaigns: &[Campaign], missing: &[String]) -> Option<Vec<ShardProgress>> {
     let count = parts.parts.first()?.1?.count;
-    if parts.parts.iter().any(|(_, s)| s.is_none_or(|s| s.count != count)) {
+    if parts
+        .parts
+        .iter()
+        .any(|(_, s)| s.is_none_or(|s| s.count != count))
+    {
         return None;
     }
     let missing: HashSet<&str> = missing.iter().map(String::as_str).collect();

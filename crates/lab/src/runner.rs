@@ -548,7 +548,10 @@ impl Gathered {
             if std::fs::read(out).with_context(|| format!("reading {}", out.display()))? == text {
                 return Ok(summary(true));
             }
-            bail!("{} already holds other results: merge into a new folder", out.display());
+            bail!(
+                "{} already holds other results: merge into a new folder",
+                out.display()
+            );
         }
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -840,7 +843,10 @@ mod tests {
         let merged = temp("merge-out");
         std::fs::remove_file(&merged).ok();
         let s = merge(&parts, &keys(&cs), &merged).unwrap();
-        assert_eq!((s.merged, s.duplicates, s.missing.len(), s.unchanged), (12, 0, 0, false));
+        assert_eq!(
+            (s.merged, s.duplicates, s.missing.len(), s.unchanged),
+            (12, 0, 0, false)
+        );
         assert_eq!(std::fs::read(&whole).unwrap(), std::fs::read(&merged).unwrap());
         // The same merge again leaves the file as it is; merging other runs
         // into a file that holds results, or a part twice with a changed

@@ -83,7 +83,13 @@ impl SlurmParams {
     pub fn new(petrinav: PathBuf, out: PathBuf, what: Vec<String>, name: &str) -> SlurmParams {
         let name: String = name
             .chars()
-            .map(|c| if c.is_ascii_alphanumeric() || "._-".contains(c) { c } else { '-' })
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                    c
+                } else {
+                    '-'
+                }
+            })
             .collect();
         SlurmParams {
             petrinav,
@@ -109,9 +115,15 @@ impl SlurmParams {
     /// line can hold, a time limit and a partition in Slurm's syntax, and
     /// options that the scripts do not set themselves.
     pub fn check(&self) -> Result<()> {
-        for (what, path) in [("the petrinav binary", &self.petrinav), ("the output folder", &self.out)] {
+        for (what, path) in [
+            ("the petrinav binary", &self.petrinav),
+            ("the output folder", &self.out),
+        ] {
             if !path.is_absolute() {
-                bail!("{what} must be an absolute path for the nodes, not {}", path.display());
+                bail!(
+                    "{what} must be an absolute path for the nodes, not {}",
+                    path.display()
+                );
             }
             sbatch_word(what, &path.to_string_lossy())?;
         }
@@ -127,7 +139,9 @@ impl SlurmParams {
         if let Some(p) = &self.partition
             && (p.is_empty() || !p.chars().all(|c| c.is_ascii_alphanumeric() || "._-,".contains(c)))
         {
-            bail!("--partition `{p}`: a partition name (letters, digits, `._-`; several separated by commas)");
+            bail!(
+                "--partition `{p}`: a partition name (letters, digits, `._-`; several separated by commas)"
+            );
         }
         if let Some(t) = &self.time {
             check_time(t)?;
@@ -212,7 +226,10 @@ impl SlurmParams {
         for o in self.common_options() {
             text += &format!("#SBATCH {o}\n");
         }
-        text += &format!("#SBATCH --output={}\n", slurm_pattern(&dir.join("shard-")) + "%a.log");
+        text += &format!(
+            "#SBATCH --output={}\n",
+            slurm_pattern(&dir.join("shard-")) + "%a.log"
+        );
         text += "#SBATCH --open-mode=append\n";
         text += &self.prelude("shards.sbatch");
         text += &format!(
@@ -239,7 +256,7 @@ impl SlurmParams {
              #\n\
              # It writes {out}/results.jsonl (the file an unsharded batch writes) and\n\
              # the report, or, when a shard is incomplete, says which and writes nothing:\n\
-             # submit those tasks again (sbatch --array=LIST {shards}), then this\n\
+             # submit those tasks again (sbatch --array=TASKS {shards}), then this\n\
              # script after them.\n",
             out = self.out.display(),
             shards = shards.display(),
@@ -350,7 +367,11 @@ fn sbatch_parsable(sbatch: &OsStr, args: &[String], script: &Path) -> Result<Str
         .args(args)
         .arg(script)
         .output()
-        .with_context(|| format!("running `{shown}`: is this a Slurm login node? The scripts are written; submit them by hand"))?;
+        .with_context(|| {
+            format!(
+                "running `{shown}`: is this a Slurm login node? The scripts are written; submit them by hand"
+            )
+        })?;
     if !out.status.success() {
         bail!(
             "`{shown} {} {}` failed ({}): {}",
@@ -365,7 +386,11 @@ fn sbatch_parsable(sbatch: &OsStr, args: &[String], script: &Path) -> Result<Str
 
 /// The job id in what `sbatch --parsable` printed: `id` or `id;cluster`.
 pub fn parse_job_id(printed: &str) -> Result<String> {
-    let line = printed.lines().map(str::trim).find(|l| !l.is_empty()).unwrap_or("");
+    let line = printed
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .unwrap_or("");
     let id = line.split(';').next().unwrap_or("");
     if id.is_empty() || !id.chars().all(|c| c.is_ascii_digit()) {
         bail!("sbatch --parsable printed `{}`, not a job id", printed.trim());
@@ -377,7 +402,8 @@ pub fn parse_job_id(printed: &str) -> Result<String> {
 /// (with an optional step `:s`) separated by commas, an optional `%k` (at
 /// most `k` tasks at once); every index from 1 to `shards`.
 pub fn check_array(spec: &str, shards: u32) -> Result<()> {
-    let bad = |why: String| anyhow::anyhow!("--array `{spec}`: {why}; e.g. 2, 1,3 or 2-4 (tasks 1 to {shards})");
+    let bad =
+        |why: String| anyhow::anyhow!("--array `{spec}`: {why}; e.g. 2, 1,3 or 2-4 (tasks 1 to {shards})");
     let (list, limit) = spec.split_once('%').map_or((spec, None), |(l, k)| (l, Some(k)));
     if let Some(k) = limit
         && !matches!(k.parse::<u32>(), Ok(k) if k > 0)
@@ -385,7 +411,9 @@ pub fn check_array(spec: &str, shards: u32) -> Result<()> {
         return Err(bad(format!("`%{k}` is not a positive number of tasks")));
     }
     let index = |s: &str| -> Result<u32> {
-        let i: u32 = s.parse().map_err(|_| bad(format!("`{s}` is not a task number")))?;
+        let i: u32 = s
+            .parse()
+            .map_err(|_| bad(format!("`{s}` is not a task number")))?;
         if i == 0 || i > shards {
             return Err(bad(format!("there is no task {i}")));
         }
@@ -418,15 +446,24 @@ pub fn check_time(t: &str) -> Result<()> {
     if t.eq_ignore_ascii_case("unlimited") || t.eq_ignore_ascii_case("infinite") {
         return Ok(());
     }
-    let numbers = |s: &str| !s.is_empty() && s.split(':').all(|n| !n.is_empty() && n.chars().all(|c| c.is_ascii_digit()));
+    let numbers = |s: &str| {
+        !s.is_empty()
+            && s.split(':')
+                .all(|n| !n.is_empty() && n.chars().all(|c| c.is_ascii_digit()))
+    };
     let ok = match t.split_once('-') {
         Some((days, rest)) => {
-            !days.is_empty() && days.chars().all(|c| c.is_ascii_digit()) && numbers(rest) && rest.split(':').count() <= 3
+            !days.is_empty()
+                && days.chars().all(|c| c.is_ascii_digit())
+                && numbers(rest)
+                && rest.split(':').count() <= 3
         }
         None => numbers(t) && t.split(':').count() <= 3,
     };
     if !ok {
-        bail!("--time `{t}`: Slurm's formats are MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM and D-HH:MM:SS (e.g. 30, 2:00:00, 1-12)");
+        bail!(
+            "--time `{t}`: Slurm's formats are MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM and D-HH:MM:SS (e.g. 30, 2:00:00, 1-12)"
+        );
     }
     Ok(())
 }
@@ -456,7 +493,8 @@ fn check_option(o: &str) -> Result<()> {
         bail!(
             "sbatch option `{o}`: the scripts set {name} themselves{}",
             match name {
-                "--partition" | "--time" | "--job-name" | "--cpus-per-task" => format!(" (use lab slurm {name})"),
+                "--partition" | "--time" | "--job-name" | "--cpus-per-task" =>
+                    format!(" (use lab slurm {name})"),
                 _ => String::new(),
             }
         );
@@ -466,7 +504,10 @@ fn check_option(o: &str) -> Result<()> {
 
 /// Refuses what an `#SBATCH` line cannot hold as one word.
 fn sbatch_word(what: &str, s: &str) -> Result<()> {
-    if s.is_empty() || s.chars().any(|c| c.is_whitespace() || c.is_control() || "\"'\\".contains(c)) {
+    if s.is_empty()
+        || s.chars()
+            .any(|c| c.is_whitespace() || c.is_control() || "\"'\\".contains(c))
+    {
         bail!("{what} `{s}`: an #SBATCH line cannot hold spaces, quotes or backslashes");
     }
     Ok(())
@@ -481,7 +522,10 @@ fn slurm_pattern(path: &Path) -> String {
 /// `s` as one shell word: as it is when it holds only safe characters,
 /// else in single quotes.
 pub fn quote(s: &str) -> String {
-    if !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "_-./:=+,@%".contains(c)) {
+    if !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-./:=+,@%".contains(c))
+    {
         s.to_string()
     } else {
         format!("'{}'", s.replace('\'', "'\\''"))
@@ -557,13 +601,24 @@ mod tests {
         assert!(s.rfind("#SBATCH").unwrap() < first_command);
         let m = p.merge_script();
         assert!(m.contains("#SBATCH --job-name=petrinav-mine-merge\n"), "{m}");
-        assert!(m.contains("lab merge \"$out\" \"${parts[@]}\" --no-pictures;"), "{m}");
+        assert!(
+            m.contains("lab merge \"$out\" \"${parts[@]}\" --no-pictures;"),
+            "{m}"
+        );
         assert!(!m.contains("#SBATCH --array"), "{m}");
     }
 
     #[test]
     fn time_limits_arrays_and_options_in_slurms_syntax() {
-        for t in ["30", "30:00", "2:00:00", "1-12", "1-12:30", "1-12:30:00", "UNLIMITED"] {
+        for t in [
+            "30",
+            "30:00",
+            "2:00:00",
+            "1-12",
+            "1-12:30",
+            "1-12:30:00",
+            "UNLIMITED",
+        ] {
             check_time(t).unwrap();
         }
         for t in ["", "1h", "1:2:3:4", "-1", "1-", "1-1:2:3:4", "1 h"] {
