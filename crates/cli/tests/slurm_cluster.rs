@@ -164,14 +164,12 @@ fn user_ids(name: &str) -> (u32, u32) {
         .unwrap_or_else(|| panic!("no user {name} (the munge package makes it)"))
 }
 
-/// A free TCP port on the loopback (free when asked; the daemons take it
-/// a moment later).
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
+/// Two distinct free TCP ports on the loopback (free when asked, both
+/// held until both are chosen; the daemons take them a moment later).
+fn free_ports() -> (u16, u16) {
+    let bind = || std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let (a, b) = (bind(), bind());
+    (a.local_addr().unwrap().port(), b.local_addr().unwrap().port())
 }
 
 fn alive(pid: u32) -> bool {
@@ -325,6 +323,7 @@ impl Cluster {
 
     fn slurm_conf(&self) -> String {
         let d = self.dir.display();
+        let (ctld, slurmd) = free_ports();
         format!(
             "ClusterName=petrinavtest\n\
              SlurmctldHost=localhost(127.0.0.1)\n\
@@ -357,8 +356,6 @@ impl Cluster {
              NodeName=localhost NodeAddr=127.0.0.1 CPUs=4 State=UNKNOWN\n\
              PartitionName=debug Nodes=localhost Default=YES MaxTime=INFINITE State=UP\n\
              PartitionName=campaign Nodes=localhost MaxTime=10 State=UP\n",
-            ctld = free_port(),
-            slurmd = free_port(),
         )
     }
 
