@@ -7,7 +7,9 @@
 //! 2. a task cancelled mid-run (`scancel` of one array element) leaves the
 //!    merge job failing with the shard named, and that task submitted again
 //!    (`--array 2`) continues its part: the merged file is again the
-//!    unsharded one;
+//!    unsharded one (of `voting --runs 20`, whose tasks run long enough to
+//!    be cut); a task requeued mid-run (`scontrol requeue`, as pre-emption
+//!    does) continues its part on its own;
 //! 3. the scripts written with `--partition` and `--time` (and a relative
 //!    `-o`) run as written on a partition that is not the default, with
 //!    that time limit and working directory, and pass `shellcheck`.
@@ -333,7 +335,7 @@ impl Cluster {
              SlurmdUser=root\n\
              AuthType=auth/munge\n\
              CredType=cred/munge\n\
-             AuthInfo=socket={d}/munge/socket\n\
+             AuthInfo=socket={d}/munge/socket,cred_expire=10\n\
              StateSaveLocation={d}/state\n\
              SlurmdSpoolDir={d}/spool\n\
              SlurmctldPidFile={d}/slurmctld.pid\n\
@@ -662,9 +664,9 @@ fn log(out: &Path, name: &str) -> String {
     std::fs::read_to_string(out.join("slurm").join(name)).unwrap_or_default()
 }
 
-/// Outcome 2: task 2 cancelled mid-run; the merge fails naming shard 2;
-/// task 2 submitted again continues and the new merge gives the unsharded
-/// file.
+/// Outcome 2: task 2 cancelled mid-run and task 3 requeued mid-run; task
+/// 3 continues on its own, the merge fails naming shard 2; task 2
+/// submitted again continues and the new merge gives the unsharded file.
 fn outcome_2_a_task_cancelled_and_submitted_again(cluster: &Cluster, base: &Path, whole: &[u8]) {
     let out = base.join("o2");
     let o = out.to_str().unwrap();
@@ -675,15 +677,20 @@ fn outcome_2_a_task_cancelled_and_submitted_again(cluster: &Cluster, base: &Path
     let (array, merge) = job_ids(&ok(&cluster.petrinav(base, &args), "lab slurm --submit"));
     let part = out.join("part-2/results.jsonl");
     let started = Instant::now();
-    while lines(&part) == 0 {
+    while lines(&part) == 0 || lines(&out.join("part-3/results.jsonl")) == 0 {
         assert!(
             started.elapsed() < Duration::from_secs(120),
-            "task 2 wrote nothing\n{}",
+            "tasks 2 and 3 wrote nothing\n{}",
             cluster.logs()
         );
         std::thread::sleep(Duration::from_millis(10));
     }
     ok(&cluster.slurm("scancel", &[&format!("{array}_2")]), "scancel");
+    // Task 3 pre-empted as Slurm does it: killed and queued again.
+    ok(
+        &cluster.slurm("scontrol", &["requeue", &format!("{array}_3")]),
+        "scontrol requeue",
+    );
     let merged = cluster.wait_ended(&merge, Duration::from_secs(240));
     let tasks = cluster.jobs(&array);
     let cut = lines(&part);
@@ -716,6 +723,17 @@ fn outcome_2_a_task_cancelled_and_submitted_again(cluster: &Cluster, base: &Path
     assert!(
         !out.join("results.jsonl").exists(),
         "an incomplete merge wrote results"
+    );
+    // The requeued task ran again and continued its part.
+    let requeued = log(&out, "shard-3.log");
+    assert_eq!(requeued.matches("== shard 3/4").count(), 2, "{requeued}");
+    let continued = requeued
+        .split(&format!("{per_task} runs ("))
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next()?.parse::<usize>().ok());
+    assert!(
+        continued.is_some_and(|done| done > 0 && done < per_task),
+        "task 3 requeued mid-run should continue its part:\n{requeued}"
     );
     // Task 2 again, and a merge after it.
     args.extend(["--array", "2"]);

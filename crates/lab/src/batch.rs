@@ -51,7 +51,7 @@ pub fn read_shard(dir: &Path) -> Result<Option<Shard>> {
 /// one, never half of one.
 pub fn write_info(dir: &Path, info: &SuiteInfo, shard: Option<Shard>) -> Result<()> {
     let path = dir.join("suite.json");
-    let tmp = dir.join("suite.json.tmp");
+    let tmp = dir.join(format!("suite.json.tmp{}", std::process::id()));
     let folder = Folder {
         info: info.clone(),
         shard,

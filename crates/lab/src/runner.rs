@@ -556,7 +556,9 @@ impl Gathered {
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
-        let tmp = out.with_extension("jsonl.tmp");
+        // A temporary file of this process's own: two merges of the same
+        // parts at once each rename a whole file into place.
+        let tmp = out.with_extension(format!("jsonl.tmp{}", std::process::id()));
         std::fs::write(&tmp, &text).with_context(|| format!("writing {}", tmp.display()))?;
         std::fs::rename(&tmp, out).with_context(|| format!("replacing {}", out.display()))?;
         Ok(summary(false))
