@@ -72,6 +72,38 @@ fn absolute(path: &Path) -> Result<PathBuf> {
         .join(path))
 }
 
+/// Refuses an output folder that holds another batch, or parts of this
+/// one cut into another number of shards: the tasks would refuse to
+/// resume them only once queued.
+fn check_out(out: &Path, info: &lab::suite::SuiteInfo, shards: u32) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Ok(()); // a new folder
+    };
+    let mut folders = vec![out.to_path_buf()];
+    folders.extend(entries.flatten().map(|e| e.path()).filter(|p| {
+        p.file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with("part-"))
+    }));
+    for dir in folders.iter().filter(|d| d.join("suite.json").exists()) {
+        if !lab::batch::read_info(dir)?.same_batch(info) {
+            bail!(
+                "{} holds another batch (suite, scenarios, runs or seed differ): choose another -o",
+                dir.display()
+            );
+        }
+        if let Some(shard) = lab::batch::read_shard(dir)?
+            && shard.count != shards
+        {
+            bail!(
+                "{} holds shard {shard} of this batch: give --shards {} as before, or choose another -o",
+                dir.display(),
+                shard.count
+            );
+        }
+    }
+    Ok(())
+}
+
 pub fn run(a: &SlurmArgs) -> Result<()> {
     // The suite is built here, once, to catch a wrong name, file or run
     // count before anything is queued.
@@ -119,6 +151,8 @@ pub fn run(a: &SlurmArgs) -> Result<()> {
     if let Some(name) = &a.job_name {
         params.job_name = name.clone();
     }
+    params.check()?;
+    check_out(&params.out, info, a.shards)?;
     let scripts = params.write()?;
     outln!("{}", scripts.shards.display())?;
     outln!("{}", scripts.merge.display())?;

@@ -306,6 +306,37 @@ fn bad_options_are_refused_before_anything_is_written() {
         assert!(!stderr(&run).contains("panicked"));
     }
     assert!(!out.exists() && !spaced.exists());
+    // A folder holding another batch, or this one in other shards.
+    ok(petrinav(&[
+        "lab", "slurm", "voting", "--runs", "1", "--shards", "2", "-o", o,
+    ]));
+    ok(petrinav(&[
+        "lab",
+        "run",
+        "voting",
+        "--runs",
+        "1",
+        "--shard",
+        "1/2",
+        "--out",
+        out.join("part-1").to_str().unwrap(),
+    ]));
+    for (args, says) in [
+        (vec!["--runs", "2", "--shards", "2"], "part-1 holds another batch"),
+        (
+            vec!["--runs", "1", "--shards", "3"],
+            "part-1 holds shard 1/2 of this batch: give --shards 2",
+        ),
+    ] {
+        let mut all = vec!["lab", "slurm", "voting", "-o", o];
+        all.extend(args.iter().copied());
+        let run = petrinav(&all);
+        assert!(!run.status.success(), "{args:?}");
+        assert!(stderr(&run).contains(says), "{args:?}: {}", stderr(&run));
+    }
+    ok(petrinav(&[
+        "lab", "slurm", "voting", "--runs", "1", "--shards", "2", "-o", o,
+    ]));
     let unknown = petrinav(&["lab", "slurm", "no_such_suite", "--shards", "2", "-o", o]);
     assert!(stderr(&unknown).contains("unknown suite"), "{}", stderr(&unknown));
 }
