@@ -269,7 +269,12 @@ where
     if let Some(dir) = params.results.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let exists = params.results.exists() && std::fs::metadata(&params.results)?.len() > 0;
+    let results = &params.results;
+    let exists = results.exists()
+        && std::fs::metadata(results)
+            .with_context(|| format!("reading {}", results.display()))?
+            .len()
+            > 0;
     let mut done: HashMap<String, Value> = HashMap::new();
     if exists {
         if !params.resume {
@@ -285,8 +290,11 @@ where
             }
         }
         // Drop a line cut mid-write.
-        let f = OpenOptions::new().write(true).open(&params.results)?;
-        f.set_len(good)?;
+        OpenOptions::new()
+            .write(true)
+            .open(results)
+            .and_then(|f| f.set_len(good))
+            .with_context(|| format!("opening {} to resume", results.display()))?;
     }
     // A campaign resumes at its first missing run; a run on file after a
     // missing one was not computed from the state this batch hands on.
@@ -343,8 +351,9 @@ where
             let mut f = sink
                 .lock()
                 .map_err(|_| anyhow::anyhow!("results file lock poisoned"))?;
-            f.write_all(line.as_bytes())?;
-            f.flush()?;
+            f.write_all(line.as_bytes())
+                .and_then(|()| f.flush())
+                .with_context(|| format!("writing {}", params.results.display()))?;
         }
         if let Some(b) = &bar {
             b.inc(1);
@@ -411,11 +420,13 @@ fn write_ordered(path: &Path, records: &[Value], keys: &[String]) -> Result<()> 
         let mut f = std::io::BufWriter::new(
             File::create(&tmp).with_context(|| format!("writing {}", tmp.display()))?,
         );
-        for (_, _, r) in ordered {
+        let written: std::io::Result<()> = ordered.iter().try_for_each(|(_, _, r)| {
             serde_json::to_writer(&mut f, r)?;
-            f.write_all(b"\n")?;
-        }
-        f.flush()?;
+            f.write_all(b"\n")
+        });
+        written
+            .and_then(|()| f.flush())
+            .with_context(|| format!("writing {}", tmp.display()))?;
     }
     std::fs::rename(&tmp, path).with_context(|| format!("replacing {}", path.display()))?;
     Ok(())
@@ -476,7 +487,12 @@ pub fn merge(parts: &[PathBuf], keys: &[String], out: &Path) -> Result<MergeSumm
             }
         }
     }
-    if out.exists() && std::fs::metadata(out)?.len() > 0 {
+    if out.exists()
+        && std::fs::metadata(out)
+            .with_context(|| format!("reading {}", out.display()))?
+            .len()
+            > 0
+    {
         bail!("{} already holds results: merge into a new folder", out.display());
     }
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {

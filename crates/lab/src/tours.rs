@@ -157,6 +157,16 @@ impl GuideOptions {
     }
 }
 
+/// Most legs a tour may have: each is a whole simulated mission (a second
+/// or more of computing), and a tour of thousands is a mistake in the
+/// places file more often than a plan; several tours do the same.
+pub const MAX_TOUR_LEGS: usize = 1000;
+
+/// The longest time limit a leg may have, seconds of simulated time (a
+/// day; the default is 300 s). A leg runs until its goal or its limit, at
+/// ten control ticks per simulated second.
+pub const MAX_TIME_LIMIT_S: f64 = 86_400.0;
+
 /// The map, checked to have free space.
 pub fn load_map(path: &Path) -> Result<OccupancyGrid> {
     let grid = crate::map_file::load_grid(path)?;
@@ -248,6 +258,12 @@ pub fn setup(
             c.time_limit_s
         );
     }
+    if c.time_limit_s > MAX_TIME_LIMIT_S {
+        bail!(
+            "--time-limit {}: more than the {MAX_TIME_LIMIT_S} s (a day of simulated time) a leg may last (lab::tours::MAX_TIME_LIMIT_S)",
+            c.time_limit_s
+        );
+    }
     let mut world = World::new(grid);
     let mut people = None;
     let r = CrowdParams::default().radius_m;
@@ -302,13 +318,8 @@ pub fn read_log_of(path: &Path, net: NetChoice) -> Result<Vec<Entry>> {
     }
     let net = net.net_id()?;
     let log = MissionLog::read(path, &net)?;
-    if let Some(t) = log.torn() {
-        eprintln!(
-            "warning: {}:{}: the last line was cut mid-write ({} bytes); it is not an entry and is left out",
-            path.display(),
-            t.line,
-            t.bytes
-        );
+    for notice in log.notices() {
+        eprintln!("warning: {notice}");
     }
     Ok(log.entries().to_vec())
 }
@@ -376,7 +387,7 @@ pub fn log_legs(options: &GuideOptions, legs: &[LegRun], policy: &Policy) -> Res
             }
             (true, Policy::Fixed(b)) => mission::credit_calibration_entry(leg, *b),
             (true, _) => bail!("--calibration runs one behaviour alone: --behaviour automove or contour"),
-            (false, _) => mission::mission_entry(leg, log.missions() + 1),
+            (false, _) => mission::mission_entry(leg, log.next_mission()),
         };
         log.append(entry)?;
     }
@@ -429,6 +440,18 @@ pub fn tour(options: &GuideOptions) -> Result<Tour> {
         bail!(
             "a tour needs at least two places; the goals file has {}",
             places.len()
+        );
+    }
+    if places.len() - 1 > MAX_TOUR_LEGS {
+        bail!(
+            "{}: a tour of its {} places has {} legs, more than the {MAX_TOUR_LEGS} a tour may have (lab::tours::MAX_TOUR_LEGS): split the places into several tours",
+            options
+                .goals
+                .as_deref()
+                .unwrap_or(Path::new("the goals file"))
+                .display(),
+            places.len(),
+            places.len() - 1
         );
     }
     let stops: Vec<Stop> = places

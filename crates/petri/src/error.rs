@@ -281,6 +281,22 @@ pub enum Error {
         /// The likely cause, or what to change.
         cause: String,
     },
+    /// A net file too large to read within the memory limit (checked
+    /// before it is read: [`crate::io::read_file_within`]).
+    #[error(
+        "{} is {}: reading it would take about {} of memory, more than the limit of {} (by default 85 % of the memory available); raise it with --max-memory if the machine has more free memory",
+        .path.display(), crate::error::format_bytes(*.bytes), crate::error::format_bytes(*.needed), crate::error::format_bytes(*.limit)
+    )]
+    FileTooLarge {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// The memory reading it would take.
+        needed: u64,
+        /// The limit.
+        limit: u64,
+    },
     /// A generator was asked for more than it makes (checked before
     /// anything is allocated).
     #[error("{what} would have {size} {unit}, more than the limit of {limit}")]

@@ -85,6 +85,7 @@ pub mod dot;
 pub mod pnml;
 pub mod pnpro;
 pub mod toml_format;
+mod toml_split;
 
 pub use dot::{write_dot, write_reachability_dot, write_tangible_dot};
 pub use pnml::{read_pnml, write_pnml};
@@ -157,17 +158,45 @@ impl fmt::Display for Format {
     }
 }
 
-/// Reads a net from a file, in the format its extension says.
+/// Memory reading a net takes per byte of its file, at most: the text, the
+/// parser's structures (one item at a time for TOML, the document tree
+/// for XML) and the net. Measured on 50 MB files of each format
+/// (`crates/petri/BENCHMARKS.md`, "Reading large files"); [`read_file`]
+/// checks a file's size against the memory guard with it before reading.
+pub const READ_BYTES_PER_FILE_BYTE: u64 = 10;
+
+/// Reads a net from a file, in the format its extension says, if reading
+/// it fits the default memory guard ([`read_file_within`] with
+/// [`crate::default_max_memory`]).
 pub fn read_file(path: impl AsRef<Path>) -> Result<Net> {
+    read_file_within(path, crate::default_max_memory())
+}
+
+/// Reads a net from a file, in the format its extension says; a file
+/// whose reading would take more than `max_memory` bytes
+/// ([`READ_BYTES_PER_FILE_BYTE`] per byte) is refused before it is read
+/// ([`Error::FileTooLarge`]).
+pub fn read_file_within(path: impl AsRef<Path>, max_memory: u64) -> Result<Net> {
     let path = path.as_ref();
     let format = Format::from_path(path)?;
     if !format.can_read() {
         return Err(dot_not_readable(&path.display().to_string()));
     }
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let io = |source| Error::Io {
         path: path.into(),
         source,
-    })?;
+    };
+    let bytes = std::fs::metadata(path).map_err(io)?.len();
+    let needed = bytes.saturating_mul(READ_BYTES_PER_FILE_BYTE);
+    if needed > max_memory {
+        return Err(Error::FileTooLarge {
+            path: path.into(),
+            bytes,
+            needed,
+            limit: max_memory,
+        });
+    }
+    let text = std::fs::read_to_string(path).map_err(io)?;
     read_str(&text, format, &path.display().to_string())
 }
 
