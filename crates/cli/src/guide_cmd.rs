@@ -279,14 +279,15 @@ fn read_any(path: &Path) -> Result<ReadLog> {
     })
 }
 
-/// `(N entries read but left out of the learning: see the warnings)`, or
-/// nothing.
-fn skipped_text(skipped: usize) -> String {
+/// Prints `N entries read but left out of the learning (see the
+/// warnings)` when there are any.
+fn print_skipped(skipped: usize) -> Result<()> {
     match skipped {
-        0 => String::new(),
-        1 => " (1 entry read but left out of the learning: see the warning)".into(),
-        n => format!(" ({n} entries read but left out of the learning: see the warnings)"),
+        0 => {}
+        1 => outln!("1 entry read but left out of the learning (see the warning)")?,
+        n => outln!("{n} entries read but left out of the learning (see the warnings)")?,
     }
+    Ok(())
 }
 
 /// The learnt line of `--json`, with `"skipped": N` when entries were
@@ -302,7 +303,7 @@ fn with_skipped(mut v: serde_json::Value, skipped: usize) -> serde_json::Value {
 
 /// The crediting supervisor's rates per crowd context, at the whole
 /// reference's length.
-fn credit_text(entries: &[Entry], skipped: usize) -> Result<String> {
+fn credit_text(entries: &[Entry]) -> Result<String> {
     use guide::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel};
     let m = CreditModel::learn(entries)?;
     let length = m.reference.length_m();
@@ -331,10 +332,9 @@ fn credit_text(entries: &[Entry], skipped: usize) -> Result<String> {
         ]);
     }
     Ok(format!(
-        "learnt from {} missions ({} reached the goal) and the calibration runs{}, at the start ({} m from the goal):\n{}",
+        "learnt from {} missions ({} reached the goal) and the calibration runs, at the start ({} m from the goal):\n{}",
         m.missions,
         m.successes,
-        skipped_text(skipped),
         num(length),
         t.render()
     ))
@@ -406,14 +406,14 @@ fn show(path: &Path, json: bool) -> Result<()> {
     }
     let t = entries_table(&entries);
     outln!("{}", t.trim_end())?;
+    print_skipped(skipped)?;
     outln!()?;
     match learned {
         Ok(l) => {
             outln!(
-                "learnt from {} missions ({} reached the goal) and the calibration runs{}:",
+                "learnt from {} missions ({} reached the goal) and the calibration runs:",
                 l.missions,
-                l.successes,
-                skipped_text(skipped)
+                l.successes
             )?;
             outln!("{}", rates_text(&l).trim_end())?;
         }
@@ -447,8 +447,9 @@ fn show_credit(entries: &[Entry], skipped: usize) -> Result<()> {
         };
         outln!("{line}")?;
     }
+    print_skipped(skipped)?;
     outln!()?;
-    match credit_text(entries, skipped) {
+    match credit_text(entries) {
         Ok(t) => outln!("{}", t.trim_end())?,
         Err(e) => outln!("no rates yet: {e}")?,
     }
@@ -560,10 +561,11 @@ fn learn(path: &Path, json: bool) -> Result<()> {
         } else {
             outln!(
                 "{}",
-                credit_text(&entries, skipped)
+                credit_text(&entries)
                     .with_context(|| format!("learning from {}", path.display()))?
                     .trim_end()
             )?;
+            print_skipped(skipped)?;
         }
         return Ok(());
     }
@@ -582,5 +584,6 @@ fn learn(path: &Path, json: bool) -> Result<()> {
         num(l.contour.mean_speed_mps),
         num(l.contour.length_m())
     )?;
+    print_skipped(skipped)?;
     Ok(())
 }

@@ -118,11 +118,6 @@ fn write_file(root: &Path, dir: &Path, name: &str, spec: &FileSpec) -> Result<()
         bytes.extend(spec.repeat.replace("{i}", &i.to_string()).as_bytes());
     }
     bytes.extend(spec.tail.as_bytes());
-    if let Ok(text) = std::str::from_utf8(&bytes)
-        && text.contains("_net}")
-    {
-        bytes = with_net_ids(text).into_bytes();
-    }
     if !spec.replace.is_empty() {
         let mut text = String::from_utf8(bytes).map_err(|_| format!("{name}: `replace` in a binary file"))?;
         for [old, new] in &spec.replace {
@@ -132,6 +127,11 @@ fn write_file(root: &Path, dir: &Path, name: &str, spec: &FileSpec) -> Result<()
             text = text.replace(old.as_str(), new);
         }
         bytes = text.into_bytes();
+    }
+    if let Ok(text) = std::str::from_utf8(&bytes)
+        && text.contains("_net}")
+    {
+        bytes = with_net_ids(text).into_bytes();
     }
     if let Some(n) = spec.truncate {
         bytes.truncate(n);

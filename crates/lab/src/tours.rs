@@ -215,7 +215,8 @@ pub fn resolve(spec: &str, places: Option<&Places>, what: &str) -> Result<Stop> 
             pose: p.pose,
         }),
         None => bail!(
-            "{what}: no place `{spec}` in the goals file; it has: {}",
+            "{what}: no place `{spec}` in the goals file{}; it has: {}",
+            petri::suggest::hint(spec, places.iter().map(|p| p.name.as_str())),
             places
                 .iter()
                 .map(|p| p.name.as_str())
@@ -326,6 +327,14 @@ pub fn read_log_of(path: &Path, net: NetChoice) -> Result<Vec<Entry>> {
 
 /// The policy, learnt from the log for the supervisor.
 pub fn policy(options: &GuideOptions) -> Result<Policy> {
+    if options.calibration
+        && !matches!(
+            options.behaviour,
+            BehaviourChoice::AutoMove | BehaviourChoice::Contour
+        )
+    {
+        bail!("--calibration runs one behaviour alone: --behaviour automove or contour");
+    }
     Ok(match options.behaviour {
         BehaviourChoice::AutoMove => Policy::Fixed(Behaviour::AutoMove),
         BehaviourChoice::Contour => Policy::Fixed(Behaviour::Contour),

@@ -70,7 +70,7 @@ pub enum Error {
         second: &'static str,
     },
     /// An arc refers to a node that does not exist (or has the wrong kind).
-    #[error("{arc}: unknown {expected} `{name}`")]
+    #[error("{arc}: unknown {expected} `{name}`{hint}")]
     UnknownNode {
         /// Description of the arc (with its position when known).
         arc: String,
@@ -78,6 +78,9 @@ pub enum Error {
         expected: &'static str,
         /// The name or id that was not found.
         name: String,
+        /// `; did you mean `X`?` naming the closest node, or empty
+        /// ([`crate::suggest::hint`]).
+        hint: String,
     },
     /// A parameter is used but has no value.
     #[error(

@@ -145,7 +145,13 @@ pub fn load(yaml_path: impl AsRef<Path>) -> Result<MapServerMap> {
         location: image_path.display().to_string(),
         message,
     })?;
-    let (grid, occupancy) = grid_from_pixels(&yaml, &pixels)?;
+    let (grid, occupancy) = grid_from_pixels(&yaml, &pixels).map_err(|e| match e {
+        Error::Geometry(message) => Error::Format {
+            location: format!("{} (image {})", yaml_path.display(), image_path.display()),
+            message,
+        },
+        other => other,
+    })?;
     Ok(MapServerMap {
         yaml,
         image_path,

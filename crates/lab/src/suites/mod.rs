@@ -78,6 +78,14 @@ pub fn load<S: AsRef<str>>(what: &[S], runs: Option<u32>) -> Result<Box<dyn Suit
     if let [name] = what
         && !name.as_ref().ends_with(".toml")
     {
+        if find(name.as_ref()).is_none() {
+            bail!(
+                "unknown suite `{}`{}; the suites are {}; or give scenario files (.toml)",
+                name.as_ref(),
+                did_you_mean(name.as_ref()),
+                names()
+            );
+        }
         return build(
             name.as_ref(),
             &SuiteArgs {

@@ -464,6 +464,7 @@ impl Reader<'_> {
                             arc: format!("{}: reference `{id}`", self.loc(node)),
                             expected: "place or transition",
                             name: target.to_string(),
+                            hint: crate::suggest::hint(target, ends.keys().copied()),
                         });
                     }
                 }
@@ -774,6 +775,7 @@ impl Reader<'_> {
                 arc: describe(),
                 expected: "place or transition",
                 name: x.to_string(),
+                hint: crate::suggest::hint(x, ends.keys().copied()),
             })
         };
         let (from, to) = (end(source)?, end(target)?);

@@ -548,6 +548,13 @@ impl Reader<'_> {
                     arc: describe(),
                     expected: "place",
                     name: place_name.to_string(),
+                    hint: crate::suggest::hint(
+                        place_name,
+                        names
+                            .iter()
+                            .filter(|(_, n)| matches!(n, Named::Place(_)))
+                            .map(|(k, _)| k.as_ref()),
+                    ),
                 });
             }
         };
@@ -558,6 +565,13 @@ impl Reader<'_> {
                     arc: describe(),
                     expected: "transition",
                     name: transition_name.to_string(),
+                    hint: crate::suggest::hint(
+                        transition_name,
+                        names
+                            .iter()
+                            .filter(|(_, n)| matches!(n, Named::Transition(_)))
+                            .map(|(k, _)| k.as_ref()),
+                    ),
                 });
             }
         };

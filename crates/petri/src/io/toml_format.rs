@@ -646,6 +646,7 @@ impl Reader<'_> {
                         ),
                         expected: "place",
                         name: place.get_ref().clone(),
+                        hint: crate::suggest::hint(place.get_ref(), place_ids.keys().map(String::as_str)),
                     });
                 };
                 let multiplicity = match mult {
