@@ -86,6 +86,7 @@ pub mod pnml;
 pub mod pnpro;
 pub mod toml_format;
 mod toml_split;
+mod xml_split;
 
 pub use dot::{write_dot, write_reachability_dot, write_tangible_dot};
 pub use pnml::{read_pnml, write_pnml};
@@ -323,22 +324,51 @@ fn location_at(source: &str, text: &str, offset: usize) -> String {
     format!("{source}:{line}:{col}")
 }
 
-/// `source:line:column` of an XML node.
-fn xml_location(source: &str, node: roxmltree::Node<'_, '_>) -> String {
-    let pos = node.document().text_pos_at(node.range().start);
-    format!("{source}:{}:{}", pos.row, pos.col)
+/// Where an XML node starts in its document.
+fn xml_pos(node: roxmltree::Node<'_, '_>) -> roxmltree::TextPos {
+    node.document().text_pos_at(node.range().start)
 }
 
-/// `source:line:column` of an attribute's value, or of its element when the
-/// attribute is absent.
-fn attr_location(source: &str, node: roxmltree::Node<'_, '_>, attr: &str) -> String {
+/// Where an attribute's value starts in its document, or its element when
+/// the attribute is absent.
+fn attr_pos(node: roxmltree::Node<'_, '_>, attr: &str) -> roxmltree::TextPos {
     match node.attribute_node(attr) {
-        Some(a) => {
-            let pos = node.document().text_pos_at(a.range_value().start);
-            format!("{source}:{}:{}", pos.row, pos.col)
-        }
-        None => xml_location(source, node),
+        Some(a) => node.document().text_pos_at(a.range_value().start),
+        None => xml_pos(node),
     }
+}
+
+/// `source:line:column` of a position in a document: the whole file's, or
+/// the fragment `base` of it ([`xml_split`]).
+fn located(source: &str, pos: roxmltree::TextPos, base: Option<&xml_split::Fragment>) -> String {
+    let (row, col) = base.map_or((pos.row, pos.col), |f| f.place(pos.row, pos.col));
+    format!("{source}:{row}:{col}")
+}
+
+/// Parses one fragment of a cut XML text ([`xml_split`]) on its own; an
+/// error's position is placed in the whole file.
+fn parse_fragment<'a>(
+    text: &'a str,
+    fragment: &xml_split::Fragment,
+    source: &str,
+) -> Result<roxmltree::Document<'a>> {
+    let piece = &text[fragment.range.clone()];
+    roxmltree::Document::parse(piece).map_err(|e| {
+        let pos = match e {
+            roxmltree::Error::UnexpectedEndOfStream | roxmltree::Error::UnclosedRootNode => {
+                let (row, col) = line_col(piece, piece.len());
+                roxmltree::TextPos::new(row as u32, col as u32)
+            }
+            _ => e.pos(),
+        };
+        let message = e.to_string();
+        let suffix = format!(" at {}", e.pos());
+        let message = message.strip_suffix(&suffix).unwrap_or(&message).to_string();
+        Error::Xml {
+            location: located(source, pos, Some(fragment)),
+            message,
+        }
+    })
 }
 
 /// Parses XML, turning the parser's error into [`Error::Xml`] with its

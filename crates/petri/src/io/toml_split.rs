@@ -56,6 +56,9 @@ fn headers(text: &str, mut f: impl FnMut(Header) -> bool) {
             while i < b.len() && (b[i] == b' ' || b[i] == b'\t') {
                 i += 1;
             }
+            if i == b.len() {
+                break;
+            }
             if depth == 0 && i < b.len() && b[i] == b'[' {
                 let end = b[i..].iter().position(|&c| c == b'\n').map_or(b.len(), |k| i + k);
                 let line = &text[i..end];
@@ -219,6 +222,13 @@ mod tests {
         assert!(head.ends_with("s = \"a\\\"[[place]]\"\n"), "{head}");
         assert_eq!(places.len(), 1);
         assert!(transitions.is_empty());
+    }
+
+    /// Regression: blanks at the very end of the text read past it.
+    #[test]
+    fn a_text_ending_in_blanks_is_scanned_to_its_end() {
+        assert!(items("a = 1\n  ").is_some());
+        assert!(items("  ").is_some());
     }
 
     #[test]
