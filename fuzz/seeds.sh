@@ -37,6 +37,10 @@ put map_image "$repo"/maps/building_31/*.png
 put scenario "$repo"/crates/lab/src/suites/*/scenarios/*.toml "$repo"/crates/lab/src/suites/*/*.toml
 put places "$repo"/maps/*/places.yaml
 put fpn_map "$repo"/crates/topo/tests/data/*.json
+# The bad-input corpus's logs and results (their net ids as placeholders:
+# the fuzzer mutates them anyway).
+put mission_log "$repo"/tests/bad_inputs/fixtures/*.jsonl
+put results "$repo"/tests/bad_inputs/fixtures/voting/results.jsonl
 # Expressions: the rates, weights and markings written in the model files.
 mkdir -p corpus/expr
 grep -ohE '(delay|weight|marking|mult|value)="[^"]+"' \

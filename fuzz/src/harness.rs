@@ -31,6 +31,7 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("scenario", scenario),
     ("places", places),
     ("mission_log", mission_log),
+    ("results", results),
     ("fpn_map", fpn_map),
 ];
 
@@ -181,31 +182,82 @@ pub fn places(data: &[u8]) {
     }
 }
 
-/// A tour guide's mission log (read from a file, as the log is), then the
-/// rates learnt from it and the supervisor's decision on them — which must
-/// be taken on finite numbers.
+/// The file an input is written to, as logs and results are files: one
+/// per target and process.
+fn temp_file(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("petrinav-fuzz-{name}-{}", std::process::id()))
+}
+
+/// A tour guide's mission log (read from a file, as the log is) for either
+/// shipped supervisor net — each line checked as data — then the rates
+/// learnt from it and the supervisor's decision on them, which must be
+/// taken on finite numbers.
 pub fn mission_log(data: &[u8]) {
-    static SUPERVISOR: OnceLock<guide::supervisor::Supervisor> = OnceLock::new();
+    use guide::supervisor::credit::CreditSupervisor;
+    use guide::supervisor::credit_learning::CreditModel;
+    static SUPERVISORS: OnceLock<(guide::supervisor::Supervisor, CreditSupervisor)> = OnceLock::new();
     static PATH: OnceLock<PathBuf> = OnceLock::new();
-    let supervisor =
-        SUPERVISOR.get_or_init(|| guide::supervisor::Supervisor::new().expect("the shipped net compiles"));
-    let path = PATH.get_or_init(|| {
-        std::env::temp_dir().join(format!("petrinav-fuzz-mission-log-{}.jsonl", std::process::id()))
+    let (source, credit) = SUPERVISORS.get_or_init(|| {
+        (
+            guide::supervisor::Supervisor::new().expect("the shipped net compiles"),
+            CreditSupervisor::new().expect("the shipped crediting net compiles"),
+        )
     });
+    let path = PATH.get_or_init(|| temp_file("mission-log.jsonl"));
     if std::fs::write(path, data).is_err() {
         return;
     }
-    let Ok(log) = guide::supervisor::log::MissionLog::read(path, supervisor.net_id()) else {
-        return;
-    };
-    let _ = log.missions();
-    let Ok(learned) = guide::supervisor::learning::learn_or_prior(log.entries()) else {
-        return;
-    };
-    if let Ok(d) = supervisor.decide(&learned.rates) {
-        for x in [d.f_auto, d.f_cont, d.u_auto, d.u_cont, d.p_loc_succ, d.p_loc_warn] {
-            assert!(x.is_finite(), "the decision {d:?} holds {x}");
+    if let Ok(log) = guide::supervisor::log::MissionLog::read(path, source.net_id()) {
+        let _ = (log.missions(), log.next_mission(), log.notices());
+        if let Ok(learned) = guide::supervisor::learning::learn_or_prior(log.entries())
+            && let Ok(d) = source.decide(&learned.rates)
+        {
+            for x in [d.f_auto, d.f_cont, d.u_auto, d.u_cont, d.p_loc_succ, d.p_loc_warn] {
+                assert!(x.is_finite(), "the decision {d:?} holds {x}");
+            }
         }
+    }
+    if let Ok(log) = guide::supervisor::log::MissionLog::read(path, credit.net_id())
+        && let Ok(model) = CreditModel::learn_or_prior(log.entries())
+    {
+        for context in 0..guide::supervisor::credit_learning::CONTEXTS {
+            let rates = model.rates(context, 10.0);
+            for localized in [true, false] {
+                if let Ok(d) = credit.decide(&rates, localized) {
+                    for x in [d.f_auto, d.f_cont, d.p_success, d.p_loc_warn] {
+                        assert!(x.is_finite(), "the decision {d:?} holds {x}");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A results file (`results.jsonl` of `lab report`): read, checked against
+/// a batch of three runs (`e1/field01#0`, `e1/field02#0`,
+/// `e1/field03#0`, the keys of the seed), grouped and summarised; every
+/// interval of a summary must be a number or absent.
+pub fn results(data: &[u8]) {
+    static PATH: OnceLock<PathBuf> = OnceLock::new();
+    let path = PATH.get_or_init(|| temp_file("results.jsonl"));
+    if std::fs::write(path, data).is_err() {
+        return;
+    }
+    let Ok((lines, _)) = lab::runner::read_results(path) else {
+        return;
+    };
+    let scenarios: Vec<String> = ["e1/field01", "e1/field02", "e1/field03"]
+        .map(String::from)
+        .to_vec();
+    let keys: Vec<String> = scenarios.iter().map(|s| format!("{s}#0")).collect();
+    if lab::record::check_lines(path, &lines, &keys, "fuzz").is_err() {
+        return;
+    }
+    let Ok(runs) = lab::record::group(&lines) else {
+        return;
+    };
+    for s in lab::summary::summarise(&scenarios, &runs) {
+        let _ = lab::tables::csv(std::slice::from_ref(&s));
     }
 }
 

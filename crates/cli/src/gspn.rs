@@ -167,13 +167,18 @@ enum MethodArg {
 
 #[derive(Args, Debug)]
 pub struct SelectArgs {
-    /// Sets a supervisor rate: lambdaN=VALUE (N from 1 to 11; λ1 and λ2 are
-    /// set by the hypotheses and ignored).
+    /// Sets a supervisor rate: lambdaN=VALUE (N from 1 to 11, to 15 for a
+    /// crediting net; λ1 and λ2 are set by the hypotheses and ignored).
     #[arg(long = "set", short = 's', value_name = "lambdaN=VALUE")]
     set: Vec<String>,
-    /// Use another supervisor net of the same structure.
+    /// Another supervisor net: of the source's structure, or of the crediting
+    /// supervisor's (models/supervisor_credit.toml: it has the transition t15).
     #[arg(long, value_name = "FILE")]
     model: Option<PathBuf>,
+    /// Decide as the crediting supervisor does at a Warning (lost); the
+    /// default decides localized.
+    #[arg(long)]
+    lost: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
@@ -259,7 +264,7 @@ pub fn run(cmd: GspnCommand) -> Result<()> {
 }
 
 fn load(args: &NetArgs) -> Result<(Net, Gspn)> {
-    lab::gspn::load(&args.file, &args.params)
+    lab::gspn::load_within(&args.file, &args.params, args.max_memory)
 }
 
 fn explore(args: &NetArgs, gspn: &Gspn) -> Result<ReachabilityGraph> {
@@ -661,39 +666,72 @@ fn memory_table(m: &lab::gspn::MemoryReport) -> String {
 }
 
 fn select(a: &SelectArgs) -> Result<()> {
-    let (d, rates) = lab::gspn::select(&a.set, a.model.as_deref())?;
+    let selection = lab::gspn::select(&a.set, a.model.as_deref(), !a.lost)?;
     if a.json {
-        return print_json(&serde_json::to_value(&d)?);
+        return print_json(&selection.to_json()?);
     }
-    let choice = match d.choice {
+    let choice = |c: Behaviour| match c {
         Behaviour::AutoMove => "AutoMove (map-based planner)",
         Behaviour::Contour => "Contour tracking (wall following)",
     };
-    out!(
-        "{}",
-        fields(&[
-            ("choice", choice.to_string()),
-            (
-                "f_auto",
-                format!("{}  (throughput of t9, AutoMove hypothesis)", num(d.f_auto))
-            ),
-            (
-                "f_cont",
-                format!("{}  (throughput of t10, Contour hypothesis)", num(d.f_cont))
-            ),
-            ("U_auto", format!("{}  P{{#P1 = 1}}", num(d.u_auto))),
-            ("U_cont", format!("{}  P{{#P2 = 1}}", num(d.u_cont))),
-            ("P_loc,succ", num(d.p_loc_succ)),
-            ("P_loc,warn", num(d.p_loc_warn)),
-            ("P_pp,norm", num(d.p_pp_norm)),
-            ("P_pp,abno", num(d.p_pp_abno)),
-            ("tangible markings", d.tangible_markings.to_string()),
-        ])
-    )?;
-    let r = rates.as_array();
+    let (table, rates) = match &selection {
+        lab::gspn::Selection::Source { decision: d, rates } => (
+            fields(&[
+                ("choice", choice(d.choice).to_string()),
+                (
+                    "f_auto",
+                    format!("{}  (throughput of t9, AutoMove hypothesis)", num(d.f_auto)),
+                ),
+                (
+                    "f_cont",
+                    format!("{}  (throughput of t10, Contour hypothesis)", num(d.f_cont)),
+                ),
+                ("U_auto", format!("{}  P{{#P1 = 1}}", num(d.u_auto))),
+                ("U_cont", format!("{}  P{{#P2 = 1}}", num(d.u_cont))),
+                ("P_loc,succ", num(d.p_loc_succ)),
+                ("P_loc,warn", num(d.p_loc_warn)),
+                ("P_pp,norm", num(d.p_pp_norm)),
+                ("P_pp,abno", num(d.p_pp_abno)),
+                ("tangible markings", d.tangible_markings.to_string()),
+            ]),
+            rates.as_array().to_vec(),
+        ),
+        lab::gspn::Selection::Credit {
+            decision: d,
+            rates,
+            localized,
+        } => (
+            fields(&[
+                ("supervisor", "crediting".to_string()),
+                (
+                    "decided",
+                    if *localized {
+                        "localized (Success)"
+                    } else {
+                        "lost (Warning)"
+                    }
+                    .to_string(),
+                ),
+                ("choice", choice(d.choice).to_string()),
+                (
+                    "f_auto",
+                    format!("{}  (completions, AutoMove hypothesis)", num(d.f_auto)),
+                ),
+                (
+                    "f_cont",
+                    format!("{}  (completions, contour hypothesis)", num(d.f_cont)),
+                ),
+                ("P_success", num(d.p_success)),
+                ("P_loc,warn", num(d.p_loc_warn)),
+            ]),
+            rates.as_array().to_vec(),
+        ),
+    };
+    out!("{table}")?;
     outln!(
-        "rates λ3…λ11: {}",
-        r[2..].iter().map(|v| num(*v)).collect::<Vec<_>>().join(", ")
+        "rates λ3…λ{}: {}",
+        rates.len(),
+        rates[2..].iter().map(|v| num(*v)).collect::<Vec<_>>().join(", ")
     )?;
     Ok(())
 }

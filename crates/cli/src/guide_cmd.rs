@@ -84,14 +84,11 @@ enum Kind {
 }
 
 fn check(path: Option<&Path>, json: bool) -> Result<()> {
-    use guide::supervisor::check::check_net;
-    use guide::supervisor::credit::{CREDIT_MODEL, credit_variants};
-    use guide::supervisor::{MODEL, source_variants};
+    use guide::supervisor::check::check_supervisor;
+    use guide::supervisor::credit::{CREDIT_MODEL, CREDIT_RATE_BINDING, CreditSupervisor, credit_variants};
+    use guide::supervisor::{MODEL, RATE_BINDING, source_variants};
     let nets: Vec<(String, petri::Net)> = match path {
-        Some(p) => vec![(
-            p.display().to_string(),
-            petri::io::read_file(p).with_context(|| format!("loading {}", p.display()))?,
-        )],
+        Some(p) => vec![(p.display().to_string(), lab::gspn::read_net(p)?)],
         None => vec![
             (
                 "models/supervisor.toml".into(),
@@ -116,30 +113,43 @@ fn check(path: Option<&Path>, json: bool) -> Result<()> {
             Kind::Source
         };
         let c = match kind {
-            Kind::Credit => check_net(net, &credit_variants()),
-            Kind::Source => check_net(net, &source_variants()),
+            Kind::Credit => check_supervisor(net, &credit_variants(), &CREDIT_RATE_BINDING),
+            Kind::Source => check_supervisor(net, &source_variants(), &RATE_BINDING),
         };
-        if let Err(e) = c.require() {
-            refused.push(format!("{name}: {e}"));
+        // What the check leaves to the supervisor itself: the places and
+        // transitions it reads, compiled as it will be.
+        let verdict = match c.require() {
+            Err(e) => Err(format!("{}: {}", e.variant, e.property)),
+            Ok(()) => match kind {
+                Kind::Credit => CreditSupervisor::from_net(net).map(drop),
+                Kind::Source => Supervisor::from_net(net).map(drop),
+            }
+            .map_err(|e| format!("the supervisor cannot use it: {e}")),
+        };
+        if let Err(why) = &verdict {
+            refused.push(format!(
+                "{name}: the supervisor net `{}` is refused: {why}",
+                c.net
+            ));
         }
-        verdicts.push((name.clone(), kind, c));
+        verdicts.push((name.clone(), kind, c, verdict));
     }
     if json {
         let v: Vec<serde_json::Value> = verdicts
             .iter()
-            .map(|(name, kind, c)| {
+            .map(|(name, kind, c, verdict)| {
                 serde_json::json!({
                     "file": name,
                     "supervisor": match kind { Kind::Credit => "credit", Kind::Source => "source" },
-                    "accepted": c.passed(),
-                    "refused": c.require().err().map(|e| e.to_string()),
+                    "accepted": verdict.is_ok(),
+                    "refused": verdict.as_ref().err(),
                     "check": c,
                 })
             })
             .collect();
         outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else {
-        for (name, kind, c) in &verdicts {
+        for (name, kind, c, verdict) in &verdicts {
             outln!(
                 "{name} ({} supervisor, net `{}`)",
                 match kind {
@@ -148,40 +158,10 @@ fn check(path: Option<&Path>, json: bool) -> Result<()> {
                 },
                 c.net
             )?;
-            let mut t = Table::new([
-                "variant",
-                "left out",
-                "markings",
-                "bounded",
-                "dead markings",
-                "live",
-                "home state",
-                "M0 home state",
-            ]);
-            for v in &c.variants {
-                t.row([
-                    v.variant.clone(),
-                    if v.without.is_empty() {
-                        "-".into()
-                    } else {
-                        v.without.join(", ")
-                    },
-                    v.markings.map_or("-".into(), |m| m.to_string()),
-                    yes_no(v.bounded),
-                    v.dead_markings.to_string(),
-                    if v.not_live.is_empty() {
-                        "yes".into()
-                    } else {
-                        format!("no: {}", v.not_live.join(", "))
-                    },
-                    yes_no(v.home_state),
-                    yes_no(v.reversible),
-                ]);
-            }
-            outln!("{}", t.render().trim_end())?;
-            match c.require() {
+            outln!("{}", check_table(c).trim_end())?;
+            match verdict {
                 Ok(()) => outln!("verdict: accepted\n")?,
-                Err(e) => outln!("verdict: REFUSED — {}: {}\n", e.variant, e.property)?,
+                Err(why) => outln!("verdict: REFUSED — {why}\n")?,
             }
         }
     }
@@ -191,12 +171,82 @@ fn check(path: Option<&Path>, json: bool) -> Result<()> {
     Ok(())
 }
 
+/// The check's table: a row per variant, `-` where a property could not be
+/// computed, and each row's first failure (or `ok`); the rates the
+/// supervisor cannot bind listed under it.
+fn check_table(c: &guide::supervisor::check::NetCheck) -> String {
+    let mut t = Table::new([
+        "variant",
+        "left out",
+        "rates, weights",
+        "markings",
+        "bounded",
+        "dead markings",
+        "live",
+        "home state",
+        "M0 home state",
+        "verdict",
+    ]);
+    for v in &c.variants {
+        let explored = v.markings.is_some();
+        let known = |s: String| if explored { s } else { "-".into() };
+        t.row([
+            v.variant.clone(),
+            if v.without.is_empty() {
+                "-".into()
+            } else {
+                v.without.join(", ")
+            },
+            match v.values.as_slice() {
+                [] => "ok".into(),
+                bad => {
+                    let mut names: Vec<&str> = bad.iter().map(|p| p.transition.as_str()).collect();
+                    names.dedup();
+                    format!("no: {}", names.join(", "))
+                }
+            },
+            v.markings.map_or("-".into(), |m| m.to_string()),
+            if v.error.is_some() {
+                "-".into()
+            } else {
+                yes_no(v.bounded)
+            },
+            known(v.dead_markings.to_string()),
+            known(if v.not_live.is_empty() {
+                "yes".into()
+            } else {
+                format!("no: {}", v.not_live.join(", "))
+            }),
+            known(yes_no(v.home_state)),
+            known(yes_no(v.reversible)),
+            v.failure().unwrap_or_else(|| "ok".into()),
+        ]);
+    }
+    let mut text = t.render();
+    for p in &c.bound_rates {
+        text.push_str(&format!("not a rate the supervisor learns: {p}\n"));
+    }
+    text
+}
+
 fn yes_no(b: bool) -> String {
     if b { "yes" } else { "no" }.to_string()
 }
 
-/// Reads a log of either shipped supervisor net (the one its lines name).
-fn read_any(path: &Path) -> Result<(Vec<Entry>, Kind)> {
+/// A log read: its entries, the supervisor it is for, and how many of its
+/// entries were read but left out of the learning (each reported on
+/// standard error as it is read).
+struct ReadLog {
+    entries: Vec<Entry>,
+    kind: Kind,
+    skipped: usize,
+}
+
+/// Reads a log of either shipped supervisor net (the one its first line
+/// names); what the reader reports (a last line cut mid-write, entries
+/// skipped) goes to standard error as warnings naming the line.
+fn read_any(path: &Path) -> Result<ReadLog> {
+    use std::io::BufRead as _;
     if !path.exists() {
         anyhow::bail!("{}: no such mission log", path.display());
     }
@@ -204,13 +254,14 @@ fn read_any(path: &Path) -> Result<(Vec<Entry>, Kind)> {
     let credit = guide::supervisor::credit::CreditSupervisor::new()?
         .net_id()
         .to_string();
-    let first_net = std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| !l.trim().is_empty())
-                .and_then(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        })
+    // The first line that is not blank names the net (a malformed one is
+    // reported by the reader below).
+    let file = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
+    let first_net = std::io::BufReader::new(file)
+        .lines()
+        .map_while(std::result::Result::ok)
+        .find(|l| !l.trim().is_empty())
+        .and_then(|l| serde_json::from_str::<serde_json::Value>(&l).ok())
         .and_then(|v| v.get("net").and_then(|n| n.as_str()).map(str::to_string));
     let (net, kind) = if first_net.as_deref() == Some(credit.as_str()) {
         (credit, Kind::Credit)
@@ -218,15 +269,36 @@ fn read_any(path: &Path) -> Result<(Vec<Entry>, Kind)> {
         (source, Kind::Source)
     };
     let log = MissionLog::read(path, &net)?;
-    if let Some(t) = log.torn() {
-        eprintln!(
-            "warning: {}:{}: the last line was cut mid-write ({} bytes); it is not an entry and is left out",
-            path.display(),
-            t.line,
-            t.bytes
-        );
+    for notice in log.notices() {
+        eprintln!("warning: {notice}");
     }
-    Ok((log.entries().to_vec(), kind))
+    Ok(ReadLog {
+        entries: log.entries().to_vec(),
+        kind,
+        skipped: log.skipped().len(),
+    })
+}
+
+/// Prints `N entries read but left out of the learning (see the
+/// warnings)` when there are any.
+fn print_skipped(skipped: usize) -> Result<()> {
+    match skipped {
+        0 => {}
+        1 => outln!("1 entry read but left out of the learning (see the warning)")?,
+        n => outln!("{n} entries read but left out of the learning (see the warnings)")?,
+    }
+    Ok(())
+}
+
+/// The learnt line of `--json`, with `"skipped": N` when entries were
+/// left out of the learning.
+fn with_skipped(mut v: serde_json::Value, skipped: usize) -> serde_json::Value {
+    if skipped > 0
+        && let Some(o) = v.as_object_mut()
+    {
+        o.insert("skipped".into(), skipped.into());
+    }
+    v
 }
 
 /// The crediting supervisor's rates per crowd context, at the whole
@@ -304,12 +376,16 @@ fn rates_text(l: &Learned) -> String {
 /// Prints a log: per entry a line or a table row, then the rates learnt
 /// from it (`json`: the entries and the learnt rates as JSON lines).
 fn show(path: &Path, json: bool) -> Result<()> {
-    let (entries, kind) = read_any(path)?;
+    let ReadLog {
+        entries,
+        kind,
+        skipped,
+    } = read_any(path)?;
     if kind == Kind::Credit && !json {
-        return show_credit(&entries);
+        return show_credit(&entries, skipped);
     }
     if kind == Kind::Credit {
-        return show_credit_json(&entries);
+        return show_credit_json(&entries, skipped);
     }
     let learned = learning::learn(&entries);
     if json {
@@ -317,16 +393,20 @@ fn show(path: &Path, json: bool) -> Result<()> {
             outln!("{}", serde_json::to_string(e)?)?;
         }
         match &learned {
-            Ok(l) => outln!("{}", serde_json::json!({ "learned": l }))?,
+            Ok(l) => outln!("{}", with_skipped(serde_json::json!({ "learned": l }), skipped))?,
             Err(e) => outln!(
                 "{}",
-                serde_json::json!({ "learned": null, "error": e.to_string() })
+                with_skipped(
+                    serde_json::json!({ "learned": null, "error": e.to_string() }),
+                    skipped
+                )
             )?,
         }
         return Ok(());
     }
     let t = entries_table(&entries);
     outln!("{}", t.trim_end())?;
+    print_skipped(skipped)?;
     outln!()?;
     match learned {
         Ok(l) => {
@@ -343,7 +423,7 @@ fn show(path: &Path, json: bool) -> Result<()> {
 }
 
 /// Prints a credit log: a line per entry, then the rates learnt from it.
-fn show_credit(entries: &[Entry]) -> Result<()> {
+fn show_credit(entries: &[Entry], skipped: usize) -> Result<()> {
     for (k, e) in entries.iter().enumerate() {
         let line = match e {
             Entry::Calibration(c) => format!(
@@ -367,6 +447,7 @@ fn show_credit(entries: &[Entry]) -> Result<()> {
         };
         outln!("{line}")?;
     }
+    print_skipped(skipped)?;
     outln!()?;
     match credit_text(entries) {
         Ok(t) => outln!("{}", t.trim_end())?,
@@ -377,16 +458,19 @@ fn show_credit(entries: &[Entry]) -> Result<()> {
 
 /// Prints a credit log as JSON lines: the entries, then the model learnt
 /// from them (or the error).
-fn show_credit_json(entries: &[Entry]) -> Result<()> {
+fn show_credit_json(entries: &[Entry], skipped: usize) -> Result<()> {
     for e in entries {
         outln!("{}", serde_json::to_string(e)?)?;
     }
     let m = guide::supervisor::credit_learning::CreditModel::learn(entries);
     match &m {
-        Ok(m) => outln!("{}", serde_json::json!({ "learned": m }))?,
+        Ok(m) => outln!("{}", with_skipped(serde_json::json!({ "learned": m }), skipped))?,
         Err(e) => outln!(
             "{}",
-            serde_json::json!({ "learned": null, "error": e.to_string() })
+            with_skipped(
+                serde_json::json!({ "learned": null, "error": e.to_string() }),
+                skipped
+            )
         )?,
     }
     Ok(())
@@ -464,7 +548,11 @@ fn entries_table(entries: &[Entry]) -> String {
 }
 
 fn learn(path: &Path, json: bool) -> Result<()> {
-    let (entries, kind) = read_any(path)?;
+    let ReadLog {
+        entries,
+        kind,
+        skipped,
+    } = read_any(path)?;
     if kind == Kind::Credit {
         if json {
             let m = guide::supervisor::credit_learning::CreditModel::learn(&entries)
@@ -477,6 +565,7 @@ fn learn(path: &Path, json: bool) -> Result<()> {
                     .with_context(|| format!("learning from {}", path.display()))?
                     .trim_end()
             )?;
+            print_skipped(skipped)?;
         }
         return Ok(());
     }
@@ -495,5 +584,6 @@ fn learn(path: &Path, json: bool) -> Result<()> {
         num(l.contour.mean_speed_mps),
         num(l.contour.length_m())
     )?;
+    print_skipped(skipped)?;
     Ok(())
 }

@@ -101,7 +101,8 @@ pub struct RunArgs {
     /// 1,000,000.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(lab::scenario::MAX_RUNS)))]
     runs: Option<u32>,
-    /// Worker threads (default: all cores). Results do not depend on it.
+    /// Worker threads (default: all cores; at most 4 per core). Results do
+    /// not depend on it.
     #[arg(long, short = 'j')]
     jobs: Option<usize>,
     /// Output folder (default: `out/<suite name>`).
@@ -174,6 +175,9 @@ fn read_info(dir: &Path) -> Result<SuiteInfo> {
 }
 
 fn run_suite(a: &RunArgs) -> Result<()> {
+    if let Some((_, Some(capped))) = a.jobs.map(lab::batch::cap_jobs).transpose()? {
+        eprintln!("warning: {capped}");
+    }
     let suite = lab::suites::load(&a.what, a.runs)?;
     let ran = lab::batch::run(
         suite,

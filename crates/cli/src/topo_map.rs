@@ -40,16 +40,7 @@ pub fn find_place(net: &FuzzyPetriNet, name: &str, option: &str, map: &Path) -> 
         return Ok(p);
     }
     let names: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
-    let similar: Vec<&str> = names
-        .iter()
-        .copied()
-        .filter(|n| n.eq_ignore_ascii_case(name) || n.trim() == name.trim())
-        .collect();
-    let hint = if let Some(s) = similar.first() {
-        format!(" (did you mean `{s}`?)")
-    } else {
-        String::new()
-    };
+    let hint = petri::closest(name, &names).map_or(String::new(), |s| format!(" (did you mean `{s}`?)"));
     const SHOWN: usize = 12;
     let listed = if names.is_empty() {
         "it has no places".to_string()

@@ -44,8 +44,9 @@ fn calibration(behaviour: &str, t: f64, len: f64) -> String {
 }
 
 fn mission(k: u32, success: bool, warn_s: f64) -> String {
+    let outcome = if success { "goal" } else { "time_limit" };
     line(&format!(
-        "\"kind\":\"mission\",\"mission\":{k},\"success\":{success},\"outcome\":\"goal\",\"duration_s\":100.0,\"localizer\":[{{\"state\":\"success\",\"duration_s\":{},\"ended\":true}},{{\"state\":\"warning\",\"duration_s\":{warn_s},\"ended\":false}}],\"planner\":[{{\"state\":\"normal\",\"duration_s\":100.0,\"ended\":false}}],\"time_automove_s\":100.0,\"time_contour_s\":0.0,\"decisions\":[]",
+        "\"kind\":\"mission\",\"mission\":{k},\"success\":{success},\"outcome\":\"{outcome}\",\"duration_s\":100.0,\"localizer\":[{{\"state\":\"success\",\"duration_s\":{},\"ended\":true}},{{\"state\":\"warning\",\"duration_s\":{warn_s},\"ended\":false}}],\"planner\":[{{\"state\":\"normal\",\"duration_s\":100.0,\"ended\":false}}],\"time_automove_s\":100.0,\"time_contour_s\":0.0,\"decisions\":[]",
         100.0 - warn_s
     ))
 }
@@ -201,7 +202,11 @@ fn bad_logs_are_clear_errors() {
     check(&good, &["guide", "learn"], &["calibration", "Contour"]);
     // A negative duration in a mission.
     let bad = good.clone() + &calibration("contour", 130.0, 40.0) + &mission(1, true, -5.0);
-    check(&bad, &["guide", "learn"], &["finite number ≥ 0"]);
+    check(
+        &bad,
+        &["guide", "learn"],
+        &["log.jsonl:3", "localizer[1].duration_s", "-5 s"],
+    );
     // The supervisor without a log.
     let out = petrinav(&[
         "nav",

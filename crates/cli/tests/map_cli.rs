@@ -154,7 +154,7 @@ fn bad_inputs_give_messages() {
     )
     .unwrap();
     let err = fails(&["map", "info", bad.to_str().unwrap()]);
-    assert!(err.contains("resolution must be > 0"), "{err}");
+    assert!(err.contains("resolution must be between"), "{err}");
     let world = tmp("bad_world.toml");
     std::fs::write(
         &world,

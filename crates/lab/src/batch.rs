@@ -33,6 +33,32 @@ use anyhow::{Context, Result, bail};
 use crate::runner::{BatchParams, BatchSummary, Campaign, Job, MergeSummary, Shard};
 use crate::suite::{Suite, SuiteInfo};
 
+/// Most worker threads a batch starts per core: `--jobs` beyond this many
+/// times the cores is capped (the runs would only wait on each other, and
+/// thousands of threads cost memory and start-up before the first run).
+pub const MAX_JOBS_PER_CORE: usize = 4;
+
+/// The worker threads a batch uses for `asked` (`--jobs`): at least 1 (0
+/// is an error), at most [`MAX_JOBS_PER_CORE`] × the cores; with the
+/// message to show when it was capped. Results do not depend on it.
+pub fn cap_jobs(asked: usize) -> Result<(usize, Option<String>)> {
+    if asked == 0 {
+        bail!("--jobs 0: a batch needs at least one worker thread (leave --jobs out to use every core)");
+    }
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let most = MAX_JOBS_PER_CORE * cores;
+    Ok(if asked > most {
+        (
+            most,
+            Some(format!(
+                "--jobs {asked}: capped at {most} worker threads ({MAX_JOBS_PER_CORE} per core, {cores} cores); more would only wait on each other. Results do not depend on it"
+            )),
+        )
+    } else {
+        (asked, None)
+    })
+}
+
 /// The `suite.json` of a results folder.
 pub fn read_info(dir: &Path) -> Result<SuiteInfo> {
     Ok(read_folder(dir)?.info)
@@ -88,7 +114,8 @@ fn read_folder(dir: &Path) -> Result<Folder> {
 /// The options of `lab run` beyond the suite.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
-    /// Worker threads (default: all cores); results do not depend on it.
+    /// Worker threads (default: all cores; capped by [`cap_jobs`]); results
+    /// do not depend on it.
     pub jobs: Option<usize>,
     /// Output folder (default: `out/<suite name>`).
     pub out: Option<PathBuf>,
@@ -165,10 +192,11 @@ pub fn run(suite: Box<dyn Suite>, options: &RunOptions) -> Result<Ran> {
     }
     // Written first, so that an interrupted batch can be checked on resume.
     write_info(&out, info, options.shard)?;
+    let jobs = options.jobs.map(cap_jobs).transpose()?.map(|(n, _)| n);
     let params = BatchParams {
         results: out.join("results.jsonl"),
         resume: options.resume,
-        jobs: options.jobs,
+        jobs,
         progress: options.progress,
         stop: options.stop.clone(),
     };

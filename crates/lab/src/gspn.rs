@@ -22,7 +22,8 @@ use std::ops::ControlFlow;
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
+use guide::supervisor::credit::{CreditDecision, CreditRates, CreditSupervisor, NUM_CREDIT_RATES};
 use guide::supervisor::{Decision, Rates, Supervisor};
 use petri::{
     CompiledGspn, ExploreParams, Expr, FarkasParams, Gspn, Interrupt, Invariants, Net, Params, Properties,
@@ -33,7 +34,15 @@ use serde_json::{Value, json};
 /// Reads a net file in the format its extension says (`.pnpro`, `.pnml`,
 /// `.toml`); errors begin `loading FILE: `.
 pub fn read_net(path: &Path) -> Result<Net> {
-    petri::io::read_file(path).with_context(|| format!("loading {}", path.display()))
+    read_net_within(path, None)
+}
+
+/// [`read_net`] within `max_memory` bytes (`--max-memory`; default the
+/// memory guard's, [`petri::default_max_memory`]): a file too large to
+/// read within it is refused before it is read.
+pub fn read_net_within(path: &Path, max_memory: Option<u64>) -> Result<Net> {
+    let limit = max_memory.unwrap_or_else(petri::default_max_memory);
+    petri::io::read_file_within(path, limit).with_context(|| format!("loading {}", path.display()))
 }
 
 /// Writes a net in the format the file's extension says; errors begin
@@ -51,7 +60,16 @@ pub fn instantiate<S: AsRef<str>>(net: &Net, assignments: &[S]) -> Result<Gspn> 
 
 /// [`read_net`] then [`instantiate`].
 pub fn load<S: AsRef<str>>(path: &Path, assignments: &[S]) -> Result<(Net, Gspn)> {
-    let net = read_net(path)?;
+    load_within(path, assignments, None)
+}
+
+/// [`read_net_within`] then [`instantiate`].
+pub fn load_within<S: AsRef<str>>(
+    path: &Path,
+    assignments: &[S],
+    max_memory: Option<u64>,
+) -> Result<(Net, Gspn)> {
+    let net = read_net_within(path, max_memory)?;
     let gspn = instantiate(&net, assignments)?;
     Ok((net, gspn))
 }
@@ -63,9 +81,10 @@ pub fn load<S: AsRef<str>>(path: &Path, assignments: &[S]) -> Result<(Net, Gspn)
 pub struct MeasureError {
     /// The measure as written (after parsing, as the parser prints it).
     pub text: String,
-    /// What is wrong.
+    /// What is wrong (boxed: the engine's errors carry file positions and
+    /// names, and a measure's result stays small).
     #[source]
-    pub source: petri::Error,
+    pub source: Box<petri::Error>,
 }
 
 /// Parses measure expressions (`#P1 = 1 and #P7 = 1`, `#P1 + 2 * #P2`).
@@ -77,7 +96,7 @@ pub fn parse_measures<S: AsRef<str>>(texts: &[S]) -> Result<Vec<Expr>> {
 pub fn parse_measure(text: &str) -> std::result::Result<Expr, MeasureError> {
     Expr::parse(text).map_err(|source| MeasureError {
         text: text.to_string(),
-        source,
+        source: Box::new(source),
     })
 }
 
@@ -186,7 +205,7 @@ impl SteadyState {
             .measure(&self.solution, expr)
             .map_err(|source| MeasureError {
                 text: expr.to_string(),
-                source,
+                source: Box::new(source),
             })
     }
 
@@ -473,23 +492,112 @@ pub fn simulate(
     })
 }
 
+/// What `gspn select` decided ([`select`]), and with which supervisor.
+#[derive(Debug, Clone)]
+pub enum Selection {
+    /// The source's supervisor (`models/supervisor.toml` or a net of its
+    /// structure).
+    Source {
+        /// The decision.
+        decision: Decision,
+        /// The rates used.
+        rates: Rates,
+    },
+    /// The crediting supervisor (`models/supervisor_credit.toml` or a net
+    /// of its structure: it has the transition `t15`).
+    Credit {
+        /// The decision.
+        decision: CreditDecision,
+        /// The rates used.
+        rates: CreditRates,
+        /// Decided while localized (Success), or lost (Warning).
+        localized: bool,
+    },
+}
+
+impl Selection {
+    /// The `--json` object: the source's decision as it always was; the
+    /// crediting one with `"supervisor": "credit"` and `"localized"`.
+    pub fn to_json(&self) -> Result<Value> {
+        Ok(match self {
+            Selection::Source { decision, .. } => serde_json::to_value(decision)?,
+            Selection::Credit {
+                decision, localized, ..
+            } => {
+                let mut v = serde_json::to_value(decision)?;
+                if let Some(o) = v.as_object_mut() {
+                    o.insert("supervisor".into(), "credit".into());
+                    o.insert("localized".into(), (*localized).into());
+                }
+                v
+            }
+        })
+    }
+}
+
+/// The index `N` of a rate named `lambdaN` (1 ≤ N ≤ `count`), or an error
+/// naming the name given and the closest valid one.
+fn rate_index(name: &str, count: usize) -> Result<usize> {
+    let index = name
+        .strip_prefix("lambda")
+        .filter(|k| !k.starts_with('0'))
+        .and_then(|k| k.parse::<usize>().ok());
+    match index {
+        Some(k) if (1..=count).contains(&k) => Ok(k),
+        Some(k) => bail!(
+            "unknown rate `{name}`: λ{k} is not one of this supervisor's rates, lambda1 … lambda{count}"
+        ),
+        None => {
+            let known: Vec<String> = (1..=count).map(|k| format!("lambda{k}")).collect();
+            let known: Vec<&str> = known.iter().map(String::as_str).collect();
+            let hint =
+                petri::closest(name, &known).map_or(String::new(), |c| format!(" (did you mean `{c}`?)"));
+            bail!("unknown rate `{name}`{hint}: this supervisor's rates are lambda1 … lambda{count}")
+        }
+    }
+}
+
 /// `gspn select`: the supervisor's decision for rates set as
-/// `lambdaN=VALUE` assignments (the others at the source's initial values),
-/// on the shipped supervisor net or on `model`. Returns the decision and the
-/// rates used.
-pub fn select<S: AsRef<str>>(set: &[S], model: Option<&Path>) -> Result<(Decision, Rates)> {
-    let supervisor = match model {
+/// `lambdaN=VALUE` assignments (the others at the supervisor's initial
+/// values), on the shipped source's supervisor net or on `model` — a net
+/// of the source's structure, or of the crediting supervisor's (it has the
+/// transition `t15`, as `models/supervisor_credit.toml`), which decides
+/// `localized` or lost (the source's decides only while localized).
+pub fn select<S: AsRef<str>>(set: &[S], model: Option<&Path>, localized: bool) -> Result<Selection> {
+    let net = model.map(read_net).transpose()?;
+    let assignments = Params::parse_assignments(set)?.0;
+    let of_model = || {
+        format!(
+            "the supervisor net of {}",
+            model.unwrap_or(Path::new("")).display()
+        )
+    };
+    if let Some(net) = net.as_ref().filter(|n| n.transition_id("t15").is_some()) {
+        let supervisor = CreditSupervisor::from_net(net).with_context(of_model)?;
+        let mut rates = CreditRates::initial();
+        for (name, value) in assignments {
+            rates.try_set(rate_index(&name, NUM_CREDIT_RATES)?, value)?;
+        }
+        let decision = supervisor.decide(&rates, localized)?;
+        return Ok(Selection::Credit {
+            decision,
+            rates,
+            localized,
+        });
+    }
+    if !localized {
+        bail!(
+            "--lost: the source's supervisor decides only while localized (at the start and on returns to Success); the crediting net (models/supervisor_credit.toml) decides lost too"
+        );
+    }
+    let supervisor = match &net {
         None => Supervisor::new()?,
-        Some(path) => Supervisor::from_net(&read_net(path)?)?,
+        Some(net) => Supervisor::from_net(net).with_context(of_model)?,
     };
     let mut rates = Rates::initial();
-    for (name, value) in Params::parse_assignments(set)?.0 {
-        let index = name
-            .strip_prefix("lambda")
-            .and_then(|k| k.parse::<usize>().ok())
-            .with_context(|| format!("unknown rate `{name}`: use lambda1 … lambda11"))?;
-        rates.try_set(index, value)?;
+    for (name, value) in assignments {
+        rates.try_set(rate_index(&name, guide::supervisor::NUM_RATES)?, value)?;
     }
     let decision = supervisor.decide(&rates)?;
-    Ok((decision, rates))
+    Ok(Selection::Source { decision, rates })
 }

@@ -97,6 +97,60 @@ pub fn parse(line: &Value) -> Result<RunRecord> {
     serde_json::from_value(line.clone()).with_context(|| format!("record {name}#{run}"))
 }
 
+/// Checks the lines of a results file (`path`, as read by
+/// [`crate::runner::read_results`]: line `k + 1` is `lines[k]`) against
+/// the suite that reads it, before any summary is made of them: every
+/// record has a `key` that is one of the suite's runs (`keys`, from
+/// [`crate::runner::keys`]; `suite` names it) and agrees with its
+/// `scenario` and `run`; no run is there twice; `success` is true exactly
+/// when `outcome` is `goal`; `time_s` and `path_length_m` are ≥ 0. Each
+/// error names the file, the line and the field. Runs of the suite that
+/// are missing are not an error (a batch in progress, or merged shards
+/// with gaps).
+pub fn check_lines(path: &std::path::Path, lines: &[Value], keys: &[String], suite: &str) -> Result<()> {
+    let wanted: std::collections::HashSet<&str> = keys.iter().map(String::as_str).collect();
+    let mut seen: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for (k, line) in lines.iter().enumerate() {
+        let at = format!("{}:{}", path.display(), k + 1);
+        let key = line.get("key").and_then(Value::as_str).with_context(|| {
+            format!(
+                "{at}: a record without a `key` (a results file's lines are written by `petrinav lab run`)"
+            )
+        })?;
+        if let Some(first) = seen.insert(key, k + 1) {
+            bail!(
+                "{at}: run `{key}` is already on line {first}: a results file holds each run once (`petrinav lab merge` puts the folders of a sharded batch together)"
+            );
+        }
+        if !wanted.contains(key) {
+            bail!(
+                "{at}: run `{key}` is not a run of the suite `{suite}` as its suite.json describes it (scenarios, runs, seed): the file holds another batch's or another suite's records"
+            );
+        }
+        let (scenario, run) = place(line).with_context(|| format!("{at}: run `{key}`"))?;
+        if key != format!("{scenario}#{run}") {
+            bail!("{at}: `key` is `{key}` but `scenario` and `run` say `{scenario}#{run}`");
+        }
+        let outcome = line.get("outcome").and_then(Value::as_str);
+        let success = line.get("success").and_then(Value::as_bool);
+        if let (Some(outcome), Some(success)) = (outcome, success)
+            && (outcome == "goal") != success
+        {
+            bail!(
+                "{at}: run `{key}`: `success` is {success} but `outcome` is `{outcome}`: a run succeeds exactly when it ends at the goal"
+            );
+        }
+        for field in ["time_s", "path_length_m"] {
+            if let Some(v) = line.get(field).and_then(Value::as_f64)
+                && v < 0.0
+            {
+                bail!("{at}: run `{key}`: `{field}` is {v}: it is a length or a time, ≥ 0");
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Parses the lines of a results file ([`crate::runner::read_results`])
 /// once, for the summaries and the run-by-run comparisons.
 pub fn group(lines: &[Value]) -> Result<Runs> {

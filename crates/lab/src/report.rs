@@ -28,7 +28,9 @@ pub struct Written {
 /// `tables.md`, the suite's pictures in `pictures/`, and `index.html`.
 pub fn write(dir: &Path, suite: &dyn Suite, pictures: bool) -> Result<Written> {
     let info = suite.info();
-    let (lines, _) = runner::read_results(&dir.join("results.jsonl"))?;
+    let results = dir.join("results.jsonl");
+    let (lines, _) = runner::read_results(&results)?;
+    record::check_lines(&results, &lines, &runner::keys(&suite.campaigns()), &info.name)?;
     let runs = record::group(&lines)?;
     let summaries = summary::summarise(&info.scenarios, &runs);
     let mut files = Vec::new();

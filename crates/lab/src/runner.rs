@@ -299,7 +299,12 @@ fn unique_keys(keys: &[String]) -> Result<()> {
 /// line cut mid-write, and refuses a campaign whose runs on file do not
 /// form a prefix of it.
 fn runs_on_file(campaigns: &[Campaign], params: &BatchParams) -> Result<HashMap<String, Value>> {
-    let exists = params.results.exists() && std::fs::metadata(&params.results)?.len() > 0;
+    let results = &params.results;
+    let exists = results.exists()
+        && std::fs::metadata(results)
+            .with_context(|| format!("reading {}", results.display()))?
+            .len()
+            > 0;
     let mut done: HashMap<String, Value> = HashMap::new();
     if exists {
         if !params.resume {
@@ -315,8 +320,11 @@ fn runs_on_file(campaigns: &[Campaign], params: &BatchParams) -> Result<HashMap<
             }
         }
         // Drop a line cut mid-write.
-        let f = OpenOptions::new().write(true).open(&params.results)?;
-        f.set_len(good)?;
+        OpenOptions::new()
+            .write(true)
+            .open(results)
+            .and_then(|f| f.set_len(good))
+            .with_context(|| format!("opening {} to resume", results.display()))?;
     }
     // A campaign resumes at its first missing run; a run on file after a
     // missing one was not computed from the state this batch hands on.
@@ -401,8 +409,9 @@ where
             let mut f = sink
                 .lock()
                 .map_err(|_| anyhow::anyhow!("results file lock poisoned"))?;
-            f.write_all(line.as_bytes())?;
-            f.flush()?;
+            f.write_all(line.as_bytes())
+                .and_then(|()| f.flush())
+                .with_context(|| format!("writing {}", params.results.display()))?;
         }
         if let Some(b) = &bar {
             b.inc(1);
@@ -473,11 +482,13 @@ fn write_ordered(path: &Path, records: &[Value], keys: &[String]) -> Result<()> 
         let mut f = std::io::BufWriter::new(
             File::create(&tmp).with_context(|| format!("writing {}", tmp.display()))?,
         );
-        for (_, _, r) in ordered {
+        let written: std::io::Result<()> = ordered.iter().try_for_each(|(_, _, r)| {
             serde_json::to_writer(&mut f, r)?;
-            f.write_all(b"\n")?;
-        }
-        f.flush()?;
+            f.write_all(b"\n")
+        });
+        written
+            .and_then(|()| f.flush())
+            .with_context(|| format!("writing {}", tmp.display()))?;
     }
     std::fs::rename(&tmp, path).with_context(|| format!("replacing {}", path.display()))?;
     Ok(())

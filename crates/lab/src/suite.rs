@@ -225,8 +225,10 @@ pub fn find_job(suite: &dyn Suite, key: &str) -> Result<(Job, Vec<String>)> {
     };
     let info = suite.info();
     if !info.scenarios.iter().any(|s| s == name) {
+        let known: Vec<&str> = info.scenarios.iter().map(String::as_str).collect();
+        let hint = petri::closest(name, &known).map_or(String::new(), |c| format!(" (did you mean `{c}`?)"));
         bail!(
-            "no scenario `{name}` in this batch of the `{}` suite; it has: {}",
+            "run `{key}`: no scenario `{name}` in this batch of the `{}` suite{hint}; it has: {}",
             info.suite,
             info.scenarios.join(", ")
         );

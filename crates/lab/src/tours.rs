@@ -157,6 +157,16 @@ impl GuideOptions {
     }
 }
 
+/// Most legs a tour may have: each is a whole simulated mission (a second
+/// or more of computing), and a tour of thousands is a mistake in the
+/// places file more often than a plan; several tours do the same.
+pub const MAX_TOUR_LEGS: usize = 1000;
+
+/// The longest time limit a leg may have, seconds of simulated time (a
+/// day; the default is 300 s). A leg runs until its goal or its limit, at
+/// ten control ticks per simulated second.
+pub const MAX_TIME_LIMIT_S: f64 = 86_400.0;
+
 /// The map, checked to have free space.
 pub fn load_map(path: &Path) -> Result<OccupancyGrid> {
     let grid = crate::map_file::load_grid(path)?;
@@ -205,7 +215,8 @@ pub fn resolve(spec: &str, places: Option<&Places>, what: &str) -> Result<Stop> 
             pose: p.pose,
         }),
         None => bail!(
-            "{what}: no place `{spec}` in the goals file; it has: {}",
+            "{what}: no place `{spec}` in the goals file{}; it has: {}",
+            petri::suggest::hint(spec, places.iter().map(|p| p.name.as_str())),
             places
                 .iter()
                 .map(|p| p.name.as_str())
@@ -245,6 +256,12 @@ pub fn setup(
     if !(c.time_limit_s.is_finite() && c.time_limit_s > 0.0) {
         bail!(
             "--time-limit must be a finite number of seconds > 0, got {}",
+            c.time_limit_s
+        );
+    }
+    if c.time_limit_s > MAX_TIME_LIMIT_S {
+        bail!(
+            "--time-limit {}: more than the {MAX_TIME_LIMIT_S} s (a day of simulated time) a leg may last (lab::tours::MAX_TIME_LIMIT_S)",
             c.time_limit_s
         );
     }
@@ -302,19 +319,22 @@ pub fn read_log_of(path: &Path, net: NetChoice) -> Result<Vec<Entry>> {
     }
     let net = net.net_id()?;
     let log = MissionLog::read(path, &net)?;
-    if let Some(t) = log.torn() {
-        eprintln!(
-            "warning: {}:{}: the last line was cut mid-write ({} bytes); it is not an entry and is left out",
-            path.display(),
-            t.line,
-            t.bytes
-        );
+    for notice in log.notices() {
+        eprintln!("warning: {notice}");
     }
     Ok(log.entries().to_vec())
 }
 
 /// The policy, learnt from the log for the supervisor.
 pub fn policy(options: &GuideOptions) -> Result<Policy> {
+    if options.calibration
+        && !matches!(
+            options.behaviour,
+            BehaviourChoice::AutoMove | BehaviourChoice::Contour
+        )
+    {
+        bail!("--calibration runs one behaviour alone: --behaviour automove or contour");
+    }
     Ok(match options.behaviour {
         BehaviourChoice::AutoMove => Policy::Fixed(Behaviour::AutoMove),
         BehaviourChoice::Contour => Policy::Fixed(Behaviour::Contour),
@@ -376,7 +396,7 @@ pub fn log_legs(options: &GuideOptions, legs: &[LegRun], policy: &Policy) -> Res
             }
             (true, Policy::Fixed(b)) => mission::credit_calibration_entry(leg, *b),
             (true, _) => bail!("--calibration runs one behaviour alone: --behaviour automove or contour"),
-            (false, _) => mission::mission_entry(leg, log.missions() + 1),
+            (false, _) => mission::mission_entry(leg, log.next_mission()),
         };
         log.append(entry)?;
     }
@@ -429,6 +449,18 @@ pub fn tour(options: &GuideOptions) -> Result<Tour> {
         bail!(
             "a tour needs at least two places; the goals file has {}",
             places.len()
+        );
+    }
+    if places.len() - 1 > MAX_TOUR_LEGS {
+        bail!(
+            "{}: a tour of its {} places has {} legs, more than the {MAX_TOUR_LEGS} a tour may have (lab::tours::MAX_TOUR_LEGS): split the places into several tours",
+            options
+                .goals
+                .as_deref()
+                .unwrap_or(Path::new("the goals file"))
+                .display(),
+            places.len(),
+            places.len() - 1
         );
     }
     let stops: Vec<Stop> = places

@@ -70,7 +70,7 @@ pub enum Error {
         second: &'static str,
     },
     /// An arc refers to a node that does not exist (or has the wrong kind).
-    #[error("{arc}: unknown {expected} `{name}`")]
+    #[error("{arc}: unknown {expected} `{name}`{hint}")]
     UnknownNode {
         /// Description of the arc (with its position when known).
         arc: String,
@@ -78,6 +78,9 @@ pub enum Error {
         expected: &'static str,
         /// The name or id that was not found.
         name: String,
+        /// `; did you mean `X`?` naming the closest node, or empty
+        /// ([`crate::suggest::hint`]).
+        hint: String,
     },
     /// A parameter is used but has no value.
     #[error(
@@ -280,6 +283,22 @@ pub enum Error {
         value: f64,
         /// The likely cause, or what to change.
         cause: String,
+    },
+    /// A net file too large to read within the memory limit (checked
+    /// before it is read: [`crate::io::read_file_within`]).
+    #[error(
+        "{} is {}: reading it would take about {} of memory, more than the limit of {} (by default 85 % of the memory available); raise it with --max-memory if the machine has more free memory",
+        .path.display(), crate::error::format_bytes(*.bytes), crate::error::format_bytes(*.needed), crate::error::format_bytes(*.limit)
+    )]
+    FileTooLarge {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// The memory reading it would take.
+        needed: u64,
+        /// The limit.
+        limit: u64,
     },
     /// A generator was asked for more than it makes (checked before
     /// anything is allocated).

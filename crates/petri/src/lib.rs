@@ -36,6 +36,7 @@
 //! | discrete-event simulation | [`simulation`] |
 //! | stopping a long computation from another thread | [`interrupt`] |
 //! | scalable benchmark nets | [`families`] |
+//! | the closest valid name, for messages | [`suggest`] |
 #![warn(missing_docs)]
 
 pub mod ctmc;
@@ -57,6 +58,7 @@ mod rows;
 pub mod scc;
 pub mod simulation;
 pub mod steady_state;
+pub mod suggest;
 mod vanishing;
 
 pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
@@ -81,3 +83,4 @@ pub use reachability::{
 };
 pub use simulation::{Estimate, SimParams, SimProgress, SimResult, simulate, simulate_observed};
 pub use steady_state::{Method, SolveInfo, SolveParams};
+pub use suggest::closest;

@@ -439,6 +439,7 @@ impl Net {
                     arc: format!("arc #{i}"),
                     expected: "place",
                     name: format!("index {}", a.place.0),
+                    hint: String::new(),
                 });
             }
             if a.transition.index() >= self.transitions.len() {
@@ -446,6 +447,7 @@ impl Net {
                     arc: format!("arc #{i}"),
                     expected: "transition",
                     name: format!("index {}", a.transition.0),
+                    hint: String::new(),
                 });
             }
         }

@@ -118,7 +118,10 @@ fn unknown_arc_endpoints_are_named_with_their_position() {
         r#"<arc head="c" kind="OUTPUT" tail="t"/>"#,
     );
     let err = read(&text, Format::Pnpro, "p.PNPRO");
-    let Error::UnknownNode { arc, expected, name } = &err else {
+    let Error::UnknownNode {
+        arc, expected, name, ..
+    } = &err
+    else {
         panic!("expected UnknownNode, got {err}");
     };
     assert_eq!((*expected, name.as_str()), ("place", "c"));
@@ -355,7 +358,10 @@ fn toml_typos_name_the_key_and_its_line() {
 fn toml_unknown_places_and_misplaced_keys() {
     let text = TOML.replace(r#"outputs = ["b"]"#, r#"outputs = ["b", "c"]"#);
     let err = read(&text, Format::Toml, "n.toml");
-    let Error::UnknownNode { arc, expected, name } = &err else {
+    let Error::UnknownNode {
+        arc, expected, name, ..
+    } = &err
+    else {
         panic!("expected UnknownNode, got {err}");
     };
     assert_eq!((*expected, name.as_str()), ("place", "c"));

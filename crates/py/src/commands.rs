@@ -25,8 +25,7 @@ pub(crate) fn select<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let assignments = crate::convert::assignments(rates)?;
     let json = detached(py, Kind::Parameter, |_| {
-        let (decision, _) = lab::gspn::select(&assignments, model.as_deref())?;
-        Ok(serde_json::to_value(&decision)?)
+        lab::gspn::select(&assignments, model.as_deref(), true)?.to_json()
     })?;
     json_to_py(py, &json)
 }

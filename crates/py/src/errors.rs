@@ -76,9 +76,11 @@ fn of_petri(e: &petri::Error) -> Option<Kind> {
         | E::MissingRate { .. }
         | E::StructuralParameter { .. } => Kind::Parameter,
         E::UnknownName { .. } => Kind::Measure,
-        E::StateLimit { .. } | E::MemoryLimit { .. } | E::TokenOverflow { .. } | E::SizeLimit { .. } => {
-            Kind::StateLimit
-        }
+        E::StateLimit { .. }
+        | E::MemoryLimit { .. }
+        | E::TokenOverflow { .. }
+        | E::SizeLimit { .. }
+        | E::FileTooLarge { .. } => Kind::StateLimit,
         E::TimelessTrap { .. }
         | E::NoConvergence { .. }
         | E::Singular { .. }

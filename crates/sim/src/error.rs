@@ -25,7 +25,7 @@ pub enum Error {
         message: String,
     },
     /// A parameter is out of range (zero resolution, negative radius…).
-    #[error("{what} must be {requirement}, got {value}")]
+    #[error("{what} must be {requirement}, got {}", shown(*.value))]
     InvalidValue {
         /// Which parameter.
         what: String,
@@ -41,3 +41,13 @@ pub enum Error {
 
 /// Shorthand for `Result<T, sim::Error>`.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A number as a message shows it: plain, or in scientific notation when
+/// very large or small (`1e300`, not 301 digits).
+fn shown(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-6..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}

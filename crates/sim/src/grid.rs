@@ -30,6 +30,57 @@ pub struct CellCounts {
     pub unknown: usize,
 }
 
+/// The finest resolution a map may have, metres per cell (1 mm).
+pub const MIN_RESOLUTION_M: f64 = 1e-3;
+
+/// The coarsest resolution a map may have, metres per cell (10 m; ROS maps
+/// have 0.01–0.1).
+pub const MAX_RESOLUTION_M: f64 = 10.0;
+
+/// The widest a map may span on a side, metres (10 km).
+pub const MAX_EXTENT_M: f64 = 10_000.0;
+
+/// The farthest a map's origin may lie from the world's, metres, on
+/// either axis (10,000 km: any projected coordinates on Earth).
+pub const MAX_ORIGIN_M: f64 = 1e7;
+
+/// Checks a resolution against [`MIN_RESOLUTION_M`]…[`MAX_RESOLUTION_M`];
+/// `what` names it in the error.
+pub fn check_resolution(what: &str, resolution_m: f64) -> Result<()> {
+    if resolution_m.is_finite() && (MIN_RESOLUTION_M..=MAX_RESOLUTION_M).contains(&resolution_m) {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            what: what.to_string(),
+            requirement: "between 0.001 and 10 metres per cell (sim::grid::MIN_RESOLUTION_M … MAX_RESOLUTION_M)",
+            value: resolution_m,
+        })
+    }
+}
+
+/// Checks a map origin: finite, within [`MAX_ORIGIN_M`] on either axis;
+/// `what` names it in the error.
+pub fn check_origin(what: &str, origin: Pose) -> Result<()> {
+    for (axis, value, limit) in [
+        ("x", origin.x_m, MAX_ORIGIN_M),
+        ("y", origin.y_m, MAX_ORIGIN_M),
+        ("yaw", origin.theta_rad, f64::MAX),
+    ] {
+        if !(value.is_finite() && value.abs() <= limit) {
+            return Err(Error::InvalidValue {
+                what: format!("{what} {axis}"),
+                requirement: if axis == "yaw" {
+                    "finite"
+                } else {
+                    "finite and within ±1e7 m (sim::grid::MAX_ORIGIN_M)"
+                },
+                value,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// An occupancy grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OccupancyGrid {
@@ -61,9 +112,9 @@ impl OccupancyGrid {
     }
 
     /// A grid from its cells, row by row from the bottom (`cells[j * width +
-    /// i]` is cell `(i, j)`). Fails if `resolution_m` is not finite and > 0,
-    /// if the origin is not finite, or if there are not `width × height`
-    /// cells. Faster than [`OccupancyGrid::new`] followed by one
+    /// i]` is cell `(i, j)`). Fails if the geometry is out of range
+    /// ([`OccupancyGrid::check_geometry`]) or if there are not `width ×
+    /// height` cells. Faster than [`OccupancyGrid::new`] followed by one
     /// [`OccupancyGrid::set`] per cell.
     pub fn from_cells(
         width: usize,
@@ -72,26 +123,7 @@ impl OccupancyGrid {
         origin: Pose,
         cells: Vec<Cell>,
     ) -> Result<OccupancyGrid> {
-        if !(resolution_m.is_finite() && resolution_m > 0.0) {
-            return Err(Error::InvalidValue {
-                what: "resolution_m".into(),
-                requirement: "finite and > 0",
-                value: resolution_m,
-            });
-        }
-        for (what, value) in [
-            ("origin x", origin.x_m),
-            ("origin y", origin.y_m),
-            ("origin yaw", origin.theta_rad),
-        ] {
-            if !value.is_finite() {
-                return Err(Error::InvalidValue {
-                    what: what.into(),
-                    requirement: "finite",
-                    value,
-                });
-            }
-        }
+        OccupancyGrid::check_geometry(width, height, resolution_m, origin)?;
         if width.checked_mul(height) != Some(cells.len()) {
             return Err(Error::Geometry(format!(
                 "a {width} × {height} grid needs {} cells, got {}",
@@ -107,6 +139,23 @@ impl OccupancyGrid {
             clearance: Clearance::build(width, height, &cells),
             cells,
         })
+    }
+
+    /// Checks a grid's geometry before anything is made of it: the
+    /// resolution within [`MIN_RESOLUTION_M`]…[`MAX_RESOLUTION_M`], the
+    /// origin finite and within [`MAX_ORIGIN_M`] of the world's, the
+    /// extent (cells × resolution) at most [`MAX_EXTENT_M`] a side. Errors
+    /// name the value and the limit.
+    pub fn check_geometry(width: usize, height: usize, resolution_m: f64, origin: Pose) -> Result<()> {
+        check_resolution("resolution_m", resolution_m)?;
+        check_origin("origin", origin)?;
+        let (w_m, h_m) = (width as f64 * resolution_m, height as f64 * resolution_m);
+        if w_m > MAX_EXTENT_M || h_m > MAX_EXTENT_M {
+            return Err(Error::Geometry(format!(
+                "a map of {width} × {height} cells of {resolution_m} m spans {w_m} × {h_m} m, more than the {MAX_EXTENT_M} m a side a map may span (sim::grid::MAX_EXTENT_M: the robots here drive in buildings and campuses, and several of their structures grow with the distances; cover a larger area with several maps)"
+            )));
+        }
+        Ok(())
     }
 
     /// Columns.

@@ -145,7 +145,13 @@ pub fn load(yaml_path: impl AsRef<Path>) -> Result<MapServerMap> {
         location: image_path.display().to_string(),
         message,
     })?;
-    let (grid, occupancy) = grid_from_pixels(&yaml, &pixels)?;
+    let (grid, occupancy) = grid_from_pixels(&yaml, &pixels).map_err(|e| match e {
+        Error::Geometry(message) => Error::Format {
+            location: format!("{} (image {})", yaml_path.display(), image_path.display()),
+            message,
+        },
+        other => other,
+    })?;
     Ok(MapServerMap {
         yaml,
         image_path,
@@ -192,19 +198,15 @@ pub fn parse_yaml(text: &str, source: &str) -> Result<MapYaml> {
         }
     };
     let resolution_m = keys.number("resolution", keys.key("resolution")?)?;
-    if resolution_m <= 0.0 {
-        return Err(Error::InvalidValue {
-            what: format!("{source}: resolution"),
-            requirement: "> 0 (metres per pixel)",
-            value: resolution_m,
-        });
-    }
+    crate::grid::check_resolution(&format!("{source}: resolution"), resolution_m)?;
     let origin = match keys.key("origin")? {
         Yaml::Array(a) if a.len() == 3 => {
             let x = keys.number("origin", &a[0])?;
             let y = keys.number("origin", &a[1])?;
             let yaw = keys.number("origin", &a[2])?;
-            Pose::new(x, y, yaw)
+            let origin = Pose::new(x, y, yaw);
+            crate::grid::check_origin(&format!("{source}: origin"), origin)?;
+            origin
         }
         v => {
             return Err(format(format!(
@@ -567,6 +569,7 @@ pub fn grid_from_pixels(yaml: &MapYaml, pixels: &Pixels) -> Result<(OccupancyGri
         return Err(Error::Geometry(format!("empty image ({w} × {h} pixels)")));
     }
     check_size(w, h).map_err(Error::Geometry)?;
+    OccupancyGrid::check_geometry(w, h, yaml.resolution_m, yaml.origin)?;
     if !(1..=4).contains(&n) || pixels.data.len() != w * h * n {
         return Err(Error::Geometry(format!(
             "{} bytes of pixels for {w} × {h} pixels of {n} bytes",

@@ -215,6 +215,9 @@ impl WorldSpec {
                 self.width_m, self.height_m, self.resolution_m
             )));
         }
+        crate::grid::check_resolution("world.resolution_m", self.resolution_m)?;
+        let origin = Pose::new(self.origin[0], self.origin[1], 0.0);
+        OccupancyGrid::check_geometry(w, h, self.resolution_m, origin)?;
         for (k, r) in self.rects.iter().enumerate() {
             finite(&format!("world.rect[{k}].x"), r.x)?;
             finite(&format!("world.rect[{k}].y"), r.y)?;

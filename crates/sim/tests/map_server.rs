@@ -299,7 +299,7 @@ fn zero_or_negative_resolution_is_refused() {
     for r in ["0", "-0.05", "0.0"] {
         let e = map_server::parse_yaml(&YAML.replace("0.1", r), "m.yaml").unwrap_err();
         assert!(matches!(e, Error::InvalidValue { .. }), "{e}");
-        assert!(e.to_string().contains("resolution must be > 0"), "{e}");
+        assert!(e.to_string().contains("resolution must be between"), "{e}");
     }
 }
 

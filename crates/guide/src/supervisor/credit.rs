@@ -52,7 +52,7 @@
 
 use petri::{CompiledGspn, ExploreParams, Net, Params, PlaceId, Solution, SolveParams, TransitionId};
 
-use super::check::{NetCheck, Variant, check_net};
+use super::check::{NetCheck, RateBinding, Variant, check_supervisor};
 use super::{Behaviour, FAST_SWITCH, SLOW_SWITCH, SupervisorError};
 
 /// The crediting supervisor net as shipped in
@@ -61,6 +61,10 @@ pub const CREDIT_MODEL: &str = include_str!("../../../../models/supervisor_credi
 
 /// Number of rates λ1…λ15.
 pub const NUM_CREDIT_RATES: usize = 15;
+
+/// The parameters the crediting supervisor binds its rates to, `lambda1`
+/// … `lambda15` ([`check_supervisor`]).
+pub const CREDIT_RATE_BINDING: RateBinding = RateBinding::lambdas(NUM_CREDIT_RATES);
 
 /// What a failed mission costs by default, seconds (λ15 = its inverse):
 /// the tour-guide mission's time limit.
@@ -263,7 +267,7 @@ pub struct CreditSupervisor {
     until_localized: Compiled,
 }
 
-/// The variants [`CreditSupervisor`] solves, for [`check_net`].
+/// The variants [`CreditSupervisor`] solves, for [`check_supervisor`].
 pub fn credit_variants() -> Vec<Variant<'static>> {
     VARIANTS
         .iter()
@@ -295,7 +299,7 @@ impl CreditSupervisor {
     /// Checks a net of the same structure ([`super::check`]) and compiles
     /// its four variants; refuses it with the first failing property.
     pub fn from_net(net: &Net) -> Result<CreditSupervisor, SupervisorError> {
-        let check = check_net(net, &credit_variants());
+        let check = check_supervisor(net, &credit_variants(), &CREDIT_RATE_BINDING);
         check.require()?;
         let variants = VARIANTS
             .iter()

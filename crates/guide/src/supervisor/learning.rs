@@ -52,6 +52,17 @@ pub enum LearnError {
         /// Its value.
         value: f64,
     },
+    /// A rate learnt from values each within range that is still not a
+    /// rate (their sum or mean overflowed, or underflowed to 0).
+    #[error(
+        "learnt λ{index} = {value}, which is not a rate (a finite number > 0): the log's durations are out of proportion (a reader checks each is at most 10⁹ s; entries not read from a log file are not checked)"
+    )]
+    LearntRate {
+        /// 1-based index.
+        index: usize,
+        /// The value learnt.
+        value: f64,
+    },
 }
 
 /// What the log says, and the rates learnt from it.
@@ -191,8 +202,8 @@ fn learn_with(entries: &[Entry], lenient: bool) -> Result<Learned, LearnError> {
     lambda[9] = lambda[7] * ratio;
     let mut rates = Rates::initial();
     for (i, &v) in lambda.iter().enumerate().take(NUM_RATES) {
-        rates.try_set(i + 1, v).map_err(|_| LearnError::BadValue {
-            what: format!("learnt λ{}", i + 1),
+        rates.try_set(i + 1, v).map_err(|_| LearnError::LearntRate {
+            index: i + 1,
             value: v,
         })?;
     }

@@ -13,6 +13,11 @@
 //! line cut mid-write (a crash) is reported and cut off the file, so that
 //! the next mission appends after the last complete one — nothing already
 //! written is lost. Any other unreadable line is an error naming its line.
+//! Every entry is checked as data too ([`super::log_check`]: durations,
+//! outcomes, times within the run, mission numbers unique and in order):
+//! an inconsistent one is an error naming its line and field, and the one
+//! kind of entry that is skipped instead is reported
+//! ([`MissionLog::skipped`]).
 
 use std::fs::{File, OpenOptions};
 use std::io::{BufRead, BufReader, Write};
@@ -174,6 +179,34 @@ pub enum LogError {
         /// What is wrong.
         message: String,
     },
+    /// A complete entry that does not hold together ([`super::log_check`]).
+    #[error("{path}:{line}: `{field}`: {message}")]
+    Inconsistent {
+        /// The file.
+        path: PathBuf,
+        /// Its line, from 1.
+        line: usize,
+        /// The field at fault.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A mission whose number does not follow the log's previous one.
+    #[error(
+        "{path}:{line}: mission {number} follows mission {previous} (line {previous_line}): mission numbers are unique and in order"
+    )]
+    MissionOrder {
+        /// The file.
+        path: PathBuf,
+        /// Its line.
+        line: usize,
+        /// Its number.
+        number: u32,
+        /// The previous mission's number.
+        previous: u32,
+        /// The previous mission's line.
+        previous_line: usize,
+    },
     /// A line of another supervisor net.
     #[error(
         "{path}:{line}: this entry was logged for the supervisor net `{found}`, not `{expected}`: keep one log per net"
@@ -199,6 +232,15 @@ pub struct TornLine {
     pub bytes: usize,
 }
 
+/// An entry read but left out of the learning ([`super::log_check`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SkippedLine {
+    /// Its line number.
+    pub line: usize,
+    /// Why.
+    pub why: String,
+}
+
 /// An open mission log.
 #[derive(Debug)]
 pub struct MissionLog {
@@ -206,6 +248,11 @@ pub struct MissionLog {
     net: String,
     entries: Vec<Entry>,
     torn: Option<TornLine>,
+    skipped: Vec<SkippedLine>,
+    /// The last mission's number and line.
+    last_mission: Option<(u32, usize)>,
+    /// Lines in the file (complete ones).
+    lines: usize,
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> LogError + '_ {
@@ -247,6 +294,9 @@ impl MissionLog {
             net: net.to_string(),
             entries: Vec::new(),
             torn: None,
+            skipped: Vec::new(),
+            last_mission: None,
+            lines: 0,
         };
         if !path.exists() {
             return Ok((log, 0));
@@ -285,11 +335,81 @@ impl MissionLog {
                         expected: net.to_string(),
                     });
                 }
-                log.entries.push(line.entry);
+                let skipped = log.admit(&line.entry, number)?;
+                log.keep(line.entry, number, skipped);
             }
             good += n as u64;
+            log.lines = number;
         }
         Ok((log, good))
+    }
+
+    /// Checks an entry that would be line `line` ([`super::log_check`],
+    /// mission numbers in order): `Ok` with the reason it is skipped, if
+    /// it is.
+    fn admit(&self, entry: &Entry, line: usize) -> Result<Option<SkippedLine>, LogError> {
+        let verdict = super::log_check::check(entry).map_err(|e| LogError::Inconsistent {
+            path: self.path.clone(),
+            line,
+            field: e.field,
+            message: e.message,
+        })?;
+        if let Entry::Mission(m) = entry
+            && let Some((previous, previous_line)) = self.last_mission
+            && m.mission <= previous
+        {
+            return Err(LogError::MissionOrder {
+                path: self.path.clone(),
+                line,
+                number: m.mission,
+                previous,
+                previous_line,
+            });
+        }
+        Ok(match verdict {
+            super::log_check::Verdict::Kept => None,
+            super::log_check::Verdict::Skipped(why) => Some(SkippedLine { line, why }),
+        })
+    }
+
+    /// Keeps an admitted entry of line `line`.
+    fn keep(&mut self, entry: Entry, line: usize, skipped: Option<SkippedLine>) {
+        if let Entry::Mission(m) = &entry {
+            self.last_mission = Some((m.mission, line));
+        }
+        self.skipped.extend(skipped);
+        self.entries.push(entry);
+        self.lines = line;
+    }
+
+    /// The entries read but left out of the learning, with their lines.
+    pub fn skipped(&self) -> &[SkippedLine] {
+        &self.skipped
+    }
+
+    /// What a reader should be told of the file beyond its entries: the
+    /// last line cut mid-write, the entries skipped; one sentence each,
+    /// naming the file and line.
+    pub fn notices(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(t) = &self.torn {
+            out.push(format!(
+                "{}:{}: the last line was cut mid-write ({} bytes); it is not an entry and is left out",
+                self.path.display(),
+                t.line,
+                t.bytes
+            ));
+        }
+        for s in &self.skipped {
+            out.push(format!("{}:{}: {}", self.path.display(), s.line, s.why));
+        }
+        out
+    }
+
+    /// The number the next mission gets: one more than the last one's (1
+    /// in a log without missions).
+    pub fn next_mission(&self) -> u32 {
+        self.last_mission.map_or(1, |(k, _)| k.saturating_add(1))
     }
 
     /// The entries, in the file's order.
@@ -311,9 +431,13 @@ impl MissionLog {
     }
 
     /// Appends an entry: one line, written and flushed to the disk before
-    /// returning.
+    /// returning. An entry that would not read back (inconsistent, or a
+    /// mission numbered out of order) is refused before anything is
+    /// written.
     pub fn append(&mut self, entry: Entry) -> Result<(), LogError> {
         let path = self.path.clone();
+        let number = self.lines + 1;
+        let skipped = self.admit(&entry, number)?;
         let line = Line {
             net: self.net.clone(),
             entry,
@@ -331,7 +455,7 @@ impl MissionLog {
             .map_err(io(&path))?;
         f.write_all(text.as_bytes()).map_err(io(&path))?;
         f.sync_data().map_err(io(&path))?;
-        self.entries.push(line.entry);
+        self.keep(line.entry, number, skipped);
         Ok(())
     }
 }
@@ -389,6 +513,77 @@ mod tests {
         assert_eq!(log.missions(), 3);
         assert!(log.torn().is_none());
         assert_eq!(log.entries()[2], mission(3));
+    }
+
+    /// Regression (issue 51): duplicate mission numbers were read.
+    #[test]
+    fn missions_out_of_order_or_inconsistent_are_errors_naming_the_line() {
+        let path = temp("order");
+        let mut log = MissionLog::open(&path, "net-a").unwrap();
+        log.append(mission(1)).unwrap();
+        log.append(mission(2)).unwrap();
+        assert_eq!(log.next_mission(), 3);
+        // Appending a mission out of order is refused before writing.
+        let before = std::fs::read(&path).unwrap();
+        assert!(matches!(
+            log.append(mission(2)),
+            Err(LogError::MissionOrder { line: 3, .. })
+        ));
+        assert_eq!(std::fs::read(&path).unwrap(), before);
+        // Written by hand, it is an error on reading.
+        let line = serde_json::to_string(&Line {
+            net: "net-a".into(),
+            entry: mission(2),
+        })
+        .unwrap();
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(format!("{line}\n").as_bytes()).unwrap();
+        drop(f);
+        let e = MissionLog::read(&path, "net-a").unwrap_err().to_string();
+        assert!(e.contains(":3: mission 2 follows mission 2 (line 2)"), "{e}");
+        // A negative duration names the line and the field.
+        let path = temp("negative");
+        let text =
+            before_text(&path, "net-a", &[mission(1)]).replace("\"duration_s\":61.0", "\"duration_s\":-61.0");
+        std::fs::write(&path, text).unwrap();
+        let e = MissionLog::read(&path, "net-a").unwrap_err().to_string();
+        assert!(e.contains(":1: `duration_s`: -61 s"), "{e}");
+    }
+
+    /// The text a log of `entries` holds.
+    fn before_text(path: &Path, net: &str, entries: &[Entry]) -> String {
+        let _ = std::fs::remove_file(path);
+        let mut log = MissionLog::open(path, net).unwrap();
+        for e in entries {
+            log.append(e.clone()).unwrap();
+        }
+        std::fs::read_to_string(path).unwrap()
+    }
+
+    #[test]
+    fn a_successful_calibration_run_of_no_time_is_read_and_reported() {
+        let path = temp("skipped");
+        let run = Entry::Calibration(CalibrationRun {
+            behaviour: Behaviour::AutoMove,
+            success: true,
+            duration_s: 0.0,
+            path_m: 0.0,
+            trajectory: Vec::new(),
+            outcome: String::new(),
+            segments: Vec::new(),
+        });
+        let mut log = MissionLog::open(&path, "net-a").unwrap();
+        log.append(run).unwrap();
+        log.append(mission(1)).unwrap();
+        let log = MissionLog::read(&path, "net-a").unwrap();
+        assert_eq!(log.entries().len(), 2);
+        assert_eq!(log.skipped().len(), 1);
+        assert_eq!(log.skipped()[0].line, 1);
+        let notices = log.notices();
+        assert!(
+            notices[0].contains(":1: a successful calibration run of 0 s"),
+            "{notices:?}"
+        );
     }
 
     #[test]

@@ -28,6 +28,7 @@ pub mod credit;
 pub mod credit_learning;
 pub mod learning;
 pub mod log;
+pub mod log_check;
 pub mod reference;
 
 use petri::{CompiledGspn, ExploreParams, Net, Params, PlaceId, Solution, SolveParams, TransitionId};
@@ -37,6 +38,10 @@ pub const MODEL: &str = include_str!("../../../../models/supervisor.toml");
 
 /// Number of rates λ1…λ11.
 pub const NUM_RATES: usize = 11;
+
+/// The parameters the source's supervisor binds its rates to, `lambda1` …
+/// `lambda11` ([`check::check_supervisor`]).
+pub const RATE_BINDING: check::RateBinding = check::RateBinding::lambdas(NUM_RATES);
 
 /// λ1 and λ2 of the hypothesis favouring a behaviour (switching towards it).
 pub const FAST_SWITCH: f64 = 1000.0;
@@ -282,7 +287,7 @@ impl Supervisor {
     /// `lambda1`…`lambda11`, weight `p`); a net failing its check is
     /// refused with the property ([`SupervisorError::Refused`]).
     pub fn from_net(net: &Net) -> Result<Supervisor, SupervisorError> {
-        check::check_net(net, &source_variants()).require()?;
+        check::check_supervisor(net, &source_variants(), &RATE_BINDING).require()?;
         let net_id = net_id(net)?;
         let auto = Hypothesis::new(net, "t1", 1.0, SLOW_SWITCH, FAST_SWITCH)?;
         let cont = Hypothesis::new(net, "t0", 0.0, FAST_SWITCH, SLOW_SWITCH)?;

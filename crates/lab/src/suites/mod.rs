@@ -41,11 +41,22 @@ pub fn names() -> String {
         .join(", ")
 }
 
+/// `; did you mean `NAME`?` for the suite closest to `name`, if one is
+/// close.
+fn did_you_mean(name: &str) -> String {
+    let known: Vec<&str> = REGISTRY.iter().map(|r| r.name).collect();
+    petri::closest(name, &known).map_or(String::new(), |c| format!("; did you mean `{c}`?"))
+}
+
 /// Builds the suite `name` with `args`.
 pub fn build(name: &str, args: &SuiteArgs) -> Result<Box<dyn Suite>> {
     match find(name) {
         Some(r) => (r.build)(args),
-        None => bail!("unknown suite `{name}`: the suites are {}", names()),
+        None => bail!(
+            "unknown suite `{name}`{}; the suites are {}",
+            did_you_mean(name),
+            names()
+        ),
     }
 }
 
@@ -67,6 +78,14 @@ pub fn load<S: AsRef<str>>(what: &[S], runs: Option<u32>) -> Result<Box<dyn Suit
     if let [name] = what
         && !name.as_ref().ends_with(".toml")
     {
+        if find(name.as_ref()).is_none() {
+            bail!(
+                "unknown suite `{}`{}; the suites are {}; or give scenario files (.toml)",
+                name.as_ref(),
+                did_you_mean(name.as_ref()),
+                names()
+            );
+        }
         return build(
             name.as_ref(),
             &SuiteArgs {
@@ -76,8 +95,15 @@ pub fn load<S: AsRef<str>>(what: &[S], runs: Option<u32>) -> Result<Box<dyn Suit
         );
     }
     if let Some(bad) = what.iter().map(AsRef::as_ref).find(|w| !w.ends_with(".toml")) {
+        let given = what.iter().map(AsRef::as_ref).collect::<Vec<_>>().join(" ");
+        if find(bad).is_some() {
+            bail!(
+                "`{given}`: a batch is one suite (`{bad}` is one) or scenario files (.toml), not several suites or a suite and files: run each suite on its own"
+            );
+        }
         bail!(
-            "unknown suite `{bad}`: the suites are {}; or give scenario files (.toml)",
+            "unknown suite `{bad}`{}; the suites are {}; or give scenario files (.toml)",
+            did_you_mean(bad),
             names()
         );
     }

@@ -85,6 +85,8 @@ pub mod dot;
 pub mod pnml;
 pub mod pnpro;
 pub mod toml_format;
+mod toml_split;
+mod xml_split;
 
 pub use dot::{write_dot, write_reachability_dot, write_tangible_dot};
 pub use pnml::{read_pnml, write_pnml};
@@ -157,17 +159,45 @@ impl fmt::Display for Format {
     }
 }
 
-/// Reads a net from a file, in the format its extension says.
+/// Memory reading a net takes per byte of its file, at most: the text, the
+/// parser's structures (one item at a time for TOML, the document tree
+/// for XML) and the net. Measured on 50 MB files of each format
+/// (`crates/petri/BENCHMARKS.md`, "Reading large files"); [`read_file`]
+/// checks a file's size against the memory guard with it before reading.
+pub const READ_BYTES_PER_FILE_BYTE: u64 = 10;
+
+/// Reads a net from a file, in the format its extension says, if reading
+/// it fits the default memory guard ([`read_file_within`] with
+/// [`crate::default_max_memory`]).
 pub fn read_file(path: impl AsRef<Path>) -> Result<Net> {
+    read_file_within(path, crate::default_max_memory())
+}
+
+/// Reads a net from a file, in the format its extension says; a file
+/// whose reading would take more than `max_memory` bytes
+/// ([`READ_BYTES_PER_FILE_BYTE`] per byte) is refused before it is read
+/// ([`Error::FileTooLarge`]).
+pub fn read_file_within(path: impl AsRef<Path>, max_memory: u64) -> Result<Net> {
     let path = path.as_ref();
     let format = Format::from_path(path)?;
     if !format.can_read() {
         return Err(dot_not_readable(&path.display().to_string()));
     }
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let io = |source| Error::Io {
         path: path.into(),
         source,
-    })?;
+    };
+    let bytes = std::fs::metadata(path).map_err(io)?.len();
+    let needed = bytes.saturating_mul(READ_BYTES_PER_FILE_BYTE);
+    if needed > max_memory {
+        return Err(Error::FileTooLarge {
+            path: path.into(),
+            bytes,
+            needed,
+            limit: max_memory,
+        });
+    }
+    let text = std::fs::read_to_string(path).map_err(io)?;
     read_str(&text, format, &path.display().to_string())
 }
 
@@ -294,22 +324,51 @@ fn location_at(source: &str, text: &str, offset: usize) -> String {
     format!("{source}:{line}:{col}")
 }
 
-/// `source:line:column` of an XML node.
-fn xml_location(source: &str, node: roxmltree::Node<'_, '_>) -> String {
-    let pos = node.document().text_pos_at(node.range().start);
-    format!("{source}:{}:{}", pos.row, pos.col)
+/// Where an XML node starts in its document.
+fn xml_pos(node: roxmltree::Node<'_, '_>) -> roxmltree::TextPos {
+    node.document().text_pos_at(node.range().start)
 }
 
-/// `source:line:column` of an attribute's value, or of its element when the
-/// attribute is absent.
-fn attr_location(source: &str, node: roxmltree::Node<'_, '_>, attr: &str) -> String {
+/// Where an attribute's value starts in its document, or its element when
+/// the attribute is absent.
+fn attr_pos(node: roxmltree::Node<'_, '_>, attr: &str) -> roxmltree::TextPos {
     match node.attribute_node(attr) {
-        Some(a) => {
-            let pos = node.document().text_pos_at(a.range_value().start);
-            format!("{source}:{}:{}", pos.row, pos.col)
-        }
-        None => xml_location(source, node),
+        Some(a) => node.document().text_pos_at(a.range_value().start),
+        None => xml_pos(node),
     }
+}
+
+/// `source:line:column` of a position in a document: the whole file's, or
+/// the fragment `base` of it ([`xml_split`]).
+fn located(source: &str, pos: roxmltree::TextPos, base: Option<&xml_split::Fragment>) -> String {
+    let (row, col) = base.map_or((pos.row, pos.col), |f| f.place(pos.row, pos.col));
+    format!("{source}:{row}:{col}")
+}
+
+/// Parses one fragment of a cut XML text ([`xml_split`]) on its own; an
+/// error's position is placed in the whole file.
+fn parse_fragment<'a>(
+    text: &'a str,
+    fragment: &xml_split::Fragment,
+    source: &str,
+) -> Result<roxmltree::Document<'a>> {
+    let piece = &text[fragment.range.clone()];
+    roxmltree::Document::parse(piece).map_err(|e| {
+        let pos = match e {
+            roxmltree::Error::UnexpectedEndOfStream | roxmltree::Error::UnclosedRootNode => {
+                let (row, col) = line_col(piece, piece.len());
+                roxmltree::TextPos::new(row as u32, col as u32)
+            }
+            _ => e.pos(),
+        };
+        let message = e.to_string();
+        let suffix = format!(" at {}", e.pos());
+        let message = message.strip_suffix(&suffix).unwrap_or(&message).to_string();
+        Error::Xml {
+            location: located(source, pos, Some(fragment)),
+            message,
+        }
+    })
 }
 
 /// Parses XML, turning the parser's error into [`Error::Xml`] with its

@@ -134,7 +134,7 @@ use std::collections::{HashMap, HashSet};
 
 use roxmltree::Node;
 
-use super::{attr_location, fmt_f64, parse_expr, parse_f64, push_attr, push_xml_escaped, xml_location};
+use super::{fmt_f64, parse_expr, parse_f64, push_attr, push_xml_escaped};
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::net::{
@@ -154,8 +154,16 @@ pub const TOOL_VERSION: &str = "1";
 /// messages (a file name).
 pub fn read_pnml(text: &str, source: &str) -> Result<Net> {
     let text = super::prepare(text, source)?;
-    let doc = super::parse_xml(text, source)?;
-    let r = Reader { source };
+    // One place, transition or arc parsed at a time where the file allows
+    // it (`xml_split`), else the whole document at once.
+    let split = super::xml_split::split(text, &["page"]);
+    let doc = super::parse_xml(split.as_ref().map_or(text, |s| s.skeleton.as_str()), source)?;
+    let r = Reader {
+        source,
+        text,
+        split: split.as_ref(),
+        base: None,
+    };
     let root = doc.root_element();
     if root.tag_name().name() != "pnml" {
         return Err(r.error(
@@ -202,8 +210,23 @@ fn is_petrinav(node: Node<'_, '_>) -> bool {
     node.tag_name().name() == "toolspecific" && node.attribute("tool") == Some(TOOL)
 }
 
+/// The file being read: its name, its text, how it was cut (`None`: one
+/// document), and the fragment being read (`None`: the skeleton or the
+/// whole document), whose positions are placed back in the file.
+#[derive(Clone, Copy)]
 struct Reader<'s> {
     source: &'s str,
+    text: &'s str,
+    split: Option<&'s super::xml_split::XmlSplit>,
+    base: Option<&'s super::xml_split::Fragment>,
+}
+
+/// An object of the net: a node of the document, or a fragment of the
+/// cut file, parsed when it is read.
+#[derive(Clone, Copy)]
+enum Obj<'a, 'i, 's> {
+    Node(Node<'a, 'i>),
+    Fragment(&'s super::xml_split::Fragment),
 }
 
 /// Where an attribute element was found.
@@ -225,17 +248,54 @@ enum End {
 }
 
 /// The objects of a net, pages flattened.
-#[derive(Default)]
-struct Objects<'a, 'i> {
-    places: Vec<Node<'a, 'i>>,
-    transitions: Vec<Node<'a, 'i>>,
-    references: Vec<Node<'a, 'i>>,
-    arcs: Vec<Node<'a, 'i>>,
+struct Objects<'a, 'i, 's> {
+    places: Vec<Obj<'a, 'i, 's>>,
+    transitions: Vec<Obj<'a, 'i, 's>>,
+    references: Vec<Obj<'a, 'i, 's>>,
+    arcs: Vec<Obj<'a, 'i, 's>>,
 }
 
-impl Reader<'_> {
+impl<'s> Reader<'s> {
+    /// `file:line:column` of a node, in the whole file.
     fn loc(&self, node: Node<'_, '_>) -> String {
-        xml_location(self.source, node)
+        super::located(self.source, super::xml_pos(node), self.base)
+    }
+
+    /// `file:line:column` of an attribute's value (or its element), in
+    /// the whole file.
+    fn attr_loc(&self, node: Node<'_, '_>, attr: &str) -> String {
+        super::located(self.source, super::attr_pos(node, attr), self.base)
+    }
+
+    /// `f` on an object's element, with the reader of the fragment it is
+    /// parsed from when the file was cut.
+    fn with<T>(
+        &self,
+        obj: Obj<'_, '_, 's>,
+        f: impl FnOnce(&Reader<'s>, Node<'_, '_>) -> Result<T>,
+    ) -> Result<T> {
+        match obj {
+            Obj::Node(n) => f(self, n),
+            Obj::Fragment(fragment) => {
+                let doc = super::parse_fragment(self.text, fragment, self.source)?;
+                let r = Reader {
+                    base: Some(fragment),
+                    ..*self
+                };
+                f(&r, doc.root_element())
+            }
+        }
+    }
+
+    /// An object's element name.
+    fn tag<'i>(&self, obj: Obj<'_, 'i, 's>) -> &'i str
+    where
+        's: 'i,
+    {
+        match obj {
+            Obj::Node(n) => n.tag_name().name(),
+            Obj::Fragment(f) => f.tag(self.text),
+        }
     }
 
     fn error(&self, node: Node<'_, '_>, message: String) -> Error {
@@ -299,64 +359,92 @@ impl Reader<'_> {
         }
 
         // Ids and names.
-        let mut ids: HashMap<&str, End> = HashMap::new();
+        let mut ids: HashMap<String, End> = HashMap::new();
         let names = self.node_names(&objects)?;
-        for (i, node) in objects.places.iter().enumerate() {
-            let id = self.id(*node)?;
+        for (i, obj) in objects.places.iter().enumerate() {
+            let id = self.with(*obj, |r, n| Ok(r.id(n)?.to_string()))?;
             self.claim_id(&mut ids, id, End::Place(PlaceId(i as u32)))?;
         }
-        for (i, node) in objects.transitions.iter().enumerate() {
-            let id = self.id(*node)?;
+        for (i, obj) in objects.transitions.iter().enumerate() {
+            let id = self.with(*obj, |r, n| Ok(r.id(n)?.to_string()))?;
             self.claim_id(&mut ids, id, End::Transition(TransitionId(i as u32)))?;
         }
         let mut names = names.into_iter();
-        for node in &objects.places {
+        for obj in &objects.places {
             let name = names.next().unwrap_or_default();
-            net.places.push(self.place(*node, name)?);
+            net.places.push(self.with(*obj, |r, n| r.place(n, name))?);
         }
-        for node in &objects.transitions {
+        for obj in &objects.transitions {
             let name = names.next().unwrap_or_default();
-            net.transitions.push(self.transition(*node, name)?);
+            net.transitions
+                .push(self.with(*obj, |r, n| r.transition(n, name))?);
         }
-        let ends = self.resolve_references(&objects, &ids)?;
-        for arc in &objects.arcs {
-            self.arc(*arc, &ends, &mut net)?;
+        let ends = self.resolve_references(&objects, ids)?;
+        for obj in &objects.arcs {
+            self.with(*obj, |r, n| r.arc(n, &ends, &mut net))?;
         }
         Ok(net)
     }
 
     /// Collects the net's objects, flattening pages (without recursion, so
-    /// that deep nesting cannot overflow the stack).
-    fn collect<'a, 'i>(&self, net_el: Node<'a, 'i>) -> Result<Objects<'a, 'i>> {
-        let mut objects = Objects::default();
-        let mut stack: Vec<Node<'a, 'i>> = elements(net_el).collect();
+    /// that deep nesting cannot overflow the stack), in document order.
+    fn collect<'a, 'i>(&self, net_el: Node<'a, 'i>) -> Result<Objects<'a, 'i, 's>> {
+        let mut objects = Objects {
+            places: Vec::new(),
+            transitions: Vec::new(),
+            references: Vec::new(),
+            arcs: Vec::new(),
+        };
+        let mut stack: Vec<Obj<'a, 'i, 's>> = elements(net_el).map(Obj::Node).collect();
         stack.reverse();
-        while let Some(n) = stack.pop() {
-            match n.tag_name().name() {
+        while let Some(obj) = stack.pop() {
+            match self.tag(obj) {
                 "page" => {
+                    let Obj::Node(page) = obj else {
+                        continue; // pages are never fragments (they are containers)
+                    };
                     let start = stack.len();
-                    stack.extend(elements(n));
+                    stack.extend(self.children(page));
                     stack[start..].reverse();
                 }
-                "place" => objects.places.push(n),
-                "transition" => objects.transitions.push(n),
-                "referencePlace" | "referenceTransition" => objects.references.push(n),
-                "arc" => objects.arcs.push(n),
-                "declaration" | "declarations" => return Err(self.coloured(n, "<declaration>")),
+                "place" => objects.places.push(obj),
+                "transition" => objects.transitions.push(obj),
+                "referencePlace" | "referenceTransition" => objects.references.push(obj),
+                "arc" => objects.arcs.push(obj),
+                "declaration" | "declarations" => {
+                    return Err(self.with(obj, |r, n| Ok(r.coloured(n, "<declaration>")))?);
+                }
                 _ => {}
             }
         }
         Ok(objects)
     }
 
-    fn claim_id<'a>(&self, ids: &mut HashMap<&'a str, End>, id: &'a str, end: End) -> Result<()> {
+    /// A page's child elements in document order: its nodes, or, when the
+    /// file was cut, its fragments and the pages nested in it (which stay
+    /// in the skeleton).
+    fn children<'a, 'i>(&self, page: Node<'a, 'i>) -> Vec<Obj<'a, 'i, 's>> {
+        let Some(split) = self.split else {
+            return elements(page).map(Obj::Node).collect();
+        };
+        let mut out: Vec<(usize, Obj<'a, 'i, 's>)> = split
+            .children(page.range().start)
+            .iter()
+            .map(|f| (f.range.start, Obj::Fragment(f)))
+            .collect();
+        out.extend(elements(page).map(|n| (n.range().start, Obj::Node(n))));
+        out.sort_by_key(|(at, _)| *at);
+        out.into_iter().map(|(_, o)| o).collect()
+    }
+
+    fn claim_id(&self, ids: &mut HashMap<String, End>, id: String, end: End) -> Result<()> {
         let what = |e: &End| match e {
             End::Place(_) => "a place",
             End::Transition(_) => "a transition",
         };
-        if let Some(first) = ids.get(id) {
+        if let Some(first) = ids.get(&id) {
             return Err(Error::DuplicateName {
-                name: id.to_string(),
+                name: id,
                 first: what(first),
                 second: what(&end),
             });
@@ -366,8 +454,8 @@ impl Reader<'_> {
     }
 
     /// Names of the places then transitions, by the naming rule.
-    fn node_names(&self, objects: &Objects<'_, '_>) -> Result<Vec<String>> {
-        let nodes: Vec<Node<'_, '_>> = objects
+    fn node_names(&self, objects: &Objects<'_, '_, 's>) -> Result<Vec<String>> {
+        let nodes: Vec<Obj<'_, '_, 's>> = objects
             .places
             .iter()
             .chain(&objects.transitions)
@@ -375,14 +463,16 @@ impl Reader<'_> {
             .collect();
         let labels: Vec<Option<String>> = nodes
             .iter()
-            .map(|n| {
-                child(*n, "name")
-                    .map(value_text)
-                    .or_else(|| n.attribute("name").map(str::to_string))
-                    .map(|t| t.trim().to_string())
-                    .filter(|t| !t.is_empty())
+            .map(|obj| {
+                self.with(*obj, |_, n| {
+                    Ok(child(n, "name")
+                        .map(value_text)
+                        .or_else(|| n.attribute("name").map(str::to_string))
+                        .map(|t| t.trim().to_string())
+                        .filter(|t| !t.is_empty()))
+                })
             })
-            .collect();
+            .collect::<Result<_>>()?;
         let mut count: HashMap<&str, usize> = HashMap::new();
         for l in labels.iter().flatten() {
             *count.entry(l.as_str()).or_default() += 1;
@@ -397,8 +487,8 @@ impl Reader<'_> {
             let name = match name {
                 Some(n) => n,
                 None => {
-                    let id = self.id(*node)?;
-                    let mut candidate = id.to_string();
+                    let id = self.with(*node, |r, n| Ok(r.id(n)?.to_string()))?;
+                    let mut candidate = id.clone();
                     let mut k = 2;
                     while taken.contains(&candidate) {
                         candidate = format!("{id}_{k}");
@@ -413,73 +503,93 @@ impl Reader<'_> {
         Ok(names)
     }
 
-    fn resolve_references<'a, 'i>(
+    fn resolve_references(
         &self,
-        objects: &Objects<'a, 'i>,
-        ids: &HashMap<&'a str, End>,
-    ) -> Result<HashMap<&'a str, End>> {
-        let mut ends: HashMap<&'a str, End> = ids.clone();
-        let mut refs: HashMap<&'a str, (&'a str, Node<'a, 'i>)> = HashMap::new();
-        for r in &objects.references {
-            let id = self.id(*r)?;
-            let target = r.attribute("ref").ok_or_else(|| {
-                self.error(
-                    *r,
-                    format!("<{}> `{id}` without a `ref` attribute", r.tag_name().name()),
-                )
+        objects: &Objects<'_, '_, 's>,
+        ids: HashMap<String, End>,
+    ) -> Result<HashMap<String, End>> {
+        /// What a reference node says, read once.
+        struct Reference {
+            id: String,
+            target: String,
+            place: bool,
+            location: String,
+        }
+        let mut refs: HashMap<String, usize> = HashMap::new();
+        let mut read: Vec<Reference> = Vec::with_capacity(objects.references.len());
+        for obj in &objects.references {
+            let r = self.with(*obj, |r, n| {
+                let id = r.id(n)?.to_string();
+                let target = n.attribute("ref").ok_or_else(|| {
+                    r.error(
+                        n,
+                        format!("<{}> `{id}` without a `ref` attribute", n.tag_name().name()),
+                    )
+                })?;
+                Ok(Reference {
+                    target: target.to_string(),
+                    place: n.tag_name().name() == "referencePlace",
+                    location: r.loc(n),
+                    id,
+                })
             })?;
-            if ids.contains_key(id) || refs.insert(id, (target, *r)).is_some() {
+            if ids.contains_key(&r.id) || refs.insert(r.id.clone(), read.len()).is_some() {
                 return Err(Error::DuplicateName {
-                    name: id.to_string(),
+                    name: r.id,
                     first: "a node",
                     second: "a reference node",
                 });
             }
+            read.push(r);
         }
+        let mut ends = ids;
         // In document order, so that the first error reported does not
         // depend on hashing.
-        for r in &objects.references {
-            let id = self.id(*r)?;
-            let Some(&(first_target, node)) = refs.get(id) else {
-                continue;
-            };
-            let mut target = first_target;
+        for r in &read {
+            let mut target = r.target.as_str();
             let mut steps = 0;
             let end = loop {
                 if let Some(e) = ends.get(target) {
                     break *e;
                 }
                 match refs.get(target) {
-                    Some(&(next, _)) if steps <= refs.len() => {
-                        target = next;
+                    Some(&next) if steps <= refs.len() => {
+                        target = read[next].target.as_str();
                         steps += 1;
                     }
                     Some(_) => {
-                        return Err(
-                            self.error(node, format!("reference `{id}`: the references form a cycle"))
-                        );
+                        return Err(Error::Format {
+                            location: r.location.clone(),
+                            message: format!("reference `{}`: the references form a cycle", r.id),
+                        });
                     }
                     None => {
                         return Err(Error::UnknownNode {
-                            arc: format!("{}: reference `{id}`", self.loc(node)),
+                            arc: format!("{}: reference `{}`", r.location, r.id),
                             expected: "place or transition",
                             name: target.to_string(),
+                            hint: crate::suggest::hint(target, ends.keys().map(String::as_str)),
                         });
                     }
                 }
             };
-            let wants_place = node.tag_name().name() == "referencePlace";
-            if wants_place != matches!(end, End::Place(_)) {
-                return Err(self.error(
-                    node,
-                    format!(
-                        "<{}> `{id}` refers to `{first_target}`, which is a {}",
-                        node.tag_name().name(),
-                        if wants_place { "transition" } else { "place" }
+            if r.place != matches!(end, End::Place(_)) {
+                return Err(Error::Format {
+                    location: r.location.clone(),
+                    message: format!(
+                        "<{}> `{}` refers to `{}`, which is a {}",
+                        if r.place {
+                            "referencePlace"
+                        } else {
+                            "referenceTransition"
+                        },
+                        r.id,
+                        r.target,
+                        if r.place { "transition" } else { "place" }
                     ),
-                ));
+                });
             }
-            ends.insert(id, end);
+            ends.insert(r.id.clone(), end);
         }
         Ok(ends)
     }
@@ -497,7 +607,7 @@ impl Reader<'_> {
                         match item.attribute(attr) {
                             None => Ok(None),
                             Some(t) => parse_f64(t).map(Some).ok_or_else(|| Error::Format {
-                                location: attr_location(self.source, item, attr),
+                                location: self.attr_loc(item, attr),
                                 message: format!("parameter `{name}`: `{attr}` is not a number: `{t}`"),
                             }),
                         }
@@ -507,7 +617,7 @@ impl Reader<'_> {
                         Some("int") => ParamKind::Int,
                         Some(k) => {
                             return Err(Error::Format {
-                                location: attr_location(self.source, item, "kind"),
+                                location: self.attr_loc(item, "kind"),
                                 message: format!("parameter `{name}`: kind `{k}` (expected `int` or `real`)"),
                             });
                         }
@@ -533,7 +643,7 @@ impl Reader<'_> {
         let coord = |a: &str| -> Result<f64> {
             let t = pos.attribute(a).unwrap_or_default();
             parse_f64(t).ok_or_else(|| Error::Format {
-                location: attr_location(self.source, pos, a),
+                location: self.attr_loc(pos, a),
                 message: format!("{owner}: position `{a}` is not a number: `{t}`"),
             })
         };
@@ -761,7 +871,7 @@ impl Reader<'_> {
         Ok(inhibitor)
     }
 
-    fn arc(&self, arc: Node<'_, '_>, ends: &HashMap<&str, End>, net: &mut Net) -> Result<()> {
+    fn arc(&self, arc: Node<'_, '_>, ends: &HashMap<String, End>, net: &mut Net) -> Result<()> {
         let attr = |a: &str| -> Result<&str> {
             arc.attribute(a)
                 .ok_or_else(|| self.error(arc, format!("<arc> without a `{a}` attribute")))
@@ -774,6 +884,7 @@ impl Reader<'_> {
                 arc: describe(),
                 expected: "place or transition",
                 name: x.to_string(),
+                hint: crate::suggest::hint(x, ends.keys().map(String::as_str)),
             })
         };
         let (from, to) = (end(source)?, end(target)?);
@@ -1164,7 +1275,12 @@ mod tests {
 
     #[test]
     fn pipe_counts() {
-        let r = Reader { source: "s" };
+        let r = Reader {
+            source: "s",
+            text: "<a/>",
+            split: None,
+            base: None,
+        };
         let doc = roxmltree::Document::parse("<a/>").unwrap();
         let node = doc.root_element();
         let what = || "x".to_string();

@@ -68,7 +68,7 @@ use std::collections::HashMap;
 
 use roxmltree::Node;
 
-use super::{attr_location, fmt_f64, parse_expr, parse_f64, push_attr, xml_location};
+use super::{fmt_f64, parse_expr, parse_f64, push_attr};
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::net::{
@@ -85,9 +85,17 @@ pub fn read_pnpro(text: &str, source: &str) -> Result<Net> {
 /// one when `None`).
 pub fn read_pnpro_named(text: &str, source: &str, gspn: Option<&str>) -> Result<Net> {
     let text = super::prepare(text, source)?;
-    let doc = super::parse_xml(text, source)?;
+    // One place, transition or arc parsed at a time where the file allows
+    // it (`xml_split`), else the whole document at once.
+    let split = super::xml_split::split(text, &["nodes", "edges"]);
+    let doc = super::parse_xml(split.as_ref().map_or(text, |s| s.skeleton.as_str()), source)?;
     let root = doc.root_element();
-    let r = Reader { source };
+    let r = Reader {
+        source,
+        text,
+        split: split.as_ref(),
+        base: None,
+    };
     if root.tag_name().name() != "project" {
         return Err(r.error(
             root,
@@ -129,8 +137,15 @@ fn elements<'a, 'i>(node: Node<'a, 'i>) -> impl Iterator<Item = Node<'a, 'i>> {
     node.children().filter(Node::is_element)
 }
 
+/// The file being read: its name, its text, how it was cut (`None`: one
+/// document), and the fragment being read (`None`: the skeleton or the
+/// whole document), whose positions are placed back in the file.
+#[derive(Clone, Copy)]
 struct Reader<'s> {
     source: &'s str,
+    text: &'s str,
+    split: Option<&'s super::xml_split::XmlSplit>,
+    base: Option<&'s super::xml_split::Fragment>,
 }
 
 /// What a name in the net refers to, for duplicate detection.
@@ -151,19 +166,51 @@ impl Named {
     }
 }
 
-impl Reader<'_> {
+impl<'s> Reader<'s> {
     fn error(&self, node: Node<'_, '_>, message: String) -> Error {
         Error::Format {
-            location: xml_location(self.source, node),
+            location: self.loc(node),
             message,
         }
     }
 
     fn attr_error(&self, node: Node<'_, '_>, attr: &str, message: String) -> Error {
         Error::Format {
-            location: attr_location(self.source, node, attr),
+            location: self.attr_loc(node, attr),
             message,
         }
+    }
+
+    /// `file:line:column` of a node, in the whole file.
+    fn loc(&self, node: Node<'_, '_>) -> String {
+        super::located(self.source, super::xml_pos(node), self.base)
+    }
+
+    /// `file:line:column` of an attribute's value (or its element), in
+    /// the whole file.
+    fn attr_loc(&self, node: Node<'_, '_>, attr: &str) -> String {
+        super::located(self.source, super::attr_pos(node, attr), self.base)
+    }
+
+    /// Calls `f` on every child element of `container`, with the reader of
+    /// the fragment it was parsed from when the file was cut.
+    fn each_child(
+        &self,
+        container: Node<'_, '_>,
+        f: &mut dyn FnMut(&Reader<'s>, Node<'_, '_>) -> Result<()>,
+    ) -> Result<()> {
+        let Some(split) = self.split else {
+            return elements(container).try_for_each(|n| f(self, n));
+        };
+        for fragment in split.children(container.range().start) {
+            let doc = super::parse_fragment(self.text, fragment, self.source)?;
+            let r = Reader {
+                base: Some(fragment),
+                ..*self
+            };
+            f(&r, doc.root_element())?;
+        }
+        Ok(())
     }
 
     fn name(&self, node: Node<'_, '_>) -> Result<String> {
@@ -181,7 +228,7 @@ impl Reader<'_> {
         match node.attribute(attr) {
             Some(t) if !t.trim().is_empty() => parse_expr(
                 t,
-                || attr_location(self.source, node, attr),
+                || self.attr_loc(node, attr),
                 || format!("{owner}, attribute `{attr}`"),
             ),
             _ => Ok(default),
@@ -227,94 +274,109 @@ impl Reader<'_> {
             .map_or_else(|| super::default_net_name(self.source), str::to_string);
         let mut net = Net::new(net_name);
         let mut names: HashMap<String, Named> = HashMap::new();
-        let node_elements: Vec<Node<'_, '_>> = elements(page)
-            .filter(|n| n.tag_name().name() == "nodes")
-            .flat_map(elements)
-            .collect();
+        let containers = |tag: &'static str| elements(page).filter(move |n| n.tag_name().name() == tag);
 
         // First pass: parameters, so that constants have values when
         // `nservers` is evaluated.
         let suggestions = measure_assignments(project, net.name.as_str());
-        let mut constants: Vec<(usize, Expr, Node<'_, '_>)> = Vec::new();
-        for node in &node_elements {
-            let node = *node;
-            match node.tag_name().name() {
-                "constant" => {
-                    let name = self.name(node)?;
-                    self.register(&mut names, &name, Named::Param)?;
-                    let owner = format!("constant `{name}`");
-                    let kind = self.param_kind(node, "consttype", &owner)?;
-                    if let Some(value) = node.attribute("value").filter(|v| !v.trim().is_empty()) {
-                        let e = parse_expr(
-                            value,
-                            || attr_location(self.source, node, "value"),
-                            || format!("{owner}, attribute `value`"),
-                        )?;
-                        constants.push((net.params.len(), e, node));
-                    }
-                    net.params.push(Param {
-                        name,
-                        value: None,
-                        kind,
-                        suggested: None,
-                        doc: None,
-                    });
-                }
-                "template" => {
-                    let name = self.name(node)?;
-                    self.register(&mut names, &name, Named::Param)?;
-                    let owner = format!("template `{name}`");
-                    let kind = self.param_kind(node, "type", &owner)?;
-                    let last_binding = match node.attribute("last-binding").filter(|v| !v.trim().is_empty()) {
-                        None => None,
-                        Some(t) => Some(parse_f64(t).ok_or_else(|| {
-                            self.attr_error(
-                                node,
-                                "last-binding",
-                                format!("{owner}: attribute `last-binding` is not a number: `{t}`"),
-                            )
-                        })?),
-                    };
-                    let suggested = suggestions.get(name.as_str()).copied().or(last_binding);
-                    net.params.push(Param {
-                        name,
-                        value: None,
-                        kind,
-                        suggested,
-                        doc: None,
-                    });
-                }
-                tag @ ("colorclass" | "color-var" | "clock-var") => {
-                    return Err(self.error(
-                        node,
-                        format!(
-                            "<{tag}{}>: coloured nets and clocks are not supported (only GSPNs with EXP and IMM transitions)",
-                            node.attribute("name").map(|n| format!(" name=\"{n}\"")).unwrap_or_default()
-                        ),
-                    ));
-                }
-                _ => {}
-            }
+        let mut constants: Vec<(usize, Expr, String)> = Vec::new();
+        for nodes in containers("nodes") {
+            self.each_child(nodes, &mut |r, node| {
+                r.parameter(node, &mut net, &mut names, &suggestions, &mut constants)
+            })?;
         }
         self.evaluate_constants(&mut net, constants)?;
 
         // Second pass: places and transitions.
-        for node in &node_elements {
-            let node = *node;
-            match node.tag_name().name() {
-                "place" => self.place(node, &mut net, &mut names)?,
-                "transition" => self.transition(node, &mut net, &mut names)?,
-                _ => {}
-            }
+        for nodes in containers("nodes") {
+            self.each_child(nodes, &mut |r, node| match node.tag_name().name() {
+                "place" => r.place(node, &mut net, &mut names),
+                "transition" => r.transition(node, &mut net, &mut names),
+                _ => Ok(()),
+            })?;
         }
 
         // Arcs.
-        for edges in elements(page).filter(|n| n.tag_name().name() == "edges") {
-            for arc in elements(edges).filter(|n| n.tag_name().name() == "arc") {
-                self.arc(arc, &mut net, &names)?;
-            }
+        for edges in containers("edges") {
+            self.each_child(edges, &mut |r, arc| {
+                if arc.tag_name().name() == "arc" {
+                    r.arc(arc, &mut net, &names)?;
+                }
+                Ok(())
+            })?;
         }
         Ok(net)
+    }
+
+    /// A `<constant>` or `<template>` of `<nodes>` (other elements are
+    /// left to the second pass): registered, its value's expression kept
+    /// with its location for [`Reader::evaluate_constants`].
+    fn parameter(
+        &self,
+        node: Node<'_, '_>,
+        net: &mut Net,
+        names: &mut HashMap<String, Named>,
+        suggestions: &HashMap<&str, f64>,
+        constants: &mut Vec<(usize, Expr, String)>,
+    ) -> Result<()> {
+        match node.tag_name().name() {
+            "constant" => {
+                let name = self.name(node)?;
+                self.register(names, &name, Named::Param)?;
+                let owner = format!("constant `{name}`");
+                let kind = self.param_kind(node, "consttype", &owner)?;
+                if let Some(value) = node.attribute("value").filter(|v| !v.trim().is_empty()) {
+                    let e = parse_expr(
+                        value,
+                        || self.attr_loc(node, "value"),
+                        || format!("{owner}, attribute `value`"),
+                    )?;
+                    constants.push((net.params.len(), e, self.attr_loc(node, "value")));
+                }
+                net.params.push(Param {
+                    name,
+                    value: None,
+                    kind,
+                    suggested: None,
+                    doc: None,
+                });
+            }
+            "template" => {
+                let name = self.name(node)?;
+                self.register(names, &name, Named::Param)?;
+                let owner = format!("template `{name}`");
+                let kind = self.param_kind(node, "type", &owner)?;
+                let last_binding = match node.attribute("last-binding").filter(|v| !v.trim().is_empty()) {
+                    None => None,
+                    Some(t) => Some(parse_f64(t).ok_or_else(|| {
+                        self.attr_error(
+                            node,
+                            "last-binding",
+                            format!("{owner}: attribute `last-binding` is not a number: `{t}`"),
+                        )
+                    })?),
+                };
+                let suggested = suggestions.get(name.as_str()).copied().or(last_binding);
+                net.params.push(Param {
+                    name,
+                    value: None,
+                    kind,
+                    suggested,
+                    doc: None,
+                });
+            }
+            tag @ ("colorclass" | "color-var" | "clock-var") => {
+                return Err(self.error(
+                    node,
+                    format!(
+                        "<{tag}{}>: coloured nets and clocks are not supported (only GSPNs with EXP and IMM transitions)",
+                        node.attribute("name").map(|n| format!(" name=\"{n}\"")).unwrap_or_default()
+                    ),
+                ));
+            }
+            _ => {}
+        }
+        Ok(())
     }
 
     fn param_kind(&self, node: Node<'_, '_>, attr: &str, owner: &str) -> Result<ParamKind> {
@@ -331,16 +393,16 @@ impl Reader<'_> {
     }
 
     /// Gives constants their values; a value may use other constants.
-    fn evaluate_constants(&self, net: &mut Net, mut pending: Vec<(usize, Expr, Node<'_, '_>)>) -> Result<()> {
+    fn evaluate_constants(&self, net: &mut Net, mut pending: Vec<(usize, Expr, String)>) -> Result<()> {
         let mut values: HashMap<String, f64> = HashMap::new();
         loop {
             let before = pending.len();
             let mut still = Vec::new();
-            for (i, e, node) in pending {
+            for (i, e, location) in pending {
                 let mut ready = true;
                 e.for_each_param(&mut |n| ready &= values.contains_key(n));
                 if !ready {
-                    still.push((i, e, node));
+                    still.push((i, e, location));
                     continue;
                 }
                 let Some(param) = net.params.get_mut(i) else {
@@ -348,7 +410,10 @@ impl Reader<'_> {
                 };
                 let v = e
                     .eval_params(&|n| values.get(n).copied(), &format!("constant `{}`", param.name))
-                    .map_err(|err| self.attr_error(node, "value", err.to_string()))?;
+                    .map_err(|err| Error::Format {
+                        location,
+                        message: err.to_string(),
+                    })?;
                 param.value = Some(v);
                 values.insert(param.name.clone(), v);
             }
@@ -361,7 +426,7 @@ impl Reader<'_> {
             .iter()
             .filter_map(|(i, _, _)| net.params.get(*i).map(|p| p.name.clone()))
             .collect();
-        if let Some((i, e, node)) = pending.into_iter().next() {
+        if let Some((i, e, location)) = pending.into_iter().next() {
             let owner = net.params.get(i).map(|p| p.name.clone()).unwrap_or_default();
             let mut missing = None;
             e.for_each_param(&mut |n| {
@@ -379,11 +444,10 @@ impl Reader<'_> {
             } else {
                 format!("`{missing}` is not defined")
             };
-            return Err(self.attr_error(
-                node,
-                "value",
-                format!("constant `{owner}`: cannot evaluate its value `{e}`: {why}"),
-            ));
+            return Err(Error::Format {
+                location,
+                message: format!("constant `{owner}`: cannot evaluate its value `{e}`: {why}"),
+            });
         }
         Ok(())
     }
@@ -494,7 +558,7 @@ impl Reader<'_> {
         }
         let e = parse_expr(
             text,
-            || attr_location(self.source, node, "nservers"),
+            || self.attr_loc(node, "nservers"),
             || format!("{owner}, attribute `nservers`"),
         )?;
         let v = e
@@ -523,12 +587,7 @@ impl Reader<'_> {
                 .ok_or_else(|| self.error(node, format!("<arc> without a `{a}` attribute")))
         };
         let (head, tail, kind_text) = (attr("head")?, attr("tail")?, attr("kind")?);
-        let describe = || {
-            format!(
-                "{}: {kind_text} arc from `{tail}` to `{head}`",
-                xml_location(self.source, node)
-            )
-        };
+        let describe = || format!("{}: {kind_text} arc from `{tail}` to `{head}`", self.loc(node));
         let (place_name, transition_name, kind) = match kind_text.to_ascii_uppercase().as_str() {
             "INPUT" => (tail, head, ArcKind::Input),
             "OUTPUT" => (head, tail, ArcKind::Output),
@@ -548,6 +607,13 @@ impl Reader<'_> {
                     arc: describe(),
                     expected: "place",
                     name: place_name.to_string(),
+                    hint: crate::suggest::hint(
+                        place_name,
+                        names
+                            .iter()
+                            .filter(|(_, n)| matches!(n, Named::Place(_)))
+                            .map(|(k, _)| k.as_ref()),
+                    ),
                 });
             }
         };
@@ -558,6 +624,13 @@ impl Reader<'_> {
                     arc: describe(),
                     expected: "transition",
                     name: transition_name.to_string(),
+                    hint: crate::suggest::hint(
+                        transition_name,
+                        names
+                            .iter()
+                            .filter(|(_, n)| matches!(n, Named::Transition(_)))
+                            .map(|(k, _)| k.as_ref()),
+                    ),
                 });
             }
         };

@@ -62,7 +62,7 @@
 //! single). Reading what it wrote gives back the same [`Net`] (arcs in the
 //! canonical order, see [`sort_arcs`](super::sort_arcs)).
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::fmt::{self, Write as _};
 use std::ops::Range;
 
@@ -70,6 +70,7 @@ use serde::Deserialize;
 use serde::de::{self, MapAccess, SeqAccess, Visitor};
 use toml::Spanned;
 
+use super::toml_split::ItemKind;
 use super::{location_at, parse_expr};
 use crate::error::{Error, Result};
 use crate::expr::Expr;
@@ -86,10 +87,8 @@ struct FileSpec {
     doc: Option<String>,
     #[serde(default)]
     params: BTreeMap<Spanned<String>, Spanned<ParamSpec>>,
-    #[serde(default)]
-    place: Vec<Spanned<PlaceSpec>>,
-    #[serde(default)]
-    transition: Vec<Spanned<TransitionSpec>>,
+    place: Option<Vec<Spanned<PlaceSpec>>>,
+    transition: Option<Vec<Spanned<TransitionSpec>>>,
 }
 
 #[derive(Deserialize)]
@@ -347,44 +346,132 @@ impl<'de> Deserialize<'de> for ArcList {
 
 /// Reads a net in petrinav's TOML format. `source` names the text in error
 /// messages (a file name) and gives the net its default name (the stem).
+///
+/// A file is parsed one item at a time where that cannot change its
+/// meaning ([`super::toml_split`]), so that the parser's document tree
+/// never holds more than one place or transition; other files are parsed
+/// whole.
 pub fn read_toml(text: &str, source: &str) -> Result<Net> {
     let text = super::prepare(text, source)?;
-    let spec: FileSpec = toml::from_str(text).map_err(|e| Error::Format {
+    let Some(items) = super::toml_split::items(text) else {
+        return read_whole(text, source);
+    };
+    let head = parse_spec(text, items.head(), source)?;
+    if head.place.is_some() || head.transition.is_some() {
+        // `place = [...]` written inline in the head: not cut.
+        return read_whole(text, source);
+    }
+    let mut b = Builder::new(text, source, head)?;
+    for (kind, is_place) in [(ItemKind::Place, true), (ItemKind::Transition, false)] {
+        for range in items.of(kind) {
+            let spec = parse_spec(text, range.clone(), source)?;
+            let r = Reader {
+                source,
+                text,
+                offset: range.start,
+            };
+            match (spec, is_place) {
+                (
+                    FileSpec {
+                        place: Some(mut p),
+                        transition: None,
+                        ..
+                    },
+                    true,
+                ) if p.len() == 1 => b.place(&r, p.remove(0))?,
+                (
+                    FileSpec {
+                        place: None,
+                        transition: Some(mut t),
+                        ..
+                    },
+                    false,
+                ) if t.len() == 1 => b.transition(&r, t.remove(0))?,
+                // Not one item (cannot happen, module docs of toml_split):
+                // the whole file decides.
+                _ => return read_whole(text, source),
+            }
+        }
+    }
+    super::finish(b.net)
+}
+
+/// Parses the whole text at once.
+fn read_whole(text: &str, source: &str) -> Result<Net> {
+    let mut spec = parse_spec(text, 0..text.len(), source)?;
+    let places = spec.place.take().unwrap_or_default();
+    let transitions = spec.transition.take().unwrap_or_default();
+    let r = Reader {
+        source,
+        text,
+        offset: 0,
+    };
+    let mut b = Builder::new(text, source, spec)?;
+    for p in places {
+        b.place(&r, p)?;
+    }
+    for t in transitions {
+        b.transition(&r, t)?;
+    }
+    super::finish(b.net)
+}
+
+/// The schema read from `text[range]`; errors located in the whole text.
+fn parse_spec(text: &str, range: Range<usize>, source: &str) -> Result<FileSpec> {
+    let start = range.start;
+    toml::from_str(&text[range]).map_err(|e| Error::Format {
         location: match e.span() {
-            Some(span) => location_at(source, text, span.start),
+            Some(span) => location_at(source, text, start + span.start),
             None => source.to_string(),
         },
         message: e.message().trim().to_string(),
-    })?;
-    let r = Reader { source, text };
-    let mut net = Net::new(spec.name.unwrap_or_else(|| super::default_net_name(source)));
-    net.doc = spec.doc;
+    })
+}
 
-    let mut params: Vec<_> = spec.params.into_iter().collect();
-    params.sort_by_key(|(key, _)| key.span().start);
-    for (key, spec) in params {
-        let span = spec.span();
-        let name = key.into_inner();
-        net.params.push(r.param(name, spec.into_inner(), span)?);
+/// The net as it is read: places and transitions added one by one, names
+/// checked.
+struct Builder {
+    net: Net,
+    place_ids: HashMap<String, PlaceId>,
+    transition_names: HashSet<String>,
+}
+
+impl Builder {
+    /// The net's name, documentation and parameters, from the head.
+    fn new(text: &str, source: &str, head: FileSpec) -> Result<Builder> {
+        let r = Reader {
+            source,
+            text,
+            offset: 0,
+        };
+        let mut net = Net::new(head.name.unwrap_or_else(|| super::default_net_name(source)));
+        net.doc = head.doc;
+        let mut params: Vec<_> = head.params.into_iter().collect();
+        params.sort_by_key(|(key, _)| key.span().start);
+        for (key, spec) in params {
+            let span = spec.span();
+            let name = key.into_inner();
+            net.params.push(r.param(name, spec.into_inner(), span)?);
+        }
+        Ok(Builder {
+            net,
+            place_ids: HashMap::new(),
+            transition_names: HashSet::new(),
+        })
     }
 
-    let mut names: HashMap<String, &'static str> = HashMap::new();
-    let mut claim = |name: &str, what: &'static str| -> Result<()> {
-        if let Some(first) = names.insert(name.to_string(), what) {
-            return Err(Error::DuplicateName {
-                name: name.to_string(),
-                first,
-                second: what,
-            });
-        }
-        Ok(())
-    };
-    let mut place_ids: HashMap<String, PlaceId> = HashMap::new();
-    for spec in spec.place {
+    fn place(&mut self, r: &Reader<'_>, spec: Spanned<PlaceSpec>) -> Result<()> {
         let span = spec.span();
         let p = spec.into_inner();
-        claim(&p.name, "a place")?;
-        place_ids.insert(p.name.clone(), PlaceId(net.places.len() as u32));
+        if self.place_ids.contains_key(&p.name) {
+            return Err(Error::DuplicateName {
+                name: p.name,
+                first: "a place",
+                second: "a place",
+            });
+        }
+        self.place_ids
+            .insert(p.name.clone(), PlaceId(self.net.places.len() as u32));
         let owner = format!("place `{}`", p.name);
         let initial = match p.initial {
             None => Expr::Num(0.0),
@@ -393,36 +480,55 @@ pub fn read_toml(text: &str, source: &str) -> Result<Net> {
         if p.name.is_empty() {
             return Err(r.error(span, "a place has an empty `name`".into()));
         }
-        net.places.push(Place {
+        self.net.places.push(Place {
             name: p.name,
             initial,
             capacity: p.capacity,
             position: p.position.map(|[x, y]| (x, y)),
             doc: p.doc,
         });
+        Ok(())
     }
-    for spec in spec.transition {
+
+    fn transition(&mut self, r: &Reader<'_>, spec: Spanned<TransitionSpec>) -> Result<()> {
         let span = spec.span();
         let t = spec.into_inner();
-        claim(&t.name, "a transition")?;
+        let first = if self.place_ids.contains_key(&t.name) {
+            Some("a place")
+        } else if self.transition_names.contains(&t.name) {
+            Some("a transition")
+        } else {
+            None
+        };
+        if let Some(first) = first {
+            return Err(Error::DuplicateName {
+                name: t.name,
+                first,
+                second: "a transition",
+            });
+        }
         if t.name.is_empty() {
             return Err(r.error(span, "a transition has an empty `name`".into()));
         }
-        let transition = r.transition(&t, &mut net, &place_ids)?;
-        net.transitions.push(transition);
+        let transition = r.transition(&t, &mut self.net, &self.place_ids)?;
+        self.transition_names.insert(t.name);
+        self.net.transitions.push(transition);
+        Ok(())
     }
-    super::finish(net)
 }
 
+/// Errors and expressions of one piece of the text: `offset` is where the
+/// piece starts in `text`, the whole file, to which spans are relative.
 struct Reader<'a> {
     source: &'a str,
     text: &'a str,
+    offset: usize,
 }
 
 impl Reader<'_> {
     fn error(&self, span: Range<usize>, message: String) -> Error {
         Error::Format {
-            location: location_at(self.source, self.text, span.start),
+            location: location_at(self.source, self.text, self.offset + span.start),
             message,
         }
     }
@@ -433,7 +539,7 @@ impl Reader<'_> {
             Value::Num(x) => Ok(Expr::Num(x)),
             Value::Text(t) => parse_expr(
                 &t,
-                || location_at(self.source, self.text, span.start),
+                || location_at(self.source, self.text, self.offset + span.start),
                 || format!("{owner}, `{key}`"),
             ),
         }
@@ -535,11 +641,12 @@ impl Reader<'_> {
                     return Err(Error::UnknownNode {
                         arc: format!(
                             "{}: {} arc of {owner} (`{key}`)",
-                            location_at(self.source, self.text, place.span().start),
+                            location_at(self.source, self.text, self.offset + place.span().start),
                             kind.name()
                         ),
                         expected: "place",
                         name: place.get_ref().clone(),
+                        hint: crate::suggest::hint(place.get_ref(), place_ids.keys().map(String::as_str)),
                     });
                 };
                 let multiplicity = match mult {

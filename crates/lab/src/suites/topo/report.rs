@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use ::topo::{FuzzyPetriNet, PlaceId, PlanMode, plan};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use robot::Pose;
 
 use super::{Explored, METHODS, ROUTES, TopoSuite, WORLDS, metric};
@@ -215,7 +215,7 @@ fn exploration_blocks(
             (760, 380),
         )?;
         let (path, src) = ctx.picture_path("growth.svg")?;
-        std::fs::write(&path, svg)?;
+        std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
         files.push(path);
         blocks.push(Block::Charts {
             heading: "The map as it grows".into(),
