@@ -39,6 +39,7 @@
 #![warn(missing_docs)]
 
 pub mod ctmc;
+pub mod decision;
 pub mod error;
 pub mod expr;
 pub mod families;
@@ -50,7 +51,9 @@ pub mod io;
 pub mod krylov;
 mod linear;
 mod marking;
+pub mod mdp;
 pub mod net;
+pub mod policy;
 pub mod properties;
 pub mod reachability;
 mod rows;
@@ -60,6 +63,7 @@ pub mod steady_state;
 mod vanishing;
 
 pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
+pub use decision::{ChoiceReport, DecisionNet, NetObjective};
 pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
 pub use gspn::{Gspn, MarkingKind, Timing};
@@ -70,9 +74,10 @@ pub use invariants::{
     NamedTerm, p_invariants, structural_bounds, t_invariants,
 };
 pub use net::{
-    Arc, ArcKind, Net, Param, ParamKind, Params, Place, PlaceId, Servers, Transition, TransitionId,
-    TransitionKind,
+    Arc, ArcKind, Label, Net, Param, ParamKind, Params, Place, PlaceId, RewardModel, Servers, Transition,
+    TransitionId, TransitionKind,
 };
+pub use policy::{Action, Policy};
 pub use properties::Properties;
 pub use reachability::{
     COMPILE_BYTES_PER_EDGE, COMPILE_BYTES_PER_STATE, Edge, ExploreParams, ExploreStats, FALLBACK_MAX_MEMORY,

@@ -36,6 +36,20 @@
 //! priority = 1                   # immediate: default 1
 //! inputs = ["P0"]
 //! outputs = ["P1"]
+//!
+//! [[transition]]
+//! name = "t1"
+//! kind = "immediate"
+//! decision = true                # a policy chooses it (no weight)
+//! inputs = ["P0"]
+//! outputs = ["P2"]
+//!
+//! [labels]                       # named marking sets, for properties ("goal")
+//! goal = "#P3 = 1"
+//!
+//! [rewards.cost]                 # a reward model, for R{"cost"} properties
+//! rate = "#P1 + 2 * #P2"         # earned per unit of time in a marking
+//! impulse = { t2 = 1, t0 = "p" } # earned at each firing
 //! ```
 //!
 //! - A parameter is either a number (a real parameter with that value) or a
@@ -52,6 +66,13 @@
 //!   multiplicities, an array mixing names and one-entry tables:
 //!   `inputs = ["P1", { P1 = 2 }]`.
 //! - `servers = 1` means k = 1 server, which behaves like `"single"`.
+//! - `decision = true` makes an immediate transition a decision
+//!   (docs/gspn.md, *Decisions*); it is an error on a timed transition and
+//!   together with `weight`, which a decision does not have.
+//! - `[labels]` maps a name to a condition over token counts; `[rewards.NAME]`
+//!   holds a reward model's `rate` (an expression over token counts and
+//!   parameters, per unit of time) and `impulse` (transition = expression
+//!   over parameters, per firing). Both are written after the transitions.
 //!
 //! # Writing
 //!
@@ -90,6 +111,18 @@ struct FileSpec {
     place: Vec<Spanned<PlaceSpec>>,
     #[serde(default)]
     transition: Vec<Spanned<TransitionSpec>>,
+    #[serde(default)]
+    labels: BTreeMap<Spanned<String>, Spanned<String>>,
+    #[serde(default)]
+    rewards: BTreeMap<Spanned<String>, Spanned<RewardSpec>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RewardSpec {
+    rate: Option<Spanned<Value>>,
+    #[serde(default)]
+    impulse: BTreeMap<Spanned<String>, Spanned<Value>>,
 }
 
 #[derive(Deserialize)]
@@ -120,6 +153,7 @@ struct TransitionSpec {
     servers: Option<Spanned<ServersSpec>>,
     weight: Option<Spanned<Value>>,
     priority: Option<Spanned<Value>>,
+    decision: Option<Spanned<bool>>,
     #[serde(default)]
     inputs: ArcList,
     #[serde(default)]
@@ -411,7 +445,32 @@ pub fn read_toml(text: &str, source: &str) -> Result<Net> {
         let transition = r.transition(&t, &mut net, &place_ids)?;
         net.transitions.push(transition);
     }
+    let mut labels: Vec<_> = spec.labels.into_iter().collect();
+    labels.sort_by_key(|(key, _)| key.span().start);
+    for (key, text) in labels {
+        let name = key.into_inner();
+        let owner = format!("label `{name}`");
+        let expr = r.expr(text.map(Value::Text), &owner, "condition")?;
+        net.labels.push(crate::net::Label { name, expr });
+    }
+    let mut rewards: Vec<_> = spec.rewards.into_iter().collect();
+    rewards.sort_by_key(|(key, _)| key.span().start);
+    for (key, reward) in rewards {
+        let reward = r.reward(key.into_inner(), reward.into_inner(), &net)?;
+        net.rewards.push(reward);
+    }
     super::finish(net)
+}
+
+trait SpannedMap<T> {
+    fn map<U>(self, f: impl FnOnce(T) -> U) -> Spanned<U>;
+}
+
+impl<T> SpannedMap<T> for Spanned<T> {
+    fn map<U>(self, f: impl FnOnce(T) -> U) -> Spanned<U> {
+        let span = self.span();
+        Spanned::new(span, f(self.into_inner()))
+    }
 }
 
 struct Reader<'a> {
@@ -477,6 +536,28 @@ impl Reader<'_> {
         })
     }
 
+    fn reward(&self, name: String, spec: RewardSpec, net: &Net) -> Result<crate::net::RewardModel> {
+        let owner = format!("reward model `{name}`");
+        let rate = spec.rate.map(|v| self.expr(v, &owner, "rate")).transpose()?;
+        let mut impulses = Vec::new();
+        let mut entries: Vec<_> = spec.impulse.into_iter().collect();
+        entries.sort_by_key(|(key, _)| key.span().start);
+        for (key, value) in entries {
+            let Some(t) = net.transition_id(key.get_ref()) else {
+                return Err(Error::UnknownNode {
+                    arc: format!(
+                        "{}: impulse of {owner}",
+                        location_at(self.source, self.text, key.span().start)
+                    ),
+                    expected: "transition",
+                    name: key.into_inner(),
+                });
+            };
+            impulses.push((t, self.expr(value, &owner, "impulse")?));
+        }
+        Ok(crate::net::RewardModel { name, rate, impulses })
+    }
+
     fn transition(
         &self,
         t: &TransitionSpec,
@@ -492,9 +573,14 @@ impl Reader<'_> {
         };
         let kind = match t.kind {
             KindSpec::Timed => {
-                let why = "timed (kind = \"timed\", the default); `weight` and `priority` are for kind = \"immediate\"";
+                let why = "timed (kind = \"timed\", the default); `weight`, `priority` and `decision` are for kind = \"immediate\"";
                 refuse("weight", t.weight.as_ref().map(Spanned::span), why)?;
                 refuse("priority", t.priority.as_ref().map(Spanned::span), why)?;
+                refuse(
+                    "decision",
+                    t.decision.as_ref().filter(|d| *d.get_ref()).map(Spanned::span),
+                    why,
+                )?;
                 TransitionKind::Timed {
                     rate: t
                         .rate
@@ -508,6 +594,13 @@ impl Reader<'_> {
                 let why = "immediate: it fires in zero time, its `weight` sets its probability";
                 refuse("rate", t.rate.as_ref().map(Spanned::span), why)?;
                 refuse("servers", t.servers.as_ref().map(Spanned::span), why)?;
+                if t.decision.as_ref().is_some_and(|d| *d.get_ref()) {
+                    refuse(
+                        "weight",
+                        t.weight.as_ref().map(Spanned::span),
+                        "a decision (decision = true): the policy chooses it, it has no weight",
+                    )?;
+                }
                 TransitionKind::Immediate {
                     weight: t
                         .weight
@@ -556,6 +649,7 @@ impl Reader<'_> {
         Ok(Transition {
             name: t.name.clone(),
             kind,
+            decision: t.decision.as_ref().is_some_and(|d| *d.get_ref()),
             position: t.position.map(|[x, y]| (x, y)),
             doc: t.doc.clone(),
         })
@@ -748,7 +842,9 @@ pub fn write_toml(net: &Net) -> Result<String> {
             }
             TransitionKind::Immediate { weight, priority } => {
                 out.push_str("kind = \"immediate\"\n");
-                if *weight != Expr::Num(1.0) {
+                if t.decision {
+                    out.push_str("decision = true\n");
+                } else if *weight != Expr::Num(1.0) {
                     let _ = writeln!(out, "weight = {}", expr_value(weight));
                 }
                 if *priority != Expr::Num(1.0) {
@@ -768,7 +864,35 @@ pub fn write_toml(net: &Net) -> Result<String> {
             let _ = writeln!(out, "position = {}", position(pos));
         }
     }
+    write_labels_and_rewards(&mut out, net);
     Ok(out)
+}
+
+/// The `[labels]` table and one `[rewards.NAME]` table per reward model.
+fn write_labels_and_rewards(out: &mut String, net: &Net) {
+    if !net.labels.is_empty() {
+        out.push_str("\n[labels]\n");
+        for l in &net.labels {
+            let _ = writeln!(out, "{} = {}", key(&l.name), quote(&l.expr.to_string()));
+        }
+    }
+    for r in &net.rewards {
+        let _ = writeln!(out, "\n[rewards.{}]", key(&r.name));
+        if let Some(rate) = &r.rate {
+            let _ = writeln!(out, "rate = {}", expr_value(rate));
+        }
+        if !r.impulses.is_empty() {
+            let entries: Vec<String> = r
+                .impulses
+                .iter()
+                .filter_map(|(t, e)| {
+                    let name = &net.transitions.get(t.index())?.name;
+                    Some(format!("{} = {}", key(name), expr_value(e)))
+                })
+                .collect();
+            let _ = writeln!(out, "impulse = {{ {} }}", entries.join(", "));
+        }
+    }
 }
 
 #[cfg(test)]
@@ -836,7 +960,14 @@ mod tests {
         assert_eq!(net.params.len(), 4);
         assert_eq!(net.param("p").unwrap().value, Some(1.0 / 3.0));
         assert_eq!(net.param("K").unwrap().suggested, Some(2.0));
-        assert_eq!(net.transitions.len(), 2);
-        assert_eq!(net.arcs.len(), 7);
+        assert_eq!(net.transitions.len(), 3);
+        assert!(net.transitions[2].decision && !net.transitions[1].decision);
+        assert_eq!(net.arcs.len(), 9);
+        assert_eq!(net.labels.len(), 1);
+        assert_eq!(net.rewards[0].impulses.len(), 2);
+        let back = read_toml(&write_toml(&net).unwrap(), "supervisor.toml").unwrap();
+        assert_eq!(back.labels, net.labels);
+        assert_eq!(back.rewards, net.rewards);
+        assert_eq!(back.transitions, net.transitions);
     }
 }
