@@ -48,7 +48,12 @@ fn a_net_written_and_read_back_gives_the_same_bits() {
         for property in [
             r#"Pmax=? [F #P3 = 1]"#,
             r#"Tmin=? [F #P3 = 1]"#,
-            r#"Tmax=? [F #P4 = 1]"#,
+            // Not Tmax to P4: in the supervisor a failure is a one-in-a-
+            // million event per mission, so the chain cycles ~10^6 times
+            // before it (spectral radius ~1 − 1e-7), beyond value
+            // iteration's sweep limit; P3 is reached within a few.
+            r#"Tmax=? [F #P3 = 1]"#,
+            r#"Pmin=? [F #P4 = 1]"#,
             r#"LRAmax=? [#P5 = 1]"#,
         ] {
             let p = Property::parse(property).unwrap();
