@@ -1,5 +1,7 @@
 //! `petrinav gspn …`: the GSPN engine on the command line.
 
+mod optimize;
+
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 
@@ -43,7 +45,7 @@ pub enum GspnCommand {
     /// choice marking the action chosen and each alternative's value.
     ///
     /// Example: petrinav gspn optimize net.toml --objective 'Tmin=? [F "done"]' --policy-out policy.json
-    Optimize(crate::gspn_optimize::OptimizeArgs),
+    Optimize(optimize::OptimizeArgs),
     /// Converts between formats, chosen by extension: .pnpro (GreatSPN),
     /// .pnml (ISO 15909-2), .toml (petrinav), .dot (Graphviz, output only),
     /// .drn (Storm's explicit format: the net's CTMC or Markov automaton,
@@ -276,7 +278,7 @@ pub fn run(cmd: GspnCommand) -> Result<()> {
         GspnCommand::Solve(a) => solve(&a),
         GspnCommand::Select(a) => select(&a),
         GspnCommand::Simulate(a) => simulate(&a),
-        GspnCommand::Optimize(a) => crate::gspn_optimize::run(&a),
+        GspnCommand::Optimize(a) => optimize::run(&a),
         GspnCommand::Convert {
             input,
             output,

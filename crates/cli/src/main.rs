@@ -2,7 +2,6 @@
 //! command lives in its own module.
 
 mod gspn;
-mod gspn_optimize;
 mod guide_cmd;
 mod interrupt;
 mod lab_cmd;

@@ -5,6 +5,8 @@
 //! This module also holds the firing rule, shared by the state-space
 //! generator, the simulator and the property checks.
 
+pub mod policy;
+
 use std::collections::{BTreeMap, BTreeSet};
 
 use std::sync::Arc;
@@ -12,7 +14,7 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::net::{ArcKind, Label, Net, Params, PlaceId, RewardModel, Servers, TransitionId, TransitionKind};
-use crate::policy::{Action, Policy};
+use policy::{Action, Policy};
 
 /// Timing of an instantiated transition.
 #[derive(Debug, Clone, Copy, PartialEq)]

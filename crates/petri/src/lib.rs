@@ -53,7 +53,7 @@ mod linear;
 mod marking;
 pub mod mdp;
 pub mod net;
-pub mod policy;
+pub use gspn::policy;
 pub mod properties;
 pub mod reachability;
 mod rows;

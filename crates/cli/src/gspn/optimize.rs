@@ -10,7 +10,7 @@ use lab::optimize::{Optimization, OptimizeOptions, describe_model};
 use petri::Interrupt;
 use petri::mdp::Precision;
 
-use crate::gspn::{NetArgs, explore_params, print_json};
+use super::{NetArgs, explore_params, print_json};
 use crate::output::{Table, fields, num};
 use crate::{out, outln};
 

@@ -34,8 +34,8 @@ use std::collections::{BTreeMap, HashMap};
 
 use serde::{Deserialize, Serialize};
 
+use super::Gspn;
 use crate::error::{Error, Result};
-use crate::gspn::Gspn;
 use crate::net::TransitionId;
 
 /// The `format` field of a policy file.
