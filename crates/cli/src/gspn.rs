@@ -92,7 +92,7 @@ pub enum Family {
     /// N robots sharing 3 corridors (immediate choice of a free corridor).
     Robots,
     /// N robots choosing among 3 corridors, fast and risky to slow and
-    /// safe: a net with decisions (gspn optimize; N = 100: 1.3 M states).
+    /// safe: a net with decisions (gspn optimize; N = 100: 216,751 states).
     Corridors,
 }
 

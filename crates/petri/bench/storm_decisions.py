@@ -16,7 +16,7 @@ Three parts, each optional:
 * ``ours``: the DRN files petrinav writes (``gspn convert NET file.drn``)
   of the shipped supervisor net with decisions and of the ``corridors``
   family are read by Storm and solved alike (Storm reads our files).
-* ``time``: end to end on a large file (``corridors N``, N = 100: 1.3 M
+* ``time``: end to end on a large file (``corridors N``, N = 100: 216,751
   states, a Markov automaton written by ``gspn convert``): the wall time of
   the whole ``petrinav gspn optimize`` process (reading, graph analysis,
   iteration, output) against Storm's ``build_model_from_drn`` plus
