@@ -1,5 +1,7 @@
 //! `petrinav gspn …`: the GSPN engine on the command line.
 
+mod optimize;
+
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 
@@ -38,13 +40,27 @@ pub enum GspnCommand {
     ///
     /// Example: petrinav gspn simulate model.toml --time 100000 --seed 1
     Simulate(SimulateArgs),
+    /// The best policy of a net with decisions (or of a Storm DRN model)
+    /// for a property, its value with a guaranteed bound, and for every
+    /// choice marking the action chosen and each alternative's value.
+    ///
+    /// Example: petrinav gspn optimize net.toml --objective 'Tmin=? [F "done"]' --policy-out policy.json
+    Optimize(optimize::OptimizeArgs),
     /// Converts between formats, chosen by extension: .pnpro (GreatSPN),
-    /// .pnml (ISO 15909-2), .toml (petrinav), .dot (Graphviz, output only).
+    /// .pnml (ISO 15909-2), .toml (petrinav), .dot (Graphviz, output only),
+    /// .drn (Storm's explicit format: the net's CTMC or Markov automaton,
+    /// output only).
     Convert {
         /// Input file.
         input: PathBuf,
         /// Output file.
         output: PathBuf,
+        /// Sets a parameter (for .drn output): NAME=VALUE.
+        #[arg(long = "param", short = 'p', value_name = "NAME=VALUE")]
+        params: Vec<String>,
+        /// Rate for every timed transition that has none (for .drn output).
+        #[arg(long, value_name = "R")]
+        default_rate: Option<f64>,
     },
     /// Graphviz drawing of the net, its reachability graph or its tangible
     /// reachability graph (CTMC). Render with `dot -Tsvg`.
@@ -75,6 +91,9 @@ pub enum Family {
     Philosophers,
     /// N robots sharing 3 corridors (immediate choice of a free corridor).
     Robots,
+    /// N robots choosing among 3 corridors, fast and risky to slow and
+    /// safe: a net with decisions (gspn optimize; N = 100: 216,751 states).
+    Corridors,
 }
 
 /// Options shared by commands that load and instantiate a net.
@@ -146,6 +165,10 @@ pub struct SolveArgs {
     /// Relative residual at which iterative methods stop.
     #[arg(long, default_value_t = 1e-12)]
     tolerance: f64,
+    /// Solve the net under this policy (a file written by `gspn optimize
+    /// --policy-out`): its choice markings resolved, every measure applies.
+    #[arg(long, value_name = "FILE")]
+    policy: Option<PathBuf>,
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
@@ -217,6 +240,9 @@ pub struct SimulateArgs {
     /// (`inf` for no limit).
     #[arg(long, default_value_t = 600.0, value_name = "S")]
     max_wall: f64,
+    /// Simulate the net under this policy (`gspn optimize --policy-out`).
+    #[arg(long, value_name = "FILE")]
+    policy: Option<PathBuf>,
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
@@ -257,7 +283,13 @@ pub fn run(cmd: GspnCommand) -> Result<()> {
         GspnCommand::Solve(a) => solve(&a),
         GspnCommand::Select(a) => select(&a),
         GspnCommand::Simulate(a) => simulate(&a),
-        GspnCommand::Convert { input, output } => convert(&input, &output),
+        GspnCommand::Optimize(a) => optimize::run(&a),
+        GspnCommand::Convert {
+            input,
+            output,
+            params,
+            default_rate,
+        } => convert(&input, &output, &params, default_rate),
         GspnCommand::Dot(a) => dot(&a),
         GspnCommand::Family { family, n, output } => family_cmd(family, n, output.as_deref()),
     }
@@ -271,7 +303,7 @@ fn explore(args: &NetArgs, gspn: &Gspn) -> Result<ReachabilityGraph> {
     lab::gspn::explore(gspn, &explore_params(args), Interrupt::NEVER)
 }
 
-fn explore_params(args: &NetArgs) -> ExploreParams {
+pub(crate) fn explore_params(args: &NetArgs) -> ExploreParams {
     let defaults = ExploreParams::default();
     ExploreParams {
         max_states: args.max_states.unwrap_or(defaults.max_states),
@@ -279,7 +311,7 @@ fn explore_params(args: &NetArgs) -> ExploreParams {
     }
 }
 
-fn print_json(v: &Value) -> Result<()> {
+pub(crate) fn print_json(v: &Value) -> Result<()> {
     outln!("{}", serde_json::to_string_pretty(v)?)?;
     Ok(())
 }
@@ -524,8 +556,20 @@ fn progress_message(now: &ProgressSnapshot, markings_per_second: f64) -> String 
     }
 }
 
+/// The net of `args`, under `policy` when one is given.
+fn load_under(args: &NetArgs, policy: Option<&Path>) -> Result<(Net, Gspn)> {
+    let (net, gspn) = load(args)?;
+    Ok(match policy {
+        Some(p) => {
+            let g = lab::optimize::with_policy(&gspn, p)?;
+            (net, g)
+        }
+        None => (net, gspn),
+    })
+}
+
 fn solve(a: &SolveArgs) -> Result<()> {
-    let (_, gspn) = load(&a.net)?;
+    let (_, gspn) = load_under(&a.net, a.policy.as_deref())?;
     let measures = lab::gspn::parse_measures(&a.measures)?;
     let options = SolveOptions {
         explore: explore_params(&a.net),
@@ -737,7 +781,7 @@ fn select(a: &SelectArgs) -> Result<()> {
 }
 
 fn simulate(a: &SimulateArgs) -> Result<()> {
-    let (_, gspn) = load(&a.net)?;
+    let (_, gspn) = load_under(&a.net, a.policy.as_deref())?;
     let options = SimOptions {
         warmup: a.warmup,
         batches: a.batches,
@@ -826,7 +870,32 @@ fn simulate_with_progress(gspn: &Gspn, options: &SimOptions) -> Result<petri::Si
     result
 }
 
-fn convert(input: &Path, output: &Path) -> Result<()> {
+fn convert(input: &Path, output: &Path, params: &[String], default_rate: Option<f64>) -> Result<()> {
+    if lab::optimize::is_drn(output) {
+        let options = lab::optimize::OptimizeOptions {
+            default_rate,
+            ..Default::default()
+        };
+        let model = lab::optimize::write_drn(input, output, params, &options)?;
+        eprintln!(
+            "{} -> {}: {}",
+            input.display(),
+            output.display(),
+            lab::optimize::describe_model(&model)
+        );
+        return Ok(());
+    }
+    if lab::optimize::is_drn(input) {
+        anyhow::bail!(
+            "{}: a DRN file holds a state space, not a net; it converts to .drn only",
+            input.display()
+        );
+    }
+    if !params.is_empty() || default_rate.is_some() {
+        anyhow::bail!(
+            "--param and --default-rate apply to .drn output only (a net file keeps its parameters)"
+        );
+    }
     let net = lab::gspn::read_net(input)?;
     lab::gspn::write_net(&net, output)?;
     eprintln!(
@@ -876,6 +945,7 @@ fn family_cmd(family: Family, n: u32, output: Option<&Path>) -> Result<()> {
         Family::Fms => F::Fms,
         Family::Philosophers => F::Philosophers,
         Family::Robots => F::Robots,
+        Family::Corridors => F::Corridors,
     }
     .build(n)?;
     match output {

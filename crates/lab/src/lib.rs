@@ -19,7 +19,8 @@
 //! The work behind the command line's commands, shared with the Python
 //! package (`crates/py`) so that both say and print the same: [`gspn`]
 //! (loading, solving, analysing, simulating nets; the supervisor's
-//! decision), [`tours`] (the guide robot between named places),
+//! decision), [`optimize`] (nets with decisions and DRN files optimised,
+//! policies), [`tours`] (the guide robot between named places),
 //! [`batch`] (a suite run into a results folder), [`map_file`] (map
 //! files).
 #![warn(missing_docs)]
@@ -31,6 +32,7 @@ pub mod experiment;
 pub mod foxglove;
 pub mod gspn;
 pub mod map_file;
+pub mod optimize;
 pub mod page;
 pub mod pictures;
 pub mod record;

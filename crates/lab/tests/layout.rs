@@ -55,7 +55,7 @@ fn node_of_path(segments: &[&str]) -> Option<String> {
 
 /// The modules behind the commands, shared by `cli` and `py`: the only
 /// core modules that may use the middle layer `runs`.
-const COMMANDS: [&str; 4] = ["batch", "gspn", "map_file", "tours"];
+const COMMANDS: [&str; 5] = ["batch", "gspn", "map_file", "optimize", "tours"];
 
 /// Paths used after `crate::` in a file (`use crate::{a, b::c}` expanded).
 fn crate_paths(text: &str) -> Vec<Vec<String>> {

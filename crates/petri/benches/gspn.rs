@@ -11,6 +11,9 @@
 //!   (N = 5, ~10 s per run, is `#[ignore]`d: see below).
 //! * `supervisor_resolve` — the robot's decision: the supervisor net compiled
 //!   once per hypothesis, re-solved for new λ3..λ10 at every iteration.
+//! * `optimize` — nets with decisions: the `corridors` family's Markov
+//!   automaton compiled once, `Pmax` and `Tmin` solved with sound value
+//!   iteration (`DecisionNet::solve`); throughput in states/s.
 //!
 //! Divan reports times and throughputs only; the figures that describe each
 //! input (markings, bytes per marking, entries, iterations, residual) are
@@ -386,5 +389,48 @@ mod supervisor_resolve {
         bencher
             .with_inputs(|| &params[next.fetch_add(1, Ordering::Relaxed) % params.len()])
             .bench_local_values(|p| chain.solve(p, None, &SolveParams::default()).unwrap());
+    }
+}
+
+/// Nets with decisions (docs/gspn.md, *Decisions*): the `corridors` family
+/// (N robots choosing among three corridors) compiled once into its Markov
+/// automaton, then each property prepared and solved with sound value
+/// iteration for its rates — the hot loop of `gspn optimize`.
+mod optimize {
+    use super::*;
+    use petri::DecisionNet;
+    use petri::mdp::{OptimizeParams, Property};
+
+    fn bench(bencher: Bencher, n: u32, property: &str) {
+        let gspn = families::corridors_decide(n).instantiate(&Params::new()).unwrap();
+        let d = DecisionNet::build(&gspn, &explore_params()).unwrap();
+        let rates = d.rates(&Params::new(), None).unwrap();
+        let objective = d.objective(&Property::parse(property).unwrap()).unwrap();
+        let params = OptimizeParams::default();
+        let (model, first) = d.solve(&objective, &rates, &params).unwrap();
+        let s0 = model.initial_states()[0] as usize;
+        figure(format!("optimize/corridors {n} {property}"), || {
+            format!(
+                "{} states, {}: {:.6} ± {:.1e}, {} sweeps",
+                d.num_states(),
+                first.method,
+                first.value(s0),
+                first.error_bound(s0),
+                first.iterations
+            )
+        });
+        bencher
+            .counter(ItemsCount::new(d.num_states()))
+            .bench_local(|| d.solve(&objective, &rates, &params).unwrap());
+    }
+
+    #[divan::bench(args = [10, 20, 40], max_time = 3)]
+    fn pmax(bencher: Bencher, n: u32) {
+        bench(bencher, n, r#"Pmax=? [F "all_working"]"#);
+    }
+
+    #[divan::bench(args = [10, 20, 40], max_time = 3)]
+    fn tmin(bencher: Bencher, n: u32) {
+        bench(bencher, n, r#"Tmin=? [F "all_working" | "lost"]"#);
     }
 }

@@ -542,6 +542,23 @@ fn bottom_partition(outgoing: &Rows, n: usize) -> (Option<Components>, Vec<Vec<u
     (Some(c), bottoms, transient)
 }
 
+/// Every choice marking of `rg` must have been resolved by a policy
+/// ([`Gspn::with_policy`]): [`Error::Undecided`] names the first that was
+/// not.
+fn check_decided(gspn: &Gspn, rg: &ReachabilityGraph) -> Result<()> {
+    let mut firable = Vec::new();
+    for i in (0..rg.num_markings()).filter(|&i| rg.vanishing[i]) {
+        firable.clear();
+        let (a, b) = rg.range(i);
+        firable.extend(rg.transitions[a..b].iter().map(|&t| TransitionId(t)));
+        if gspn.is_choice(&firable) {
+            let m = rg.marking(crate::reachability::MarkingId(i as u32));
+            return Err(gspn.undecided(&m, &firable));
+        }
+    }
+    Ok(())
+}
+
 impl CompiledGspn {
     /// Generates the state space of `gspn` and compiles its CTMC.
     pub fn build(gspn: &Gspn, explore: &ExploreParams) -> Result<CompiledGspn> {
@@ -564,6 +581,9 @@ impl CompiledGspn {
     ) -> Result<CompiledGspn> {
         stop.check(COMPILING)?;
         stop.stage(Stage::Compiling);
+        if gspn.has_decisions() {
+            check_decided(&gspn, &rg)?;
+        }
         let start = Instant::now();
         let (tangible_id, mut tangible_rg) = tangible_numbering(&rg);
         let n = tangible_rg.len();

@@ -366,6 +366,47 @@ pub enum Error {
         /// The end time of each run.
         end_time: f64,
     },
+    /// A choice marking (docs/gspn.md, *Decisions*) was met by an analysis
+    /// that needs every choice made: a steady-state solve or a simulation
+    /// without a policy.
+    #[error(
+        "marking [{marking}] is a choice between {choices}: solve the net under a policy (--policy FILE, from `gspn optimize --policy-out`) or optimize it (`gspn optimize`)"
+    )]
+    Undecided {
+        /// The marking, formatted.
+        marking: String,
+        /// Its actions.
+        choices: String,
+    },
+    /// Decisions can be taken forever without time passing: an end
+    /// component of choice markings (or of a Markov automaton's
+    /// probabilistic states).
+    #[error(
+        "Zeno choice: {count} choice state(s) can be chosen in a cycle of immediate transitions forever, without time passing (e.g. {states}); give the cycle a timed transition or make one of its choices the only one"
+    )]
+    Zeno {
+        /// How many states form the end component.
+        count: usize,
+        /// A few of them, printed.
+        states: String,
+    },
+    /// A policy that does not fit the net it is applied to.
+    #[error("policy {source_name}: {message}")]
+    Policy {
+        /// The policy file (or "the policy").
+        source_name: String,
+        /// What does not fit.
+        message: String,
+    },
+    /// A property (`Pmax=? [F "goal"]`) that does not parse or does not fit
+    /// the model.
+    #[error("property `{text}`: {message}")]
+    Property {
+        /// The property as written.
+        text: String,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// Shorthand for `Result<T, petri::Error>`.

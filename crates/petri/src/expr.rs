@@ -234,6 +234,19 @@ impl Expr {
         });
     }
 
+    /// The expression with every parameter `n` for which `f(n)` gives an
+    /// expression replaced by it (labels by their conditions, say).
+    pub fn substitute(&self, f: &dyn Fn(&str) -> Option<Expr>) -> Expr {
+        match self {
+            Expr::Param(n) => f(n).unwrap_or_else(|| self.clone()),
+            Expr::Num(_) | Expr::Tokens(_) => self.clone(),
+            Expr::Neg(a) => Expr::Neg(Box::new(a.substitute(f))),
+            Expr::Not(a) => Expr::Not(Box::new(a.substitute(f))),
+            Expr::Binary(op, a, b) => Expr::Binary(*op, Box::new(a.substitute(f)), Box::new(b.substitute(f))),
+            Expr::Call(func, args) => Expr::Call(*func, args.iter().map(|a| a.substitute(f)).collect()),
+        }
+    }
+
     /// Whether the expression reads token counts.
     pub fn uses_tokens(&self) -> bool {
         let mut found = false;

@@ -6,10 +6,11 @@
 //! | [`fms`] | Ciardo & Trivedi's flexible manufacturing system (structure of the MCC `FMS-PT` nets) | grows ~ N⁶ |
 //! | [`philosophers`] | dining philosophers as in the MCC `Philosophers-PT` nets (either fork first; can deadlock) | 3^N markings |
 //! | [`robots_corridors`] | N robots sharing K one-way corridors (immediate choice of a free corridor) | C(N+K, K)-ish |
+//! | [`corridors_decide`] | N robots choosing among 3 corridors, fast and risky to slow and safe (decisions) | N = 40: 18,701 states, N = 100: 216,751 |
 //! | [`mm1k`] | M/M/1/K queue | K + 1 |
 
 use crate::error::{Error, Result};
-use crate::expr::Expr;
+use crate::expr::{BinOp, Expr};
 use crate::net::{ArcKind, Net, ParamKind, PlaceId, Servers, TransitionId};
 
 /// Most places plus transitions [`Family::build`] makes: a million nodes
@@ -29,6 +30,9 @@ pub enum Family {
     Philosophers,
     /// [`robots_corridors`] with 3 corridors: `n` robots (fixed structure).
     Robots,
+    /// [`corridors_decide`]: `n` robots choosing corridors (decisions;
+    /// fixed structure).
+    Corridors,
 }
 
 impl Family {
@@ -39,6 +43,7 @@ impl Family {
             Family::Fms => "fms",
             Family::Philosophers => "philosophers",
             Family::Robots => "robots",
+            Family::Corridors => "corridors",
         }
     }
 
@@ -60,6 +65,7 @@ impl Family {
             Family::Fms => fms(n, false),
             Family::Philosophers => philosophers(n),
             Family::Robots => robots_corridors(n, 3),
+            Family::Corridors => corridors_decide(n),
         }
     }
 
@@ -296,6 +302,64 @@ pub fn robots_corridors(n: u32, k: u32) -> Net {
         let t = net.add_timed(format!("leave{c}"), traverse.clone());
         arcs(&mut net, t, &[busy], &[free, working]);
     }
+    net
+}
+
+/// `n` robots choosing corridors, a net with decisions (docs/gspn.md,
+/// *Decisions*): an idle robot requests a passage (rate `r_request` = 0.5,
+/// infinite servers); a waiting robot takes a free corridor, the policy
+/// choosing which when several are free (decisions `enter1…3`). Corridor
+/// `c` is crossed at rate `r_cross_c` (3, 2, 1) but loses the robot at
+/// rate `r_crash_c` (0.3, 0.05, 0): fast and risky to slow and safe. A
+/// robot across works (rate `r_work` = 0.25, infinite servers) and goes
+/// back to idle; a lost robot stays lost. Labels `all_working`
+/// (`#Working = N`) and `lost` (`#Lost > 0`); reward model `trips` (an
+/// impulse per crossing).
+pub fn corridors_decide(n: u32) -> Net {
+    let mut net = Net::new(format!("corridors{n}"));
+    let request = rate(&mut net, "r_request", 0.5);
+    let work = rate(&mut net, "r_work", 0.25);
+    let idle = net.add_place("Idle", n);
+    let waiting = net.add_place("Waiting", 0u32);
+    let working = net.add_place("Working", 0u32);
+    let lost = net.add_place("Lost", 0u32);
+    let t = net.add_timed("request", request);
+    net.set_servers(t, Servers::Infinite);
+    arcs(&mut net, t, &[idle], &[waiting]);
+    let t = net.add_timed("work_done", work);
+    net.set_servers(t, Servers::Infinite);
+    arcs(&mut net, t, &[working], &[idle]);
+    let mut crossings = Vec::new();
+    for (c, (cross, crash)) in [(3.0, 0.3), (2.0, 0.05), (1.0, 0.0)].into_iter().enumerate() {
+        let c = c + 1;
+        let free = net.add_place(format!("Free{c}"), 1u32);
+        let busy = net.add_place(format!("Busy{c}"), 0u32);
+        let t = net.add_decision(format!("enter{c}"), 1);
+        arcs(&mut net, t, &[waiting, free], &[busy]);
+        let r = rate(&mut net, &format!("r_cross{c}"), cross);
+        let t = net.add_timed(format!("cross{c}"), r);
+        arcs(&mut net, t, &[busy], &[free, working]);
+        crossings.push((t, Expr::Num(1.0)));
+        if crash > 0.0 {
+            let r = rate(&mut net, &format!("r_crash{c}"), crash);
+            let t = net.add_timed(format!("crash{c}"), r);
+            arcs(&mut net, t, &[busy], &[free, lost]);
+        }
+    }
+    let compare = |op, place: &str, value: u32| {
+        Expr::Binary(
+            op,
+            Box::new(Expr::Tokens(place.into())),
+            Box::new(Expr::from(value)),
+        )
+    };
+    net.add_label("all_working", compare(BinOp::Eq, "Working", n));
+    net.add_label("lost", compare(BinOp::Gt, "Lost", 0));
+    net.add_reward(crate::net::RewardModel {
+        name: "trips".into(),
+        rate: None,
+        impulses: crossings,
+    });
     net
 }
 

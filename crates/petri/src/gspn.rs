@@ -5,11 +5,16 @@
 //! This module also holds the firing rule, shared by the state-space
 //! generator, the simulator and the property checks.
 
+pub mod policy;
+
 use std::collections::{BTreeMap, BTreeSet};
+
+use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::expr::Expr;
-use crate::net::{ArcKind, Net, Params, PlaceId, Servers, TransitionId, TransitionKind};
+use crate::net::{ArcKind, Label, Net, Params, PlaceId, RewardModel, Servers, TransitionId, TransitionKind};
+use policy::{Action, Policy};
 
 /// Timing of an instantiated transition.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,6 +84,14 @@ pub struct Gspn {
     outputs: PerTransition<u32>,
     inhibitors: PerTransition<u32>,
     delta: PerTransition<i64>,
+    /// Whether each transition is a decision.
+    decision: Vec<bool>,
+    /// Whether any is.
+    has_decisions: bool,
+    labels: Vec<Label>,
+    rewards: Vec<RewardModel>,
+    /// What to choose in the choice markings ([`Gspn::with_policy`]).
+    policy: Option<Arc<Policy>>,
 }
 
 impl Net {
@@ -285,6 +298,11 @@ impl Gspn {
             outputs: PerTransition::from_lists(outs),
             inhibitors: PerTransition::from_lists(inhs),
             delta: PerTransition::from_lists(deltas),
+            decision: net.transitions.iter().map(|t| t.decision).collect(),
+            has_decisions: net.has_decisions(),
+            labels: net.labels.clone(),
+            rewards: net.rewards.clone(),
+            policy: None,
         })
     }
 
@@ -606,6 +624,137 @@ impl Gspn {
             }
         }
         MarkingKind::Tangible
+    }
+
+    /// Whether the net has decision transitions.
+    #[inline]
+    pub fn has_decisions(&self) -> bool {
+        self.has_decisions
+    }
+
+    /// Whether `t` is a decision.
+    #[inline]
+    pub fn is_decision(&self, t: TransitionId) -> bool {
+        self.decision[t.index()]
+    }
+
+    /// The net's labels (named marking sets).
+    pub fn labels(&self) -> &[Label] {
+        &self.labels
+    }
+
+    /// The net's reward models.
+    pub fn rewards(&self) -> &[RewardModel] {
+        &self.rewards
+    }
+
+    /// The policy the net runs under, if any ([`Gspn::with_policy`]).
+    pub fn policy(&self) -> Option<&Policy> {
+        self.policy.as_deref()
+    }
+
+    /// This net run under `policy`: in every choice marking it reaches,
+    /// the policy's action is taken, so the net is an ordinary GSPN again
+    /// and every steady-state measure applies. The policy must name this
+    /// net's places and decisions ([`Policy::bind`]).
+    pub fn with_policy(&self, mut policy: Policy) -> Result<Gspn> {
+        policy.bind(self)?;
+        let mut g = self.clone();
+        g.policy = Some(Arc::new(policy));
+        Ok(g)
+    }
+
+    /// Whether the transitions `firable` in a vanishing marking make it a
+    /// **choice marking**: at least two decisions, or a decision and a
+    /// transition that is not one (docs/gspn.md, *Decisions*).
+    pub fn is_choice(&self, firable: &[TransitionId]) -> bool {
+        if !self.has_decisions {
+            return false;
+        }
+        let decisions = firable.iter().filter(|t| self.decision[t.index()]).count();
+        decisions >= 2 || (decisions == 1 && firable.len() >= 2)
+    }
+
+    /// [`firable`](Self::firable), with the choice markings resolved by the
+    /// net's policy when it has one: the chosen decision alone, or the
+    /// transitions that are not decisions (the random switch). Without a
+    /// policy a choice marking keeps every alternative. Nets without
+    /// decisions take the plain path. Errors: the policy says nothing about
+    /// a choice marking, or names an action that is not available there.
+    pub fn firable_resolved(&self, m: &[u32], out: &mut Vec<TransitionId>) -> Result<MarkingKind> {
+        let kind = self.firable(m, out);
+        if kind == MarkingKind::Tangible || !self.is_choice(out) {
+            return Ok(kind);
+        }
+        let Some(policy) = &self.policy else {
+            return Ok(kind);
+        };
+        match policy.action(m) {
+            None => Err(Error::Policy {
+                source_name: policy.source_name().to_string(),
+                message: format!(
+                    "it says nothing about the choice marking [{}] (choices: {})",
+                    self.format_marking(m),
+                    self.describe_choices(out)
+                ),
+            }),
+            Some(Action::Fire(t)) if out.contains(&t) && self.is_decision(t) => {
+                out.clear();
+                out.push(t);
+                Ok(kind)
+            }
+            Some(Action::Random) if out.iter().any(|t| !self.is_decision(*t)) => {
+                out.retain(|t| !self.decision[t.index()]);
+                Ok(kind)
+            }
+            Some(action) => Err(Error::Policy {
+                source_name: policy.source_name().to_string(),
+                message: format!(
+                    "it chooses {} in marking [{}], which offers only: {}",
+                    action.describe(self),
+                    self.format_marking(m),
+                    self.describe_choices(out)
+                ),
+            }),
+        }
+    }
+
+    /// [`firable_resolved`](Self::firable_resolved), failing with
+    /// [`Error::Undecided`] on a choice marking that no policy resolves.
+    pub fn firable_decided(&self, m: &[u32], out: &mut Vec<TransitionId>) -> Result<MarkingKind> {
+        let kind = self.firable_resolved(m, out)?;
+        if kind == MarkingKind::Vanishing && self.is_choice(out) {
+            return Err(self.undecided(m, out));
+        }
+        Ok(kind)
+    }
+
+    /// The error for the choice marking `m` with its firable transitions.
+    pub(crate) fn undecided(&self, m: &[u32], firable: &[TransitionId]) -> Error {
+        Error::Undecided {
+            marking: self.format_marking(m),
+            choices: self.describe_choices(firable),
+        }
+    }
+
+    /// The actions of a choice marking whose firable transitions are
+    /// `firable`: each decision, and `random (…)` over the others.
+    pub(crate) fn describe_choices(&self, firable: &[TransitionId]) -> String {
+        let names = self.transition_names();
+        let mut parts: Vec<String> = firable
+            .iter()
+            .filter(|t| self.is_decision(**t))
+            .map(|t| names[t.index()].clone())
+            .collect();
+        let random: Vec<&str> = firable
+            .iter()
+            .filter(|t| !self.is_decision(**t))
+            .map(|t| names[t.index()].as_str())
+            .collect();
+        if !random.is_empty() {
+            parts.push(format!("random ({})", random.join(", ")));
+        }
+        parts.join(", ")
     }
 
     /// Formats a marking compactly: the marked places, `P3 P7 Q(2)`.

@@ -40,6 +40,7 @@
 #![warn(missing_docs)]
 
 pub mod ctmc;
+pub mod decision;
 pub mod error;
 pub mod expr;
 pub mod families;
@@ -51,7 +52,9 @@ pub mod io;
 pub mod krylov;
 mod linear;
 mod marking;
+pub mod mdp;
 pub mod net;
+pub use gspn::policy;
 pub mod properties;
 pub mod reachability;
 mod rows;
@@ -62,6 +65,7 @@ pub mod suggest;
 mod vanishing;
 
 pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
+pub use decision::{ChoiceReport, DecisionNet, NetObjective};
 pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
 pub use gspn::{Gspn, MarkingKind, Timing};
@@ -72,9 +76,10 @@ pub use invariants::{
     NamedTerm, p_invariants, structural_bounds, t_invariants,
 };
 pub use net::{
-    Arc, ArcKind, Net, Param, ParamKind, Params, Place, PlaceId, Servers, Transition, TransitionId,
-    TransitionKind,
+    Arc, ArcKind, Label, Net, Param, ParamKind, Params, Place, PlaceId, RewardModel, Servers, Transition,
+    TransitionId, TransitionKind,
 };
+pub use policy::{Action, Policy};
 pub use properties::Properties;
 pub use reachability::{
     COMPILE_BYTES_PER_EDGE, COMPILE_BYTES_PER_STATE, Edge, ExploreParams, ExploreStats, FALLBACK_MAX_MEMORY,

@@ -112,6 +112,10 @@ pub struct Transition {
     pub name: String,
     /// Timed or immediate.
     pub kind: TransitionKind,
+    /// A **decision** (immediate transitions only): where it is enabled at
+    /// the highest priority, a policy chooses whether it fires instead of
+    /// chance (docs/gspn.md, *Decisions*). Its weight plays no part.
+    pub decision: bool,
     /// Layout position, if the file has one.
     pub position: Option<(f64, f64)>,
     /// Free text.
@@ -123,6 +127,31 @@ impl Transition {
     pub fn is_immediate(&self) -> bool {
         matches!(self.kind, TransitionKind::Immediate { .. })
     }
+}
+
+/// A named set of markings (a *label*, as PRISM and Storm call it): the
+/// markings where `expr`, an expression over token counts, is non-zero.
+/// Properties name it in quotes (`Pmax=? [F "goal"]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Label {
+    /// Its name.
+    pub name: String,
+    /// The condition, e.g. `#P3 = 1`.
+    pub expr: Expr,
+}
+
+/// A reward model: a **rate** earned per unit of time spent in a tangible
+/// marking (an expression over token counts and parameters) and
+/// **impulses** earned each time a transition fires (expressions over
+/// parameters). Properties name it: `R{"cost"}min=? [F "goal"]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RewardModel {
+    /// Its name.
+    pub name: String,
+    /// Reward per unit of time in a marking, if any.
+    pub rate: Option<Expr>,
+    /// Reward per firing, by transition.
+    pub impulses: Vec<(TransitionId, Expr)>,
 }
 
 /// The three kinds of arc.
@@ -174,6 +203,10 @@ pub struct Net {
     pub transitions: Vec<Transition>,
     /// Arcs.
     pub arcs: Vec<Arc>,
+    /// Named sets of markings, in file order.
+    pub labels: Vec<Label>,
+    /// Reward models, in file order.
+    pub rewards: Vec<RewardModel>,
     /// Free text.
     pub doc: Option<String>,
 }
@@ -317,10 +350,46 @@ impl Net {
         self.transitions.push(Transition {
             name: name.into(),
             kind,
+            decision: false,
             position: None,
             doc: None,
         });
         TransitionId(self.transitions.len() as u32 - 1)
+    }
+
+    /// Adds a decision: an immediate transition that a policy chooses
+    /// (weight 1, which plays no part).
+    pub fn add_decision(&mut self, name: impl Into<String>, priority: u32) -> TransitionId {
+        let t = self.add_immediate(name, 1.0, priority);
+        self.transitions[t.index()].decision = true;
+        t
+    }
+
+    /// Whether the net has a decision transition.
+    pub fn has_decisions(&self) -> bool {
+        self.transitions.iter().any(|t| t.decision)
+    }
+
+    /// Adds (or replaces) a label: the markings where `expr` holds.
+    pub fn add_label(&mut self, name: impl Into<String>, expr: Expr) {
+        let name = name.into();
+        match self.labels.iter_mut().find(|l| l.name == name) {
+            Some(l) => l.expr = expr,
+            None => self.labels.push(Label { name, expr }),
+        }
+    }
+
+    /// The label called `name`.
+    pub fn label(&self, name: &str) -> Option<&Label> {
+        self.labels.iter().find(|l| l.name == name)
+    }
+
+    /// Adds (or replaces) a reward model.
+    pub fn add_reward(&mut self, reward: RewardModel) {
+        match self.rewards.iter_mut().find(|r| r.name == reward.name) {
+            Some(r) => *r = reward,
+            None => self.rewards.push(reward),
+        }
     }
 
     /// Sets the server semantics of a timed transition (no effect on immediate ones).
@@ -393,6 +462,14 @@ impl Net {
                 a.transition.0 -= 1;
             }
         }
+        for r in &mut net.rewards {
+            r.impulses.retain(|(u, _)| *u != t);
+            for (u, _) in &mut r.impulses {
+                if u.0 > t.0 {
+                    u.0 -= 1;
+                }
+            }
+        }
         Ok(net)
     }
 
@@ -433,6 +510,7 @@ impl Net {
                 });
             }
         }
+        self.validate_decisions_labels_rewards()?;
         for (i, a) in self.arcs.iter().enumerate() {
             if a.place.index() >= self.places.len() {
                 return Err(Error::UnknownNode {
@@ -449,6 +527,67 @@ impl Net {
                     name: format!("index {}", a.transition.0),
                     hint: String::new(),
                 });
+            }
+        }
+        Ok(())
+    }
+
+    /// Decisions are immediate; label and reward names are unique and
+    /// non-empty; impulses name transitions of the net, once each.
+    fn validate_decisions_labels_rewards(&self) -> Result<()> {
+        if let Some(t) = self.transitions.iter().find(|t| t.decision && !t.is_immediate()) {
+            return Err(Error::Invalid(format!(
+                "transition `{}` is timed: only immediate transitions can be decisions",
+                t.name
+            )));
+        }
+        let mut labels = std::collections::BTreeSet::new();
+        for l in &self.labels {
+            if l.name.is_empty() || l.name.contains('"') {
+                return Err(Error::Invalid(format!(
+                    "label `{}`: a label's name must be non-empty and hold no `\"`",
+                    l.name
+                )));
+            }
+            if !labels.insert(l.name.as_str()) {
+                return Err(Error::DuplicateName {
+                    name: l.name.clone(),
+                    first: "a label",
+                    second: "a label",
+                });
+            }
+        }
+        let mut rewards = std::collections::BTreeSet::new();
+        for r in &self.rewards {
+            if r.name.is_empty() || r.name.contains('"') {
+                return Err(Error::Invalid(format!(
+                    "reward model `{}`: a reward model's name must be non-empty and hold no `\"`",
+                    r.name
+                )));
+            }
+            if !rewards.insert(r.name.as_str()) {
+                return Err(Error::DuplicateName {
+                    name: r.name.clone(),
+                    first: "a reward model",
+                    second: "a reward model",
+                });
+            }
+            let mut seen = std::collections::BTreeSet::new();
+            for (t, _) in &r.impulses {
+                let Some(tr) = self.transitions.get(t.index()) else {
+                    return Err(Error::UnknownNode {
+                        arc: format!("reward model `{}`", r.name),
+                        expected: "transition",
+                        name: format!("index {}", t.0),
+                        hint: String::new(),
+                    });
+                };
+                if !seen.insert(*t) {
+                    return Err(Error::Invalid(format!(
+                        "reward model `{}` gives transition `{}` two impulses",
+                        r.name, tr.name
+                    )));
+                }
             }
         }
         Ok(())

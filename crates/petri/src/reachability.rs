@@ -211,9 +211,11 @@ impl ReachabilityGraph {
     /// Markings are numbered in breadth-first discovery order (successors in
     /// transition order), the same on any number of threads: rounds of
     /// markings are expanded and looked up in parallel, the new successors
-    /// inserted in order. Errors: [`Error::MemoryLimit`] (see
-    /// [`ExploreParams::max_memory`]), [`Error::StateLimit`],
-    /// [`Error::TokenOverflow`].
+    /// inserted in order. A choice marking (docs/gspn.md, *Decisions*) has
+    /// an edge per alternative, unless the net runs under a policy
+    /// ([`Gspn::with_policy`]), whose choice it then follows. Errors:
+    /// [`Error::MemoryLimit`] (see [`ExploreParams::max_memory`]),
+    /// [`Error::StateLimit`], [`Error::TokenOverflow`], [`Error::Policy`].
     pub fn explore(gspn: &Gspn, params: &ExploreParams) -> Result<ReachabilityGraph> {
         Self::explore_interruptible(gspn, params, Interrupt::NEVER)
     }
@@ -505,7 +507,7 @@ impl Batch {
             for (mx, &c) in self.max_tokens.iter_mut().zip(&self.cur) {
                 *mx = (*mx).max(c);
             }
-            let kind = gspn.firable(&self.cur, &mut self.firable);
+            let kind = gspn.firable_resolved(&self.cur, &mut self.firable)?;
             self.vanishing.push(kind == MarkingKind::Vanishing);
             let total_weight: f64 = if kind == MarkingKind::Vanishing {
                 self.firable.iter().map(|&t| gspn.weight(t).unwrap_or(1.0)).sum()
@@ -585,7 +587,8 @@ fn largest_successor_counts(gspn: &Gspn, store: &MarkingStore, range: std::ops::
     let mut firable = Vec::new();
     for i in range {
         store.decode(i, &mut m);
-        gspn.firable(&m, &mut firable);
+        // A policy that does not fit fails in the expansion itself.
+        let _ = gspn.firable_resolved(&m, &mut firable);
         for &t in &firable {
             for &(p, d) in gspn.delta(t) {
                 let c = i64::from(m[p as usize]) + d;

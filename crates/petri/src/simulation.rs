@@ -705,7 +705,7 @@ impl<'a> Simulator<'a> {
         }
         let mut chain = 0u64;
         loop {
-            let kind = self.gspn.firable(&self.marking, &mut self.firable);
+            let kind = self.gspn.firable_decided(&self.marking, &mut self.firable)?;
             let measuring = next_k >= 1;
             match kind {
                 MarkingKind::Vanishing => {
@@ -863,7 +863,8 @@ impl<'a> Simulator<'a> {
         const SHOWN: usize = 3;
         let mut seen: Vec<Vec<u32>> = Vec::new();
         for _ in 0..STEPS {
-            if self.gspn.firable(&self.marking, &mut self.firable) != MarkingKind::Vanishing {
+            let kind = self.gspn.firable_resolved(&self.marking, &mut self.firable);
+            if kind.unwrap_or(MarkingKind::Tangible) != MarkingKind::Vanishing {
                 break;
             }
             if seen.len() < DISTINCT && !seen.contains(&self.marking) {

@@ -95,11 +95,14 @@ impl Accumulator {
     }
 }
 
-/// Eliminates every vanishing marking of `rg`. `tangible_id` maps RG
-/// indices to tangible ids (`u32::MAX` for vanishing markings).
+/// Eliminates every vanishing marking of `rg` that `tangible_id` does not
+/// keep. `tangible_id` maps RG indices to the ids of the markings kept
+/// (`u32::MAX` for those eliminated): the tangible ones, and for a net
+/// with decisions its choice markings too, at which the elimination stops
+/// as at a tangible marking.
 pub(crate) fn eliminate(gspn: &Gspn, rg: &ReachabilityGraph, tangible_id: &[u32]) -> Result<Elimination> {
     let n = rg.num_markings();
-    let nt = rg.num_tangible();
+    let nt = tangible_id.iter().filter(|&&k| k != NONE).count();
     let mut el = Elimination {
         slot: vec![NONE; n],
         d_start: vec![0],
@@ -112,7 +115,7 @@ pub(crate) fn eliminate(gspn: &Gspn, rg: &ReachabilityGraph, tangible_id: &[u32]
     let mut local = vec![NONE; n];
     tarjan(
         rg,
-        |v| rg.vanishing[v as usize],
+        |v| tangible_id[v as usize] == NONE,
         |scc| -> Result<()> {
             let single = scc.len() == 1 && {
                 let (a, b) = rg.range(scc[0] as usize);

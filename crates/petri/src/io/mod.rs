@@ -43,6 +43,9 @@
 //! | petrinav TOML | yes | yes | `.toml` | [`toml_format`] |
 //! | Graphviz DOT | no | yes | `.dot`, `.gv` | [`dot`] |
 //!
+//! Storm's DRN format holds state spaces, not nets (Markov chains, MDPs,
+//! Markov automata): [`drn`] reads and writes [`crate::mdp::Model`]s.
+//!
 //! Each module documents what its format holds, the defaults applied when an
 //! attribute is absent, and what is refused. In short:
 //!
@@ -82,6 +85,7 @@ use crate::expr::Expr;
 use crate::net::Net;
 
 pub mod dot;
+pub mod drn;
 pub mod pnml;
 pub mod pnpro;
 pub mod toml_format;

@@ -116,7 +116,12 @@
 //!
 //! - Net: `<doc>`, and one `<parameter name kind value suggested doc>` per
 //!   parameter in order (`kind` is `int` or `real`; the other attributes are
-//!   written when present).
+//!   written when present); one `<label name expr>` per label and one
+//!   `<reward name rate>` (with an `<impulse transition value>` per
+//!   impulse) per reward model.
+//! - A decision (docs/gspn.md, *Decisions*) is an immediate transition
+//!   with `<decision><value>true</value></decision>` in its block; other
+//!   tools see an ordinary immediate transition.
 //! - Place: `<initialMarking>` holds the value of the marking whenever it
 //!   evaluates to a whole number with the parameters' values (other tools
 //!   see that); when the marking is anything but a plain number, the
@@ -383,7 +388,47 @@ impl<'s> Reader<'s> {
         for obj in &objects.arcs {
             self.with(*obj, |r, n| r.arc(n, &ends, &mut net))?;
         }
+        for ts in elements(net_el).filter(|n| is_petrinav(*n)) {
+            self.net_rewards(ts, &mut net)?;
+        }
         Ok(net)
+    }
+
+    /// The reward models of a net's petrinav block (read once the
+    /// transitions they name are known).
+    fn net_rewards(&self, ts: Node<'_, '_>, net: &mut Net) -> Result<()> {
+        for item in elements(ts).filter(|n| n.tag_name().name() == "reward") {
+            let name = item
+                .attribute("name")
+                .filter(|n| !n.is_empty())
+                .ok_or_else(|| self.error(item, "<reward> without a `name`".into()))?;
+            let owner = format!("reward model `{name}`");
+            let expr_attr = |node: Node<'_, '_>, attr: &str| -> Result<Option<Expr>> {
+                node.attribute(attr)
+                    .map(|t| parse_expr(t, || self.attr_loc(node, attr), || format!("{owner}, `{attr}`")))
+                    .transpose()
+            };
+            let rate = expr_attr(item, "rate")?;
+            let mut impulses = Vec::new();
+            for imp in elements(item).filter(|n| n.tag_name().name() == "impulse") {
+                let tname = imp.attribute("transition").unwrap_or_default();
+                let t = net.transition_id(tname).ok_or_else(|| Error::UnknownNode {
+                    arc: format!("{}: impulse of {owner}", self.loc(imp)),
+                    expected: "transition",
+                    name: tname.to_string(),
+                    hint: crate::suggest::hint(tname, net.transitions.iter().map(|t| t.name.as_str())),
+                })?;
+                let value = expr_attr(imp, "value")?
+                    .ok_or_else(|| self.error(imp, format!("{owner}: <impulse> without a `value`")))?;
+                impulses.push((t, value));
+            }
+            net.rewards.push(crate::net::RewardModel {
+                name: name.to_string(),
+                rate,
+                impulses,
+            });
+        }
+        Ok(())
     }
 
     /// Collects the net's objects, flattening pages (without recursion, so
@@ -630,6 +675,21 @@ impl<'s> Reader<'s> {
                         doc: item.attribute("doc").map(str::to_string),
                     });
                 }
+                "label" => {
+                    let name = item
+                        .attribute("name")
+                        .filter(|n| !n.is_empty())
+                        .ok_or_else(|| self.error(item, "<label> without a `name`".into()))?;
+                    let text = item
+                        .attribute("expr")
+                        .ok_or_else(|| self.error(item, format!("label `{name}` without an `expr`")))?;
+                    let expr =
+                        parse_expr(text, || self.attr_loc(item, "expr"), || format!("label `{name}`"))?;
+                    net.labels.push(crate::net::Label {
+                        name: name.to_string(),
+                        expr,
+                    });
+                }
                 _ => {}
             }
         }
@@ -785,6 +845,7 @@ impl<'s> Reader<'s> {
         let mut priority = None;
         let mut servers = Servers::Single;
         let mut doc = None;
+        let mut decision = false;
         for (item, source) in Self::attributes(node) {
             let tag = item.tag_name().name();
             let blank = value_text(item).trim().is_empty();
@@ -802,8 +863,15 @@ impl<'s> Reader<'s> {
                 }
                 ("servers", Source::Petrinav) => servers = self.servers(item, &owner)?,
                 ("doc", Source::Petrinav) => doc = Some(value_text(item)),
+                ("decision", Source::Petrinav) => decision = self.boolean(item, &owner)?,
                 _ => {}
             }
+        }
+        if decision && timed {
+            return Err(self.error(
+                node,
+                format!("{owner} is a decision but timed: decisions are immediate (<timed> false)"),
+            ));
         }
         let kind = if timed {
             TransitionKind::Timed { rate, servers }
@@ -815,6 +883,7 @@ impl<'s> Reader<'s> {
         };
         Ok(Transition {
             kind,
+            decision,
             position: self.position(node, &owner)?,
             doc,
             name,
@@ -1027,7 +1096,7 @@ const TOOL_OPEN: &str = "<toolspecific tool=\"petrinav\" version=\"1\">\n";
 /// when it has neither).
 fn push_net_tools(out: &mut String, net: &Net) -> Result<()> {
     let net_what = || "the net".to_string();
-    if net.doc.is_some() || !net.params.is_empty() {
+    if net.doc.is_some() || !net.params.is_empty() || !net.labels.is_empty() || !net.rewards.is_empty() {
         out.push_str("    ");
         out.push_str(TOOL_OPEN);
         if let Some(doc) = &net.doc {
@@ -1052,7 +1121,40 @@ fn push_net_tools(out: &mut String, net: &Net) -> Result<()> {
             }
             out.push_str("/>\n");
         }
+        push_labels_and_rewards(out, net)?;
         out.push_str("    </toolspecific>\n");
+    }
+    Ok(())
+}
+
+/// `<label name expr/>` per label and `<reward name rate>` with an
+/// `<impulse transition value/>` per impulse, per reward model.
+fn push_labels_and_rewards(out: &mut String, net: &Net) -> Result<()> {
+    for l in &net.labels {
+        let what = || format!("label `{}`", l.name);
+        out.push_str("      <label");
+        push_attr(out, "name", &l.name, &what)?;
+        push_attr(out, "expr", &l.expr.to_string(), &what)?;
+        out.push_str("/>\n");
+    }
+    for r in &net.rewards {
+        let what = || format!("reward model `{}`", r.name);
+        out.push_str("      <reward");
+        push_attr(out, "name", &r.name, &what)?;
+        if let Some(rate) = &r.rate {
+            push_attr(out, "rate", &rate.to_string(), &what)?;
+        }
+        out.push_str(">\n");
+        for (t, value) in &r.impulses {
+            let Some(tr) = net.transitions.get(t.index()) else {
+                continue;
+            };
+            out.push_str("        <impulse");
+            push_attr(out, "transition", &tr.name, &what)?;
+            push_attr(out, "value", &value.to_string(), &what)?;
+            out.push_str("/>\n");
+        }
+        out.push_str("      </reward>\n");
     }
     Ok(())
 }
@@ -1123,6 +1225,9 @@ fn push_transition(out: &mut String, t: &Transition, id: &str) -> Result<()> {
                 push_value(out, ind, "timed", "false", &what)?;
                 push_value(out, ind, "weight", &weight.to_string(), &what)?;
                 push_value(out, ind, "priority", &priority.to_string(), &what)?;
+                if t.decision {
+                    push_value(out, ind, "decision", "true", &what)?;
+                }
             }
         }
         if let Some(doc) = &t.doc {

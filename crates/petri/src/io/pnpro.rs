@@ -12,6 +12,7 @@
 //! | `<place name marking>` | [`Place`], `marking` an expression | `marking` 0 |
 //! | `<transition type="EXP" delay nservers>` | timed; `delay` is the **rate** expression | `delay` 1.0; `nservers` absent: **infinite** servers |
 //! | `<transition type="IMM" weight priority>` | immediate | `weight` 1.0, `priority` 1 |
+//! | `<transition type="IMM" weight="0">` | a **decision** (Storm's convention: a weight-0 immediate transition is a choice of its own) | |
 //! | `<constant name consttype value>` | [`Param`] with its value | `INTEGER` → int, `REAL` → real |
 //! | `<template name type last-binding>` | [`Param`] without value, `last-binding` as the suggested value | |
 //! | `<arc kind head tail mult>` | `INPUT` (tail = place, head = transition), `OUTPUT` (tail = transition, head = place), `INHIBITOR` (tail = place) | `mult` 1 |
@@ -57,7 +58,8 @@
 //!   parameters are placed below the net.
 //!
 //! What PNPRO cannot hold: place **capacities** (writing refuses them rather
-//! than change the net's behaviour silently), documentation, a value
+//! than change the net's behaviour silently), labels and reward models
+//! (refused rather than lost), documentation, a value
 //! suggested for a parameter that has a value, k = 1 servers as distinct from
 //! a single server, and a timed transition **without rate** (the `delay` is
 //! omitted, which GreatSPN reads as rate 1). Names are written as they are:
@@ -527,6 +529,21 @@ impl<'s> Reader<'s> {
                 ));
             }
         };
+        // Storm's convention: an immediate transition of weight 0 is a
+        // choice of its own, a decision (the literal number 0 only).
+        let (kind, decision) = match kind {
+            TransitionKind::Immediate {
+                weight: Expr::Num(0.0),
+                priority,
+            } => (
+                TransitionKind::Immediate {
+                    weight: Expr::Num(1.0),
+                    priority,
+                },
+                true,
+            ),
+            kind => (kind, false),
+        };
         let position = self.position(node, &owner)?;
         self.register(
             names,
@@ -536,6 +553,7 @@ impl<'s> Reader<'s> {
         net.transitions.push(Transition {
             name,
             kind,
+            decision,
             position,
             doc: None,
         });
@@ -669,10 +687,18 @@ fn measure_assignments<'a>(project: Node<'a, '_>, gspn: &str) -> HashMap<&'a str
 
 /// Writes a net as a GreatSPN editor project.
 ///
-/// Fails if a place has a capacity (PNPRO cannot hold one) or if a name
-/// contains a character XML cannot represent.
+/// Fails if a place has a capacity, or the net labels or reward models
+/// (PNPRO cannot hold them), or if a name contains a character XML cannot
+/// represent.
 pub fn write_pnpro(net: &Net) -> Result<String> {
     net.validate()?;
+    if !net.labels.is_empty() || !net.rewards.is_empty() {
+        return Err(Error::Invalid(format!(
+            "PNPRO cannot hold labels or reward models (the net has {} label(s) and {} reward model(s)); write the net as TOML or PNML instead",
+            net.labels.len(),
+            net.rewards.len()
+        )));
+    }
     if let Some(p) = net.places.iter().find(|p| p.capacity.is_some()) {
         return Err(Error::Invalid(format!(
             "PNPRO cannot hold place capacities (place `{}` has capacity {}); write the net as TOML or PNML instead",
@@ -719,7 +745,9 @@ pub fn write_pnpro(net: &Net) -> Result<String> {
             }
             TransitionKind::Immediate { weight, priority } => {
                 out.push_str(" type=\"IMM\"");
-                if *weight != Expr::Num(1.0) {
+                if t.decision {
+                    out.push_str(" weight=\"0\"");
+                } else if *weight != Expr::Num(1.0) {
                     push_attr(&mut out, "weight", &weight.to_string(), &what)?;
                 }
                 if *priority != Expr::Num(1.0) {

@@ -36,6 +36,20 @@
 //! priority = 1                   # immediate: default 1
 //! inputs = ["P0"]
 //! outputs = ["P1"]
+//!
+//! [[transition]]
+//! name = "t1"
+//! kind = "immediate"
+//! decision = true                # a policy chooses it (no weight)
+//! inputs = ["P0"]
+//! outputs = ["P2"]
+//!
+//! [labels]                       # named marking sets, for properties ("goal")
+//! goal = "#P3 = 1"
+//!
+//! [rewards.cost]                 # a reward model, for R{"cost"} properties
+//! rate = "#P1 + 2 * #P2"         # earned per unit of time in a marking
+//! impulse = { t2 = 1, t0 = "p" } # earned at each firing
 //! ```
 //!
 //! - A parameter is either a number (a real parameter with that value) or a
@@ -52,6 +66,13 @@
 //!   multiplicities, an array mixing names and one-entry tables:
 //!   `inputs = ["P1", { P1 = 2 }]`.
 //! - `servers = 1` means k = 1 server, which behaves like `"single"`.
+//! - `decision = true` makes an immediate transition a decision
+//!   (docs/gspn.md, *Decisions*); it is an error on a timed transition and
+//!   together with `weight`, which a decision does not have.
+//! - `[labels]` maps a name to a condition over token counts; `[rewards.NAME]`
+//!   holds a reward model's `rate` (an expression over token counts and
+//!   parameters, per unit of time) and `impulse` (transition = expression
+//!   over parameters, per firing). Both are written after the transitions.
 //!
 //! # Writing
 //!
@@ -89,6 +110,18 @@ struct FileSpec {
     params: BTreeMap<Spanned<String>, Spanned<ParamSpec>>,
     place: Option<Vec<Spanned<PlaceSpec>>>,
     transition: Option<Vec<Spanned<TransitionSpec>>>,
+    #[serde(default)]
+    labels: BTreeMap<Spanned<String>, Spanned<String>>,
+    #[serde(default)]
+    rewards: BTreeMap<Spanned<String>, Spanned<RewardSpec>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RewardSpec {
+    rate: Option<Spanned<Value>>,
+    #[serde(default)]
+    impulse: BTreeMap<Spanned<String>, Spanned<Value>>,
 }
 
 #[derive(Deserialize)]
@@ -119,6 +152,7 @@ struct TransitionSpec {
     servers: Option<Spanned<ServersSpec>>,
     weight: Option<Spanned<Value>>,
     priority: Option<Spanned<Value>>,
+    decision: Option<Spanned<bool>>,
     #[serde(default)]
     inputs: ArcList,
     #[serde(default)]
@@ -356,11 +390,13 @@ pub fn read_toml(text: &str, source: &str) -> Result<Net> {
     let Some(items) = super::toml_split::items(text) else {
         return read_whole(text, source);
     };
-    let head = parse_spec(text, items.head(), source)?;
+    let mut head = parse_spec(text, items.head(), source)?;
     if head.place.is_some() || head.transition.is_some() {
         // `place = [...]` written inline in the head: not cut.
         return read_whole(text, source);
     }
+    let labels = std::mem::take(&mut head.labels);
+    let rewards = std::mem::take(&mut head.rewards);
     let mut b = Builder::new(text, source, head)?;
     for (kind, is_place) in [(ItemKind::Place, true), (ItemKind::Transition, false)] {
         for range in items.of(kind) {
@@ -393,7 +429,12 @@ pub fn read_toml(text: &str, source: &str) -> Result<Net> {
             }
         }
     }
-    super::finish(b.net)
+    let r = Reader {
+        source,
+        text,
+        offset: 0,
+    };
+    b.finish(&r, labels, rewards)
 }
 
 /// Parses the whole text at once.
@@ -401,6 +442,8 @@ fn read_whole(text: &str, source: &str) -> Result<Net> {
     let mut spec = parse_spec(text, 0..text.len(), source)?;
     let places = spec.place.take().unwrap_or_default();
     let transitions = spec.transition.take().unwrap_or_default();
+    let labels = std::mem::take(&mut spec.labels);
+    let rewards = std::mem::take(&mut spec.rewards);
     let r = Reader {
         source,
         text,
@@ -413,7 +456,7 @@ fn read_whole(text: &str, source: &str) -> Result<Net> {
     for t in transitions {
         b.transition(&r, t)?;
     }
-    super::finish(b.net)
+    b.finish(&r, labels, rewards)
 }
 
 /// The schema read from `text[range]`; errors located in the whole text.
@@ -515,6 +558,43 @@ impl Builder {
         self.net.transitions.push(transition);
         Ok(())
     }
+
+    /// The named marking sets and the reward models (they name places and
+    /// transitions, so they come once all are read), then the net checked
+    /// as a whole.
+    fn finish(
+        mut self,
+        r: &Reader<'_>,
+        labels: BTreeMap<Spanned<String>, Spanned<String>>,
+        rewards: BTreeMap<Spanned<String>, Spanned<RewardSpec>>,
+    ) -> Result<Net> {
+        let mut labels: Vec<_> = labels.into_iter().collect();
+        labels.sort_by_key(|(key, _)| key.span().start);
+        for (key, text) in labels {
+            let name = key.into_inner();
+            let owner = format!("label `{name}`");
+            let expr = r.expr(text.map(Value::Text), &owner, "condition")?;
+            self.net.labels.push(crate::net::Label { name, expr });
+        }
+        let mut rewards: Vec<_> = rewards.into_iter().collect();
+        rewards.sort_by_key(|(key, _)| key.span().start);
+        for (key, reward) in rewards {
+            let reward = r.reward(key.into_inner(), reward.into_inner(), &self.net)?;
+            self.net.rewards.push(reward);
+        }
+        super::finish(self.net)
+    }
+}
+
+trait SpannedMap<T> {
+    fn map<U>(self, f: impl FnOnce(T) -> U) -> Spanned<U>;
+}
+
+impl<T> SpannedMap<T> for Spanned<T> {
+    fn map<U>(self, f: impl FnOnce(T) -> U) -> Spanned<U> {
+        let span = self.span();
+        Spanned::new(span, f(self.into_inner()))
+    }
 }
 
 /// Errors and expressions of one piece of the text: `offset` is where the
@@ -583,6 +663,31 @@ impl Reader<'_> {
         })
     }
 
+    fn reward(&self, name: String, spec: RewardSpec, net: &Net) -> Result<crate::net::RewardModel> {
+        let owner = format!("reward model `{name}`");
+        let rate = spec.rate.map(|v| self.expr(v, &owner, "rate")).transpose()?;
+        let mut impulses = Vec::new();
+        let mut entries: Vec<_> = spec.impulse.into_iter().collect();
+        entries.sort_by_key(|(key, _)| key.span().start);
+        for (key, value) in entries {
+            let Some(t) = net.transition_id(key.get_ref()) else {
+                let hint =
+                    crate::suggest::hint(key.get_ref(), net.transitions.iter().map(|t| t.name.as_str()));
+                return Err(Error::UnknownNode {
+                    arc: format!(
+                        "{}: impulse of {owner}",
+                        location_at(self.source, self.text, self.offset + key.span().start)
+                    ),
+                    expected: "transition",
+                    name: key.into_inner(),
+                    hint,
+                });
+            };
+            impulses.push((t, self.expr(value, &owner, "impulse")?));
+        }
+        Ok(crate::net::RewardModel { name, rate, impulses })
+    }
+
     fn transition(
         &self,
         t: &TransitionSpec,
@@ -598,9 +703,14 @@ impl Reader<'_> {
         };
         let kind = match t.kind {
             KindSpec::Timed => {
-                let why = "timed (kind = \"timed\", the default); `weight` and `priority` are for kind = \"immediate\"";
+                let why = "timed (kind = \"timed\", the default); `weight`, `priority` and `decision` are for kind = \"immediate\"";
                 refuse("weight", t.weight.as_ref().map(Spanned::span), why)?;
                 refuse("priority", t.priority.as_ref().map(Spanned::span), why)?;
+                refuse(
+                    "decision",
+                    t.decision.as_ref().filter(|d| *d.get_ref()).map(Spanned::span),
+                    why,
+                )?;
                 TransitionKind::Timed {
                     rate: t
                         .rate
@@ -614,6 +724,13 @@ impl Reader<'_> {
                 let why = "immediate: it fires in zero time, its `weight` sets its probability";
                 refuse("rate", t.rate.as_ref().map(Spanned::span), why)?;
                 refuse("servers", t.servers.as_ref().map(Spanned::span), why)?;
+                if t.decision.as_ref().is_some_and(|d| *d.get_ref()) {
+                    refuse(
+                        "weight",
+                        t.weight.as_ref().map(Spanned::span),
+                        "a decision (decision = true): the policy chooses it, it has no weight",
+                    )?;
+                }
                 TransitionKind::Immediate {
                     weight: t
                         .weight
@@ -663,6 +780,7 @@ impl Reader<'_> {
         Ok(Transition {
             name: t.name.clone(),
             kind,
+            decision: t.decision.as_ref().is_some_and(|d| *d.get_ref()),
             position: t.position.map(|[x, y]| (x, y)),
             doc: t.doc.clone(),
         })
@@ -855,7 +973,9 @@ pub fn write_toml(net: &Net) -> Result<String> {
             }
             TransitionKind::Immediate { weight, priority } => {
                 out.push_str("kind = \"immediate\"\n");
-                if *weight != Expr::Num(1.0) {
+                if t.decision {
+                    out.push_str("decision = true\n");
+                } else if *weight != Expr::Num(1.0) {
                     let _ = writeln!(out, "weight = {}", expr_value(weight));
                 }
                 if *priority != Expr::Num(1.0) {
@@ -875,7 +995,35 @@ pub fn write_toml(net: &Net) -> Result<String> {
             let _ = writeln!(out, "position = {}", position(pos));
         }
     }
+    write_labels_and_rewards(&mut out, net);
     Ok(out)
+}
+
+/// The `[labels]` table and one `[rewards.NAME]` table per reward model.
+fn write_labels_and_rewards(out: &mut String, net: &Net) {
+    if !net.labels.is_empty() {
+        out.push_str("\n[labels]\n");
+        for l in &net.labels {
+            let _ = writeln!(out, "{} = {}", key(&l.name), quote(&l.expr.to_string()));
+        }
+    }
+    for r in &net.rewards {
+        let _ = writeln!(out, "\n[rewards.{}]", key(&r.name));
+        if let Some(rate) = &r.rate {
+            let _ = writeln!(out, "rate = {}", expr_value(rate));
+        }
+        if !r.impulses.is_empty() {
+            let entries: Vec<String> = r
+                .impulses
+                .iter()
+                .filter_map(|(t, e)| {
+                    let name = &net.transitions.get(t.index())?.name;
+                    Some(format!("{} = {}", key(name), expr_value(e)))
+                })
+                .collect();
+            let _ = writeln!(out, "impulse = {{ {} }}", entries.join(", "));
+        }
+    }
 }
 
 #[cfg(test)]
@@ -943,7 +1091,14 @@ mod tests {
         assert_eq!(net.params.len(), 4);
         assert_eq!(net.param("p").unwrap().value, Some(1.0 / 3.0));
         assert_eq!(net.param("K").unwrap().suggested, Some(2.0));
-        assert_eq!(net.transitions.len(), 2);
-        assert_eq!(net.arcs.len(), 7);
+        assert_eq!(net.transitions.len(), 3);
+        assert!(net.transitions[2].decision && !net.transitions[1].decision);
+        assert_eq!(net.arcs.len(), 9);
+        assert_eq!(net.labels.len(), 1);
+        assert_eq!(net.rewards[0].impulses.len(), 2);
+        let back = read_toml(&write_toml(&net).unwrap(), "supervisor.toml").unwrap();
+        assert_eq!(back.labels, net.labels);
+        assert_eq!(back.rewards, net.rewards);
+        assert_eq!(back.transitions, net.transitions);
     }
 }
