@@ -30,6 +30,7 @@
 //! | the net instantiated, firing rule | [`gspn`] |
 //! | reachability graph | [`reachability`] |
 //! | vanishing elimination, CTMC, long-run solution, measures | [`ctmc`] |
+//! | nets that finish: end probabilities, mean time, its distribution | [`absorption`] |
 //! | steady-state methods (GTH, LU, BiCGSTAB, Gauss–Seidel) | [`steady_state`], [`krylov`] |
 //! | structural analysis | [`incidence`], [`invariants`] |
 //! | behavioural properties | [`properties`] |
@@ -38,6 +39,7 @@
 //! | scalable benchmark nets | [`families`] |
 #![warn(missing_docs)]
 
+pub mod absorption;
 pub mod ctmc;
 pub mod error;
 pub mod expr;
@@ -59,6 +61,7 @@ pub mod simulation;
 pub mod steady_state;
 mod vanishing;
 
+pub use absorption::Absorption;
 pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
 pub use error::{Error, Result};
 pub use expr::{CompiledExpr, Expr};
