@@ -6,7 +6,7 @@
 //! | `unreachable` | a node no tick can reach: after a child that always succeeds in a Fallback, always fails in a Sequence; a recovery that is never needed; a `BehaviorTree` no one uses |
 //! | `endless_loop` | a loop with no way out: `RetryUntilSuccessful` forever around a child that cannot succeed, `Repeat`/`KeepRunningUntilFailure` forever around one that cannot fail |
 //! | `never_succeeds` | the tree as a whole can only fail or run forever |
-//! | `reactive_preemption` | a reactive node with a child that keeps running before a later one that also runs: BehaviorTree.CPP re-starts the first at every tick and it pre-empts the later one forever |
+//! | `reactive_preemption` | a reactive node with a child that keeps running before a later one that also runs: BehaviorTree.CPP re-starts the first at every tick and it pre-empts the later one forever (a gate such as Nav2's `PathLongerOnApproach`, which runs its child only while its condition holds, counts as passing at once) |
 //! | `read_before_write` | an input port reads a blackboard entry that no node has written on some path to it, and that the application does not provide |
 //! | `missing_subtree`, `subtree_cycle` | a `SubTree` no file defines; subtrees that include each other |
 //! | `dead_parallel_threshold` | a `Parallel` threshold that can never be reached, or never matters |
@@ -264,7 +264,7 @@ impl Checker<'_> {
                 Kind::Timeout { .. } | Kind::Delay { .. } | Kind::Periodic { .. } => false,
                 _ => true,
             }
-        })
+        }) || matches!(self.tree.node(n).kind, Kind::Gate)
     }
 
     fn structure(&mut self) {
@@ -493,6 +493,25 @@ impl Checker<'_> {
         false
     }
 
+    /// Reports the input ports of `n` that read entries not in `defined`.
+    fn read_ports(&mut self, n: NodeId, defined: &BTreeSet<String>) {
+        let ports = self.tree.node(n).ports.clone();
+        for p in &ports {
+            if let (Direction::Input | Direction::InOut, Some(k)) = (p.direction, &p.key) {
+                if !defined.contains(k) && !self.guarded(n, k) {
+                    self.add(
+                        FindingKind::ReadBeforeWrite,
+                        n,
+                        format!(
+                            "port `{}` reads `{{{k}}}`, which no node has written on some path to here (and the application does not provide it)",
+                            p.name
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
     /// Entries defined after `n` succeeds and after it fails, given those
     /// defined before; reports reads of undefined entries.
     fn flow(&mut self, n: NodeId, defined: &BTreeSet<String>) -> (BTreeSet<String>, BTreeSet<String>) {
@@ -501,21 +520,16 @@ impl Checker<'_> {
         let meet = |a: &BTreeSet<String>, b: &BTreeSet<String>| -> BTreeSet<String> {
             a.intersection(b).cloned().collect()
         };
+        // A node's own ports: read when it is ticked; a decorator or control
+        // node (Nav2's GoalUpdater) writes its outputs before its children run.
+        let mut defined = defined.clone();
+        if !node.kind.is_leaf() && !kids.is_empty() {
+            self.read_ports(n, &defined);
+            defined.extend(self.writes(n));
+        }
+        let defined = &defined;
         if node.kind.is_leaf() || kids.is_empty() {
-            for p in &node.ports {
-                if let (Direction::Input | Direction::InOut, Some(k)) = (p.direction, &p.key) {
-                    if !defined.contains(k) && !self.guarded(n, k) {
-                        self.add(
-                            FindingKind::ReadBeforeWrite,
-                            n,
-                            format!(
-                                "port `{}` reads `{{{k}}}`, which no node has written on some path to here (and the application does not provide it)",
-                                p.name
-                            ),
-                        );
-                    }
-                }
-            }
+            self.read_ports(n, defined);
             let mut out = defined.clone();
             out.extend(self.writes(n));
             return (out.clone(), out);

@@ -113,6 +113,22 @@ impl Models {
     }
 }
 
+/// The models of a file holding a `<TreeNodesModel>` (at its root or under
+/// `<root>`); `file` names it in errors.
+pub fn parse_models(text: &str, file: &str) -> crate::error::Result<Models> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| crate::error::Error::Xml {
+        file: file.to_string(),
+        line: e.pos().row,
+        column: e.pos().col,
+        message: e.to_string(),
+    })?;
+    let mut m = Models::default();
+    for el in doc.descendants().filter(|e| e.has_tag_name("TreeNodesModel")) {
+        m.add_from(el);
+    }
+    Ok(m)
+}
+
 /// The naming rule for leaves no model names: whether `id` reads as a condition.
 pub fn looks_like_condition(id: &str) -> bool {
     let prefixed = ["Is", "Are", "Has", "Would", "Can"].iter().any(|p| {

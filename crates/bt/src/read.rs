@@ -31,7 +31,8 @@ pub struct ReadOptions {
     pub main: Option<String>,
     /// Keep going past `SubTree`s that no file defines or that close a
     /// cycle (recorded in [`Tree::missing`] and [`Tree::cycles`], each
-    /// replaced by a failing leaf) instead of failing: what `bt check` does.
+    /// replaced by a leaf that may succeed or fail) instead of failing: what
+    /// `bt check` does.
     /// Default `false`.
     pub keep_missing: bool,
     /// Largest file read, bytes (default 64 MiB).
@@ -114,6 +115,29 @@ struct Source {
     name: String,
     dir: Option<PathBuf>,
     text: String,
+}
+
+/// Byte offsets of line starts, for line numbers in O(log n) (roxmltree's
+/// `text_pos_at` scans from the start: quadratic on large files).
+struct Lines(Vec<usize>);
+
+impl Lines {
+    fn of(text: &str) -> Lines {
+        Lines(
+            std::iter::once(0)
+                .chain(
+                    text.bytes()
+                        .enumerate()
+                        .filter(|&(_, b)| b == b'\n')
+                        .map(|(i, _)| i + 1),
+                )
+                .collect(),
+        )
+    }
+
+    fn line(&self, offset: usize) -> u32 {
+        self.0.partition_point(|&start| start <= offset) as u32
+    }
 }
 
 fn parse<'a>(src: &'a Source) -> Result<Document<'a>> {
@@ -259,8 +283,10 @@ fn read_source(text: String, name: String, dir: Option<PathBuf>, options: &ReadO
         }
     }
     let main = choose_main(&sources, &docs, &defs, options)?;
+    let lines: Vec<Lines> = sources.iter().map(|s| Lines::of(&s.text)).collect();
     let mut ex = Expander {
         sources: &sources,
+        lines: &lines,
         docs: &docs,
         defs: &defs,
         models: &models,
@@ -362,6 +388,7 @@ fn entry_of(value: &str) -> Option<&str> {
 
 struct Expander<'s, 'd, 'x> {
     sources: &'s [Source],
+    lines: &'s [Lines],
     docs: &'d [Document<'x>],
     defs: &'d BTreeMap<String, (usize, XNode<'x, 'x>)>,
     models: &'d Models,
@@ -482,7 +509,7 @@ impl<'x> Expander<'_, '_, 'x> {
         let at = At {
             el,
             doc,
-            line: line_of(&self.docs[doc], el),
+            line: self.lines[doc].line(el.range().start),
             path,
         };
         if depth > self.options.max_depth {
@@ -565,7 +592,7 @@ impl<'x> Expander<'_, '_, 'x> {
                     line: at.line,
                 },
             ));
-            self.nodes[me.index()].kind = Kind::Constant { success: false };
+            self.nodes[me.index()].kind = Kind::Action;
             return Ok(me);
         }
         if !self.defs.contains_key(&target) {
@@ -581,7 +608,7 @@ impl<'x> Expander<'_, '_, 'x> {
                 file: at.doc,
                 line: at.line,
             });
-            self.nodes[me.index()].kind = Kind::Constant { success: false };
+            self.nodes[me.index()].kind = Kind::Action;
             return Ok(me);
         }
         let mut remap = BTreeMap::new();

@@ -234,7 +234,8 @@ pub struct Tree {
     /// `BehaviorTree` definitions never reached from the main tree.
     pub unused_trees: Vec<(String, usize, u32)>,
     /// `SubTree` references to trees no file defines (only with
-    /// [`crate::ReadOptions::keep_missing`]; otherwise reading fails).
+    /// [`crate::ReadOptions::keep_missing`], each then an action leaf;
+    /// otherwise reading fails).
     pub missing: Vec<MissingSubtree>,
     /// `SubTree` references that close a cycle, with the cycle (only with
     /// [`crate::ReadOptions::keep_missing`]; otherwise reading fails).
