@@ -3,6 +3,9 @@
 //! nested one — each a clear error with the line and the node's path,
 //! never a panic. Logs: FileLogger2 read back and fitted.
 
+// Reading the trees here returns `bt::Error` as the library does.
+#![allow(clippy::result_large_err)]
+
 use bt::{ReadOptions, TreeParams};
 
 fn read(text: &str) -> Result<bt::Tree, bt::Error> {
