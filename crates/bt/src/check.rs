@@ -137,14 +137,9 @@ const ALWAYS_SUCCEED: [&str; 6] = [
     "PathHandlerSelector",
 ];
 
-/// Nav2 actions that finish within their tick (`BT::SyncActionNode`s).
-const NAV2_SYNC: [&str; 15] = [
-    "ControllerSelector",
-    "PlannerSelector",
-    "GoalCheckerSelector",
-    "ProgressCheckerSelector",
-    "SmootherSelector",
-    "PathHandlerSelector",
+/// Nav2's other actions that finish within their tick (`BT::SyncActionNode`s
+/// besides the selectors).
+const NAV2_SYNC: [&str; 9] = [
     "GetCurrentPose",
     "GetPoseFromPath",
     "ConcatenatePaths",
@@ -155,6 +150,11 @@ const NAV2_SYNC: [&str; 15] = [
     "AppendGoalPoseToGoals",
     "GetNextFewGoals",
 ];
+
+/// Whether Nav2 implements action `id` as a synchronous node.
+fn nav2_sync(id: &str) -> bool {
+    ALWAYS_SUCCEED.contains(&id) || NAV2_SYNC.contains(&id)
+}
 
 struct Checker<'a> {
     tree: &'a Tree,
@@ -258,7 +258,7 @@ impl Checker<'_> {
                         let a = p.action(self.tree, m);
                         a.mean_time_success == 0.0 && a.mean_time_failure == 0.0
                     }
-                    _ => NAV2_SYNC.contains(&node.id.as_str()),
+                    _ => nav2_sync(&node.id),
                 },
                 Kind::Sleep { mean_s } => mean_s == 0.0,
                 Kind::Timeout { .. } | Kind::Delay { .. } | Kind::Periodic { .. } => false,
