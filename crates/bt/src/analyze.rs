@@ -281,22 +281,25 @@ fn node_stats(
 }
 
 /// Times by which the runs that end have ended with probability `qs`:
-/// the distribution on a grid of 300 steps up to 20 mean times
-/// (Crank–Nicolson, [`petri::CompiledGspn::absorption_cdf_grid`]), read by
-/// linear interpolation; a quantile beyond the grid is reported as its end.
+/// the distribution on a grid of 25 steps per mean time (Crank–Nicolson,
+/// [`petri::CompiledGspn::absorption_cdf_steps`]) up to the largest
+/// quantile or 20 mean times, read by linear interpolation; a quantile
+/// beyond 20 mean times is reported as 20 mean times.
 fn quantiles(s: &Solved, qs: &[f64], mean_time: f64, p_end: f64) -> Result<Vec<(f64, f64)>> {
     if qs.is_empty() || mean_time <= 0.0 || p_end <= 0.0 {
         return Ok(qs.iter().map(|&q| (q, 0.0)).collect());
     }
-    const STEPS: usize = 300;
-    let t_max = mean_time * 20.0;
+    const STEPS_PER_MEAN: usize = 25;
+    const MEANS: usize = 20;
+    let h = mean_time / STEPS_PER_MEAN as f64;
+    let top = qs.iter().copied().fold(0.0, f64::max).min(1.0);
     let cdf: Vec<f64> = s
         .compiled
-        .absorption_cdf_grid(&s.rates, t_max, STEPS)?
+        .absorption_cdf_steps(&s.rates, h, STEPS_PER_MEAN * MEANS, top * p_end)?
         .into_iter()
         .map(|p| (p / p_end).min(1.0))
         .collect();
-    let h = t_max / STEPS as f64;
+    let t_max = h * (cdf.len() - 1) as f64;
     Ok(qs
         .iter()
         .map(|&q| {

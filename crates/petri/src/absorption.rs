@@ -10,7 +10,9 @@
 //! - probability of ending in component `B`, `π0_B + Σ_{s∈T} x_s q_{sB}`;
 //! - mean time to the end, `Σ_s x_s` (finite when every run ends);
 //! - mean time of the runs that end in `B`, `Σ_s x_s h_B(s) / P(B)` with
-//!   `h_B` the absorption probabilities from each state, `(−Q_TT) h_B = q_{·B}`;
+//!   `h_B` the absorption probabilities from each state, `(−Q_TT) h_B = q_{·B}`
+//!   — computed for every `B` at once as `Σ_i z_i q_{iB} / P(B)` with
+//!   `z (−Q_TT) = x`;
 //! - `P(T ≤ t)` by uniformisation (Jensen's method): with `Λ ≥` every exit
 //!   rate and `P = I + Q/Λ`, `P(T > t) = Σ_k Poisson(k; Λt) ‖π0_T P_TT^k‖₁`,
 //!   the sum cut when the Poisson tail is below the tolerance.
@@ -18,9 +20,12 @@
 //! - the same on a grid by Crank–Nicolson (`absorption_cdf_grid`), whose
 //!   cost does not grow with the fastest rate.
 //!
-//! Both linear systems are solved directly (dense LU below 160 states,
-//! sparse LU above, with a step of iterative refinement: [`crate::linear`]).
+//! Both linear systems, and every implicit time step, are solved block by
+//! block over the chain's strongly connected components in topological
+//! order ([`crate::blocks`]): a finishing chain is mostly small components
+//! in sequence, which a sparse LU of the whole matrix would fill in.
 
+use crate::blocks::BlockSystem;
 use crate::ctmc::CompiledGspn;
 use crate::error::{Error, Result};
 use crate::net::TransitionId;
@@ -115,51 +120,60 @@ fn transient(chain: &CompiledGspn, rates: &[f64]) -> Result<Transient> {
     })
 }
 
-/// `P(T > t)` on the grid `t_k = k·t_max/steps` by Crank–Nicolson on the
-/// forward equation `dp/dt = p Q_TT` (one sparse LU of `I − (h/2) Q_TTᵀ`,
-/// then one solve per step): second order in `h`, stable for any rate, so
-/// its cost does not grow with the fastest rate as uniformisation's does.
-fn survival_crank_nicolson(tr: &Transient, p0: &[f64], t_max: f64, steps: usize) -> Result<Vec<f64>> {
-    use faer::Mat;
-    use faer::prelude::Solve;
-    use faer::sparse::{SparseColMat, Triplet};
-    let m = p0.len();
-    let h = t_max / steps as f64;
-    let mut entries: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(m + tr.inner.len());
-    for (i, &r) in tr.out_rate.iter().enumerate() {
-        entries.push(Triplet::new(i, i, 1.0 + 0.5 * h * r));
-    }
-    for &(i, j, r) in &tr.inner {
-        entries.push(Triplet::new(j as usize, i as usize, -0.5 * h * r));
-    }
-    let singular = |detail: String| Error::Singular {
-        what: "the time distribution (Crank–Nicolson)",
-        detail,
-    };
-    let a = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &entries)
-        .map_err(|e| singular(format!("cannot build the sparse matrix: {e:?}")))?;
-    let lu = a
-        .sp_lu()
-        .map_err(|e| singular(format!("sparse LU failed: {e:?}")))?;
-    let mut p = Mat::<f64>::from_fn(m, 1, |i, _| p0[i]);
-    let mut out = Vec::with_capacity(steps + 1);
-    out.push(p0.iter().sum::<f64>());
-    for _ in 0..steps {
-        // rhs = (I + (h/2) Q_TTᵀ) p
-        let mut rhs = Mat::<f64>::from_fn(m, 1, |i, _| p[(i, 0)] * (1.0 - 0.5 * h * tr.out_rate[i]));
-        for &(i, j, r) in &tr.inner {
-            rhs[(j as usize, 0)] += 0.5 * h * r * p[(i as usize, 0)];
+/// `P(T > t)` on the grid `t_k = k·h`, `k = 0, 1, …`, by Crank–Nicolson on
+/// the forward equation `dp/dt = p Q_TT`: `p_{k+1} (I + (h/2) A) = p_k (I −
+/// (h/2) A)` with `A = −Q_TT`, one block-triangular factorisation
+/// ([`crate::blocks`]) for every step. Second order in `h` and stable for
+/// any rate, so its cost does not grow with the fastest rate as
+/// uniformisation's does. The first two steps are four backward-Euler half
+/// steps (Rannacher's start, same matrix), which damp the components far
+/// faster than `1/h` that Crank–Nicolson alone would carry as oscillations.
+/// Stops after `max_steps` steps, or once the survival is at most `stop_below`.
+fn survival_crank_nicolson(
+    tr: &Transient,
+    p0: &[f64],
+    h: f64,
+    max_steps: usize,
+    stop_below: f64,
+) -> Result<Vec<f64>> {
+    let sys = BlockSystem::new(
+        "the time distribution (Crank–Nicolson)",
+        &tr.out_rate,
+        &tr.inner,
+        1.0,
+        0.5 * h,
+    )?;
+    let mut p = p0.to_vec();
+    let mut rhs = vec![0.0; p.len()];
+    let mut out = Vec::with_capacity(max_steps + 1);
+    out.push(p.iter().sum::<f64>());
+    for k in 0..max_steps {
+        if k < 2 {
+            sys.solve_row(&mut p);
+            sys.solve_row(&mut p);
+        } else {
+            // rhs = p (I − (h/2) A)
+            for (i, v) in rhs.iter_mut().enumerate() {
+                *v = p[i] * (1.0 - 0.5 * h * tr.out_rate[i]);
+            }
+            for &(i, j, r) in &tr.inner {
+                rhs[j as usize] += 0.5 * h * r * p[i as usize];
+            }
+            sys.solve_row(&mut rhs);
+            std::mem::swap(&mut p, &mut rhs);
         }
-        lu.solve_in_place(&mut rhs);
-        p = rhs;
-        out.push((0..m).map(|i| p[(i, 0)]).sum::<f64>());
-    }
-    if let Some(v) = out.iter().find(|v| !v.is_finite()) {
-        return Err(Error::NotFinite {
-            what: "the time distribution".into(),
-            value: *v,
-            cause: "the Crank–Nicolson steps lost all precision".into(),
-        });
+        let survival = p.iter().sum::<f64>();
+        out.push(survival);
+        if !survival.is_finite() {
+            return Err(Error::NotFinite {
+                what: "the time distribution".into(),
+                value: survival,
+                cause: "the Crank–Nicolson steps lost all precision".into(),
+            });
+        }
+        if survival <= stop_below {
+            break;
+        }
     }
     Ok(out)
 }
@@ -175,6 +189,18 @@ impl CompiledGspn {
                 "a time grid needs t_max > 0 and steps ≥ 1 (got {t_max}, {steps})"
             )));
         }
+        self.absorption_cdf_steps(rates, t_max / steps as f64, steps, 2.0)
+    }
+
+    /// `P(end reached by k·h)` for `k = 0, 1, …` as for
+    /// [`absorption_cdf_grid`](Self::absorption_cdf_grid), stopped after
+    /// `max_steps` steps or at the first point where it reaches `level`
+    /// (the last value returned): the grid of a quantile need not be longer
+    /// than the quantile.
+    pub fn absorption_cdf_steps(&self, rates: &[f64], h: f64, max_steps: usize, level: f64) -> Result<Vec<f64>> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::Invalid(format!("a time step must be > 0 (got {h})")));
+        }
         let tr = transient(self, rates)?;
         let mut p = vec![0.0; tr.states.len()];
         for &(s, w) in self.initial_distribution() {
@@ -183,7 +209,7 @@ impl CompiledGspn {
                 p[i as usize] += w;
             }
         }
-        let survival = survival_crank_nicolson(&tr, &p, t_max, steps)?;
+        let survival = survival_crank_nicolson(&tr, &p, h, max_steps, 1.0 - level)?;
         Ok(survival.into_iter().map(|v| (1.0 - v).clamp(0.0, 1.0)).collect())
     }
 
@@ -204,38 +230,27 @@ impl CompiledGspn {
                 i => pi0_t[i as usize] += p,
             }
         }
-        // (−Q_TT) as triplets; its transpose for the forward system.
-        let mut a = Vec::with_capacity(tr.inner.len() + m);
-        let mut at = Vec::with_capacity(tr.inner.len() + m);
-        for (i, &r) in tr.out_rate.iter().enumerate() {
-            a.push((i as u32, i as u32, r));
-            at.push((i as u32, i as u32, r));
-        }
-        for &(i, j, r) in &tr.inner {
-            a.push((i, j, -r));
-            at.push((j, i, -r));
-        }
-        let mut x = vec![pi0_t];
-        crate::linear::solve("the expected sojourn times", m, &at, &mut x)?;
-        let x = x.pop().unwrap_or_default();
-        let mut rhs: Vec<Vec<f64>> = vec![vec![0.0; m]; nb];
+        // x (−Q_TT) = π0_T.
+        let sys = BlockSystem::new("the absorption equations", &tr.out_rate, &tr.inner, 0.0, 1.0)?;
+        let mut x = pi0_t;
+        sys.solve_row(&mut x);
         let mut entered: Vec<std::collections::BTreeMap<TransitionId, f64>> = vec![Default::default(); nb];
         for &(i, b, t, r) in &tr.exits {
-            rhs[b as usize][i as usize] += r;
             end_probability[b as usize] += x[i as usize] * r;
             *entered[b as usize].entry(t).or_insert(0.0) += x[i as usize] * r;
         }
-        crate::linear::solve("the absorption probabilities", m, &a, &mut rhs)?;
-        let mean_time_to = rhs
+        // Σ_s x_s h_B(s) = x (−Q_TT)⁻¹ q_{·B} = z q_{·B} with z (−Q_TT) = x:
+        // one more row solve serves every end.
+        let mut z = x.clone();
+        sys.solve_row(&mut z);
+        let mut weighted = vec![0.0; nb];
+        for &(i, b, _, r) in &tr.exits {
+            weighted[b as usize] += z[i as usize] * r;
+        }
+        let mean_time_to = weighted
             .iter()
             .zip(&end_probability)
-            .map(|(h, &p)| {
-                if p > 0.0 {
-                    x.iter().zip(h).map(|(a, b)| a * b).sum::<f64>() / p
-                } else {
-                    0.0
-                }
-            })
+            .map(|(&w, &p)| if p > 0.0 { w / p } else { 0.0 })
             .collect();
         let total: f64 = end_probability.iter().sum();
         let mean_time = x.iter().sum::<f64>() / total.max(f64::MIN_POSITIVE);

@@ -40,6 +40,7 @@
 #![warn(missing_docs)]
 
 pub mod absorption;
+mod blocks;
 pub mod ctmc;
 pub mod error;
 pub mod expr;
