@@ -146,7 +146,14 @@ fn parse<'a>(src: &'a Source) -> Result<Document<'a>> {
         ..roxmltree::ParsingOptions::default()
     };
     Document::parse_with_options(&src.text, opts).map_err(|e| {
-        let pos = e.pos();
+        // The parser places an unclosed root or an early end at 1:1: the
+        // place the reader stopped is the end of the text.
+        let pos = match e {
+            roxmltree::Error::UnclosedRootNode | roxmltree::Error::UnexpectedEndOfStream => {
+                end_position(&src.text)
+            }
+            _ => e.pos(),
+        };
         Error::Xml {
             file: src.name.clone(),
             line: pos.row,
@@ -154,6 +161,14 @@ fn parse<'a>(src: &'a Source) -> Result<Document<'a>> {
             message: e.to_string(),
         }
     })
+}
+
+/// Line and column (1-based, in characters) just past the last character of `text`.
+fn end_position(text: &str) -> roxmltree::TextPos {
+    let line_start = text.rfind('\n').map_or(0, |i| i + 1);
+    let row = 1 + text.bytes().filter(|&b| b == b'\n').count() as u32;
+    let col = 1 + text[line_start..].chars().count() as u32;
+    roxmltree::TextPos::new(row, col)
 }
 
 fn line_of(doc: &Document<'_>, el: XNode<'_, '_>) -> u32 {
@@ -747,10 +762,13 @@ impl<'x> Expander<'_, '_, 'x> {
                 at,
                 format!("`{id}` is a subtree model: use <SubTree ID=\"{id}\"/>"),
             )),
-            None if n == 0 => Ok(if looks_like_condition(id) {
-                Kind::Condition
-            } else {
-                Kind::Action
+            // v3's explicit `<Condition ID=…>` / `<Action ID=…>` says it;
+            // otherwise the naming rule.
+            None if n == 0 => Ok(match at.el.tag_name().name() {
+                "Condition" => Kind::Condition,
+                "Action" => Kind::Action,
+                _ if looks_like_condition(id) => Kind::Condition,
+                _ => Kind::Action,
             }),
             None => Err(Error::UnknownNode {
                 file: self.sources[at.doc].name.clone(),

@@ -197,7 +197,13 @@ impl CompiledGspn {
     /// `max_steps` steps or at the first point where it reaches `level`
     /// (the last value returned): the grid of a quantile need not be longer
     /// than the quantile.
-    pub fn absorption_cdf_steps(&self, rates: &[f64], h: f64, max_steps: usize, level: f64) -> Result<Vec<f64>> {
+    pub fn absorption_cdf_steps(
+        &self,
+        rates: &[f64],
+        h: f64,
+        max_steps: usize,
+        level: f64,
+    ) -> Result<Vec<f64>> {
         if !(h.is_finite() && h > 0.0) {
             return Err(Error::Invalid(format!("a time step must be > 0 (got {h})")));
         }

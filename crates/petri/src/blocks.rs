@@ -17,8 +17,8 @@
 
 use faer::Mat;
 use faer::prelude::Solve;
-use faer::sparse::{SparseColMat, Triplet};
 use faer::sparse::linalg::solvers::Lu;
+use faer::sparse::{SparseColMat, Triplet};
 
 use crate::error::{Error, Result};
 use crate::scc::{Successors, tarjan};
@@ -60,7 +60,10 @@ impl Csr {
     #[inline]
     fn row(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
         let r = self.start[i] as usize..self.start[i + 1] as usize;
-        self.cols[r.clone()].iter().copied().zip(self.vals[r].iter().copied())
+        self.cols[r.clone()]
+            .iter()
+            .copied()
+            .zip(self.vals[r].iter().copied())
     }
 }
 
@@ -170,12 +173,16 @@ impl BlockSystem {
         let graph = Csr::new(n, inner.iter().map(|&(i, j, r)| (i, j, r)));
         // Tarjan reports sink components first: reversed, a topological order.
         let mut found: Vec<Vec<u32>> = Vec::new();
-        tarjan(&graph, |_| true, |scc: &[u32]| -> std::result::Result<(), ()> {
-            let mut v = scc.to_vec();
-            v.sort_unstable();
-            found.push(v);
-            Ok(())
-        })
+        tarjan(
+            &graph,
+            |_| true,
+            |scc: &[u32]| -> std::result::Result<(), ()> {
+                let mut v = scc.to_vec();
+                v.sort_unstable();
+                found.push(v);
+                Ok(())
+            },
+        )
         .map_err(|()| Error::Invalid("component search stopped".into()))?;
         found.reverse();
         let mut states = Vec::with_capacity(n);
@@ -305,7 +312,14 @@ mod tests {
         // 0 → {1 ⇄ 2} → 3, 0 → 3, and a ring 4 → 5 → … → 4 reached from 3.
         let ring = 450u32;
         let n = 4 + ring as usize;
-        let mut inner = vec![(0, 1, 1.0), (1, 2, 2.0), (2, 1, 0.5), (2, 3, 1.5), (0, 3, 0.25), (3, 4, 1.0)];
+        let mut inner = vec![
+            (0, 1, 1.0),
+            (1, 2, 2.0),
+            (2, 1, 0.5),
+            (2, 3, 1.5),
+            (0, 3, 0.25),
+            (3, 4, 1.0),
+        ];
         for k in 0..ring {
             inner.push((4 + k, 4 + (k + 1) % ring, 3.0 + f64::from(k % 7)));
         }
@@ -332,7 +346,10 @@ mod tests {
         let mt = m.transpose().to_owned();
         let want = mt.partial_piv_lu().solve(Mat::<f64>::from_fn(n, 1, |i, _| b[i]));
         for i in 0..n {
-            assert!((row[i] - want[(i, 0)]).abs() < 1e-9 * want[(i, 0)].abs().max(1.0), "row {i}");
+            assert!(
+                (row[i] - want[(i, 0)]).abs() < 1e-9 * want[(i, 0)].abs().max(1.0),
+                "row {i}"
+            );
         }
     }
 }

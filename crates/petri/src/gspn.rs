@@ -105,7 +105,11 @@ impl Candidates {
         let mut sourceless = Vec::new();
         for t in 0..num_transitions {
             let tid = TransitionId(t as u32);
-            match inputs.of(t).iter().min_by_key(|&&(p, _)| (consumers[p as usize], p)) {
+            match inputs
+                .of(t)
+                .iter()
+                .min_by_key(|&&(p, _)| (consumers[p as usize], p))
+            {
                 Some(&(p, _)) => lists[p as usize].push(tid),
                 None => sourceless.push(tid),
             }
