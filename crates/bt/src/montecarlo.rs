@@ -795,7 +795,8 @@ pub struct Estimate {
 /// z for a two-sided 99 % interval.
 const Z99: f64 = 2.575_829_303_548_901;
 
-/// Simulates `runs` executions (run `k` seeded with `seed + k`).
+/// Simulates `runs` executions (run `k` seeded with `seed + k`); parameters
+/// of the wrong kind for a leaf are an error ([`TreeParams::check_kinds`]).
 pub fn estimate(
     tree: &Tree,
     params: &TreeParams,
@@ -803,6 +804,7 @@ pub fn estimate(
     seed: u64,
     limits: Limits,
 ) -> Result<Estimate> {
+    params.check_kinds(tree)?;
     let mut it = Interpreter::new(tree, params);
     let (mut ok, mut never) = (0usize, 0usize);
     let (mut sum, mut sum2, mut ended) = (0.0, 0.0, 0usize);

@@ -113,6 +113,9 @@ pub struct TreeParams {
     pub conditions: BTreeMap<String, ConditionParams>,
     /// Control nodes and decorators by key.
     pub nodes: BTreeMap<String, NodeParams>,
+    /// The file the parameters were read from (named in errors), if any.
+    #[serde(skip)]
+    pub source: Option<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -319,6 +322,7 @@ impl TreeParams {
         };
         let mut out = TreeParams {
             defaults,
+            source: Some(file.to_string()),
             ..TreeParams::default()
         };
         for (key, t) in &raw.leaf {
@@ -389,6 +393,66 @@ impl TreeParams {
         }
     }
 
+    /// Refuses parameters of the wrong kind: a leaf table that gives an
+    /// action only a condition's fields (`p_true`, `change_rate`), or a
+    /// condition (or `Gate`) only an action's, would be ignored in favour
+    /// of the defaults. The error names the node (file, line, path), the
+    /// table and the sidecar file.
+    pub fn check_kinds(&self, tree: &Tree) -> Result<()> {
+        for (i, node) in tree.nodes.iter().enumerate() {
+            let n = NodeId(i as u32);
+            let (wanted, other, given) = match node.kind {
+                Kind::Action => (
+                    self.lookup(&self.actions, tree, n).is_some(),
+                    self.key_in(&self.conditions, tree, n),
+                    "only a condition's fields (p_true, change_rate)",
+                ),
+                Kind::Condition | Kind::Gate => (
+                    self.lookup(&self.conditions, tree, n).is_some(),
+                    self.key_in(&self.actions, tree, n),
+                    "no condition field (p_true, change_rate)",
+                ),
+                _ => continue,
+            };
+            if let (false, Some(key)) = (wanted, other) {
+                let kind = if node.kind == Kind::Action {
+                    "an action"
+                } else {
+                    "a condition"
+                };
+                let source = self
+                    .source
+                    .as_deref()
+                    .map_or_else(String::new, |f| format!(" of {f}"));
+                return Err(Error::Tree {
+                    file: tree.files[node.file].clone(),
+                    line: node.line,
+                    path: node.path.clone(),
+                    message: format!(
+                        "`{}` is {kind}, but [leaf.{key}]{source} gives it {given}: \
+                         they would be ignored",
+                        node.id
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The key under which `map` holds parameters for node `n`, in lookup order.
+    fn key_in<T>(&self, map: &BTreeMap<String, T>, tree: &Tree, n: NodeId) -> Option<String> {
+        let node = tree.node(n);
+        [
+            Some(node.path.as_str()),
+            node.name.as_deref(),
+            Some(node.id.as_str()),
+        ]
+        .into_iter()
+        .flatten()
+        .find(|k| map.contains_key(*k))
+        .map(str::to_string)
+    }
+
     /// Keys of the sidecar that name no node of `tree` (likely misspelt).
     pub fn unused_keys(&self, tree: &Tree) -> Vec<String> {
         let names: std::collections::BTreeSet<&str> = tree
@@ -436,6 +500,48 @@ mod tests {
             .to_string();
         assert!(e.starts_with("p.toml:2:"), "{e}");
         assert!(e.contains("p_sucess"), "{e}");
+    }
+
+    fn tree() -> Tree {
+        crate::read::read_str(
+            "<root BTCPP_format=\"4\">\n<BehaviorTree ID=\"M\">\n<Fallback>\n\
+             <IsStuck/>\n<Spin name=\"spin\"/>\n</Fallback>\n</BehaviorTree>\n</root>",
+            "t.xml",
+            None,
+            &crate::ReadOptions::default(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn condition_fields_on_an_action_are_an_error_naming_node_and_file() {
+        let p = TreeParams::parse("[leaf.spin]\np_true = 0.5\n", "p.toml").unwrap();
+        let e = p.check_kinds(&tree()).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "t.xml:5: M/Fallback#0/Spin(spin): `Spin` is an action, but [leaf.spin] of p.toml \
+             gives it only a condition's fields (p_true, change_rate): they would be ignored"
+        );
+    }
+
+    #[test]
+    fn action_fields_on_a_condition_are_an_error() {
+        let p = TreeParams::parse("[leaf.IsStuck]\np_success = 0.5\n", "p.toml").unwrap();
+        let e = p.check_kinds(&tree()).unwrap_err().to_string();
+        assert!(
+            e.starts_with("t.xml:4: M/Fallback#0/IsStuck#0: `IsStuck` is a condition"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn fields_of_the_right_kind_pass() {
+        let p = TreeParams::parse(
+            "[leaf.spin]\np_success = 0.5\n[leaf.IsStuck]\np_true = 0.1\n[leaf.Other]\np_true = 0.2\n",
+            "p.toml",
+        )
+        .unwrap();
+        assert!(p.check_kinds(&tree()).is_ok());
     }
 
     #[test]

@@ -125,7 +125,11 @@ struct Builder<'a> {
 }
 
 /// Translates `tree` with `params` into a GSPN.
+///
+/// Errors: parameters of the wrong kind for a leaf
+/// ([`TreeParams::check_kinds`]), and what the translation refuses.
 pub fn translate(tree: &Tree, params: &TreeParams) -> Result<Translation> {
+    params.check_kinds(tree)?;
     let mut net = Net::new(format!("bt:{}", tree.main));
     net.doc = Some(format!(
         "behaviour tree `{}` translated by petrinav (crates/bt)",

@@ -194,6 +194,9 @@ fn check_inner(a: &CheckArgs) -> Result<bool> {
         Some(p) => Some(TreeParams::read_file(p)?),
         None => None,
     };
+    if let Some(p) = &p {
+        p.check_kinds(&tree)?;
+    }
     let mut options = if a.no_nav2_blackboard {
         CheckOptions::none()
     } else {

@@ -77,11 +77,29 @@ impl Successors for Csr {
     }
 }
 
-/// A dense LU with partial pivoting, `P·B = L·U`, row-major, `k × k`.
+/// A dense LU with partial pivoting, `P·B = L·U`, row-major, `k × k`; the
+/// factorised matrix is the block's transpose, so that the row system
+/// `x B_block = y` is a plain solve with contiguous rows.
 struct DenseLu {
     k: usize,
     lu: Vec<f64>,
     perm: Vec<usize>,
+}
+
+/// `Σ a_i b_i` over equal-length slices, four partial sums (so that the
+/// compiler can use vector registers).
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 impl DenseLu {
@@ -101,12 +119,15 @@ impl DenseLu {
                 perm.swap(col, piv);
             }
             let d = a[col * k + col];
-            for r in col + 1..k {
-                let f = a[r * k + col] / d;
-                a[r * k + col] = f;
+            let (top, rest) = a.split_at_mut((col + 1) * k);
+            let pivot_row = &top[col * k + col + 1..(col + 1) * k];
+            for r in 0..k - col - 1 {
+                let row = &mut rest[r * k..(r + 1) * k];
+                let f = row[col] / d;
+                row[col] = f;
                 if f != 0.0 {
-                    for j in col + 1..k {
-                        a[r * k + j] -= f * a[col * k + j];
+                    for (x, &p) in row[col + 1..].iter_mut().zip(pivot_row) {
+                        *x -= f * p;
                     }
                 }
             }
@@ -114,22 +135,20 @@ impl DenseLu {
         Some(DenseLu { k, lu: a, perm })
     }
 
-    /// `Bᵀ z = y`, in place: `Uᵀ Lᵀ (P z) = y`.
-    fn solve_transposed(&self, y: &mut [f64], work: &mut Vec<f64>) {
+    /// `B z = y` for the factorised `B`, in place: `L U z = P y`.
+    fn solve(&self, y: &mut [f64], work: &mut Vec<f64>) {
         let k = self.k;
         work.clear();
-        work.extend_from_slice(y);
-        for i in 0..k {
-            let s: f64 = (0..i).map(|j| self.lu[j * k + i] * work[j]).sum();
-            work[i] = (work[i] - s) / self.lu[i * k + i];
-        }
-        for i in (0..k).rev() {
-            let s: f64 = (i + 1..k).map(|j| self.lu[j * k + i] * work[j]).sum();
+        work.extend(self.perm.iter().map(|&p| y[p]));
+        for i in 1..k {
+            let s = dot(&self.lu[i * k..i * k + i], &work[..i]);
             work[i] -= s;
         }
-        for (i, &p) in self.perm.iter().enumerate() {
-            y[p] = work[i];
+        for i in (0..k).rev() {
+            let s = dot(&self.lu[i * k + i + 1..(i + 1) * k], &work[i + 1..k]);
+            work[i] = (work[i] - s) / self.lu[i * k + i];
         }
+        y.copy_from_slice(work);
     }
 }
 
@@ -242,9 +261,10 @@ impl BlockSystem {
                     }
                 }
                 if k <= DENSE_BLOCK_LIMIT {
+                    // The block's transpose, row-major.
                     let mut a = vec![0.0; k * k];
                     for (i, j, v) in entries {
-                        a[i * k + j] += v;
+                        a[j * k + i] += v;
                     }
                     Block::Dense(
                         DenseLu::new(k, a)
@@ -290,7 +310,7 @@ impl BlockSystem {
 fn solve_block(block: &Block, y: &mut [f64], work: &mut Vec<f64>) {
     match block {
         Block::Scalar(d) => y[0] /= d,
-        Block::Dense(lu) => lu.solve_transposed(y, work),
+        Block::Dense(lu) => lu.solve(y, work),
         Block::Sparse(lu) => {
             let mut m = Mat::<f64>::from_fn(y.len(), 1, |i, _| y[i]);
             lu.solve_in_place(&mut m);
@@ -310,8 +330,10 @@ mod tests {
     #[test]
     fn matches_a_dense_solve() {
         // 0 → {1 ⇄ 2} → 3, 0 → 3, and a ring 4 → 5 → … → 4 reached from 3.
+        // … and from 3 also a dense component: a ring of 37 with chords.
         let ring = 450u32;
-        let n = 4 + ring as usize;
+        let (small, s0) = (37u32, 4 + 450u32);
+        let n = (s0 + small) as usize;
         let mut inner = vec![
             (0, 1, 1.0),
             (1, 2, 2.0),
@@ -319,10 +341,16 @@ mod tests {
             (2, 3, 1.5),
             (0, 3, 0.25),
             (3, 4, 1.0),
+            (3, s0, 0.5),
         ];
         for k in 0..ring {
             inner.push((4 + k, 4 + (k + 1) % ring, 3.0 + f64::from(k % 7)));
         }
+        for k in 0..small {
+            inner.push((s0 + k, s0 + (k + 1) % small, 2.0 + f64::from(k % 5)));
+            inner.push((s0 + k, s0 + (k * 7 + 3) % small, 0.5 + f64::from(k % 3)));
+        }
+        inner.retain(|&(i, j, _)| i != j);
         let mut out = vec![0.0; n];
         for &(i, _, r) in &inner {
             out[i as usize] += r;
@@ -330,6 +358,9 @@ mod tests {
         out[1] += 0.1;
         for k in 0..ring {
             out[(4 + k) as usize] += 0.01 * f64::from(k % 3 + 1);
+        }
+        for k in 0..small {
+            out[(s0 + k) as usize] += 0.05 * f64::from(k % 4 + 1);
         }
         let (s, c) = (0.3, 0.7);
         let sys = BlockSystem::new("test", &out, &inner, s, c).unwrap();
