@@ -35,6 +35,9 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("fpn_map", fpn_map),
     ("drn", drn),
     ("policy", policy),
+    ("bt_xml", bt_xml),
+    ("bt_params", bt_params),
+    ("bt_log", bt_log),
 ];
 
 /// Largest state space a fuzzed net is explored to: enough to reach the
@@ -423,4 +426,98 @@ pub fn policy(data: &[u8]) {
             assert!(x.is_finite(), "a solution holds {x}");
         }
     }
+}
+
+/// A behaviour-tree XML file (`bt::read_str`, subtrees missing or cyclic
+/// kept as `bt check` reads them): checked, then — when it reads strictly —
+/// translated, analysed within 2,000 markings (every probability and time
+/// finite) and simulated a few times within bounded events.
+pub fn bt_xml(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let lenient = bt::ReadOptions {
+        keep_missing: true,
+        max_nodes: 2_000,
+        ..bt::ReadOptions::default()
+    };
+    if let Ok(tree) = bt::read_str(text, "fuzz.xml", None, &lenient) {
+        let _ = bt::check(&tree, None, &bt::check::CheckOptions::nav2());
+        let _ = bt::svg::render(&tree, None);
+    }
+    let strict = bt::ReadOptions {
+        max_nodes: 2_000,
+        ..bt::ReadOptions::default()
+    };
+    let Ok(tree) = bt::read_str(text, "fuzz.xml", None, &strict) else {
+        return;
+    };
+    bt_analyze(&tree, &bt::TreeParams::default());
+}
+
+fn bt_analyze(tree: &bt::Tree, params: &bt::TreeParams) {
+    let options = bt::AnalyzeOptions {
+        sensitivities: false,
+        quantiles: vec![0.5],
+        max_states: 2_000,
+    };
+    if let Ok(r) = bt::analyze(tree, params, &options) {
+        for x in [
+            r.p_success,
+            r.p_failure,
+            r.p_never,
+            r.mean_time,
+            r.mean_time_success,
+            r.mean_time_failure,
+        ] {
+            assert!(x.is_finite(), "a tree's analysis holds {x}: {r:?}");
+        }
+    }
+    let limits = bt::montecarlo::Limits {
+        max_events: 10_000,
+        max_time: 1e6,
+    };
+    let _ = bt::montecarlo::estimate(tree, params, 3, 1, limits);
+}
+
+/// The tree every sidecar and log of the fuzz targets is applied to.
+const BT_TREE: &str = r#"<root BTCPP_format="4"><BehaviorTree ID="T">
+<ReactiveSequence><IsOk/><Fallback><A/><RetryUntilSuccessful num_attempts="3"><B/></RetryUntilSuccessful></Fallback></ReactiveSequence>
+</BehaviorTree></root>"#;
+
+/// A parameter sidecar (`bt::TreeParams::parse`), applied to a small tree.
+pub fn bt_params(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(params) = bt::TreeParams::parse(text, "fuzz.toml") else {
+        return;
+    };
+    let tree = bt::read_str(BT_TREE, "t.xml", None, &bt::ReadOptions::default()).expect("the fixed tree");
+    bt_analyze(&tree, &params);
+}
+
+/// Logs: our JSONL, BehaviorTree.CPP's FileLogger2 and Minitrace; fitted
+/// to a small tree, the sidecar written must read back.
+pub fn bt_log(data: &[u8]) {
+    let tree = bt::read_str(BT_TREE, "t.xml", None, &bt::ReadOptions::default()).expect("the fixed tree");
+    let mut all = Vec::new();
+    if let Ok(t) = bt::logs::read_btlog(data, "fuzz.btlog", 0) {
+        all.extend(t);
+    }
+    if let Ok(text) = std::str::from_utf8(data) {
+        if let Ok(t) = bt::logs::read_jsonl(text, "fuzz.jsonl") {
+            all.extend(t);
+        }
+        if let Ok(t) = bt::logs::read_minitrace(text, "fuzz.json", 1) {
+            all.extend(t);
+        }
+    }
+    let fit = bt::logs::fit(&tree, &all);
+    let written = fit.to_toml();
+    let again = bt::TreeParams::parse(&written, "fit.toml");
+    assert!(
+        again.is_ok(),
+        "a fitted sidecar does not read: {again:?}\n{written}"
+    );
 }

@@ -1,6 +1,7 @@
 //! `petrinav`: the command-line entry point. Parsing and dispatch only; each
 //! command lives in its own module.
 
+mod bt_cmd;
 mod gspn;
 mod guide_cmd;
 mod interrupt;
@@ -78,6 +79,10 @@ enum Command {
     /// Topological maps as fuzzy Petri nets: explore a world, plan and drive routes, convert, generate.
     #[command(subcommand)]
     Topo(topo_cmd::TopoCommand),
+    /// Behaviour trees (BehaviorTree.CPP v3/v4, Nav2): check, analyse through
+    /// their GSPN, simulate, fit leaf parameters to logs.
+    #[command(subcommand)]
+    Bt(bt_cmd::BtCommand),
 }
 
 fn main() -> ExitCode {
@@ -94,20 +99,26 @@ fn main() -> ExitCode {
         Command::Nav(cmd) => nav_cmd::run(cmd),
         Command::Guide(cmd) => guide_cmd::run(cmd),
         Command::Topo(cmd) => topo_cmd::run(cmd),
+        Command::Bt(cmd) => match bt_cmd::run(cmd) {
+            Ok(code) => return code,
+            Err(e) => Err(e),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // A closed pipe (`petrinav … | head`) is not an error.
-            let broken_pipe = e
-                .chain()
-                .filter_map(|c| c.downcast_ref::<std::io::Error>())
-                .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe);
-            if broken_pipe {
+            if broken_pipe(&e) {
                 return ExitCode::SUCCESS;
             }
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether an error is a closed pipe (`petrinav … | head`), which is not an error.
+pub(crate) fn broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain()
+        .filter_map(|c| c.downcast_ref::<std::io::Error>())
+        .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
 }

@@ -92,6 +92,68 @@ pub struct Gspn {
     rewards: Vec<RewardModel>,
     /// What to choose in the choice markings ([`Gspn::with_policy`]).
     policy: Option<Arc<Policy>>,
+    /// The candidates of the firing rule ([`Gspn::firable`]).
+    candidates: Candidates,
+}
+
+/// Which transitions may be enabled in a marking: each transition with
+/// input arcs is listed under one of its input places (the one with the
+/// fewest consumers), so only the lists of marked places need testing;
+/// transitions without input arcs are always candidates.
+#[derive(Debug, Clone, Default)]
+struct Candidates {
+    /// `start[p]..start[p + 1]` in `keyed`: the transitions keyed on place `p`.
+    start: Vec<u32>,
+    keyed: Vec<TransitionId>,
+    sourceless: Vec<TransitionId>,
+}
+
+impl Candidates {
+    fn new(num_places: usize, inputs: &PerTransition<u32>, num_transitions: usize) -> Candidates {
+        let mut consumers = vec![0u32; num_places];
+        for &(p, _) in &inputs.items {
+            consumers[p as usize] += 1;
+        }
+        let mut lists = vec![Vec::new(); num_places];
+        let mut sourceless = Vec::new();
+        for t in 0..num_transitions {
+            let tid = TransitionId(t as u32);
+            match inputs
+                .of(t)
+                .iter()
+                .min_by_key(|&&(p, _)| (consumers[p as usize], p))
+            {
+                Some(&(p, _)) => lists[p as usize].push(tid),
+                None => sourceless.push(tid),
+            }
+        }
+        let mut start = Vec::with_capacity(num_places + 1);
+        let mut keyed = Vec::new();
+        start.push(0);
+        for l in lists {
+            keyed.extend(l);
+            start.push(keyed.len() as u32);
+        }
+        Candidates {
+            start,
+            keyed,
+            sourceless,
+        }
+    }
+
+    /// Collects into `out`, in transition order, every transition that
+    /// might be enabled in `m`.
+    #[inline]
+    fn collect(&self, m: &[u32], out: &mut Vec<TransitionId>) {
+        out.clear();
+        out.extend_from_slice(&self.sourceless);
+        for (p, &k) in m.iter().enumerate() {
+            if k > 0 {
+                out.extend_from_slice(&self.keyed[self.start[p] as usize..self.start[p + 1] as usize]);
+            }
+        }
+        out.sort_unstable();
+    }
 }
 
 impl Net {
@@ -283,6 +345,8 @@ impl Gspn {
             list[t as usize].push((p, m));
         }
         let deltas = token_deltas(&ins, &outs);
+        let inputs = PerTransition::from_lists(ins);
+        let candidates = Candidates::new(net.places.len(), &inputs, nt);
 
         Ok(Gspn {
             name: net.name.clone(),
@@ -294,7 +358,7 @@ impl Gspn {
             rate_exprs,
             params,
             structural_params,
-            inputs: PerTransition::from_lists(ins),
+            inputs,
             outputs: PerTransition::from_lists(outs),
             inhibitors: PerTransition::from_lists(inhs),
             delta: PerTransition::from_lists(deltas),
@@ -303,6 +367,7 @@ impl Gspn {
             labels: net.labels.clone(),
             rewards: net.rewards.clone(),
             policy: None,
+            candidates,
         })
     }
 
@@ -598,31 +663,40 @@ impl Gspn {
     /// Collects into `out` the transitions that may fire in `m` under GSPN
     /// semantics, and says whether `m` is vanishing: if any immediate
     /// transition is enabled, only the enabled immediate transitions of the
-    /// highest priority; otherwise all enabled timed transitions.
+    /// highest priority; otherwise all enabled timed transitions. Both in
+    /// transition order. Cost: the places, plus the transitions keyed on a
+    /// marked place (each transition is keyed on one of its input places).
     pub fn firable(&self, m: &[u32], out: &mut Vec<TransitionId>) -> MarkingKind {
-        out.clear();
+        // Only transitions with a marked input place (or none) can be
+        // enabled; they are tested in transition order, filtered in place.
+        self.candidates.collect(m, out);
+        let mut kept = 0;
         let mut best_priority = 0u32;
-        for t in 0..self.num_transitions() {
-            let tid = TransitionId(t as u32);
-            if let Timing::Immediate { priority, .. } = self.timing[t] {
+        for i in 0..out.len() {
+            let tid = out[i];
+            if let Timing::Immediate { priority, .. } = self.timing[tid.index()] {
                 if priority >= best_priority && self.is_enabled(tid, m) {
                     if priority > best_priority {
-                        out.clear();
+                        kept = 0;
                         best_priority = priority;
                     }
-                    out.push(tid);
+                    out[kept] = tid;
+                    kept += 1;
                 }
             }
         }
         if best_priority > 0 {
+            out.truncate(kept);
             return MarkingKind::Vanishing;
         }
-        for t in 0..self.num_transitions() {
-            let tid = TransitionId(t as u32);
-            if matches!(self.timing[t], Timing::Timed { .. }) && self.is_enabled(tid, m) {
-                out.push(tid);
+        for i in 0..out.len() {
+            let tid = out[i];
+            if matches!(self.timing[tid.index()], Timing::Timed { .. }) && self.is_enabled(tid, m) {
+                out[kept] = tid;
+                kept += 1;
             }
         }
+        out.truncate(kept);
         MarkingKind::Tangible
     }
 

@@ -30,6 +30,7 @@
 //! | the net instantiated, firing rule | [`gspn`] |
 //! | reachability graph | [`reachability`] |
 //! | vanishing elimination, CTMC, long-run solution, measures | [`ctmc`] |
+//! | nets that finish: end probabilities, mean time, its distribution | [`absorption`] |
 //! | steady-state methods (GTH, LU, BiCGSTAB, Gauss–Seidel) | [`steady_state`], [`krylov`] |
 //! | structural analysis | [`incidence`], [`invariants`] |
 //! | behavioural properties | [`properties`] |
@@ -39,6 +40,8 @@
 //! | the closest valid name, for messages | [`suggest`] |
 #![warn(missing_docs)]
 
+pub mod absorption;
+mod blocks;
 pub mod ctmc;
 pub mod decision;
 pub mod error;
@@ -64,6 +67,7 @@ pub mod steady_state;
 pub mod suggest;
 mod vanishing;
 
+pub use absorption::Absorption;
 pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
 pub use decision::{ChoiceReport, DecisionNet, NetObjective};
 pub use error::{Error, Result};

@@ -117,6 +117,15 @@ pub(crate) fn classify(e: &anyhow::Error, default: Kind) -> Kind {
         {
             return k;
         }
+        if let Some(b) = cause.downcast_ref::<bt::Error>() {
+            return match b {
+                bt::Error::Io { .. } => Kind::File,
+                bt::Error::Param { .. } => Kind::Parameter,
+                bt::Error::Petri(p) => of_petri(p).unwrap_or(Kind::Solve),
+                bt::Error::Analysis(_) => Kind::Solve,
+                _ => Kind::Format,
+            };
+        }
         if let Some(s) = cause.downcast_ref::<sim::Error>() {
             return match s {
                 sim::Error::Io { .. } => Kind::File,

@@ -4,7 +4,7 @@
 //!
 //! It is a thin layer over the library crates: every call goes through the
 //! same functions as the command line (`lab::gspn`, `lab::tours`,
-//! `lab::batch`), so numbers, records and error messages are the command
+//! `lab::batch`, `bt`), so numbers, records and error messages are the command
 //! line's. What this crate adds is the Python side of things:
 //!
 //! - numpy arrays for markings and probabilities (`net.rs`);
@@ -13,6 +13,7 @@
 //! - long calls off the GIL, stopped by Ctrl-C, panics caught (`run.rs`);
 //! - JSON values as dicts, parameter values as assignments (`convert.rs`).
 
+mod bt;
 mod commands;
 mod convert;
 mod errors;
@@ -40,6 +41,9 @@ fn petrinav_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(commands::lab_run, m)?)?;
     m.add_function(wrap_pyfunction!(commands::lab_results, m)?)?;
     m.add_function(wrap_pyfunction!(commands::lab_suites, m)?)?;
+    m.add_function(wrap_pyfunction!(bt::bt_load, m)?)?;
+    m.add_function(wrap_pyfunction!(bt::bt_check, m)?)?;
+    m.add_function(wrap_pyfunction!(bt::bt_analyze, m)?)?;
     m.add_function(wrap_pyfunction!(commands::_panic_for_tests, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

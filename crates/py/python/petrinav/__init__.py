@@ -18,7 +18,8 @@ release the GIL and stop on Ctrl-C (``KeyboardInterrupt``).
 
 Modules: :mod:`petrinav.supervisor` (the tour-guide supervisor's
 decision), :mod:`petrinav.nav` (guided tours on building maps),
-:mod:`petrinav.lab` (experiment suites), :mod:`petrinav.errors`.
+:mod:`petrinav.lab` (experiment suites), :mod:`petrinav.bt` (behaviour
+trees checked and quantified), :mod:`petrinav.errors`.
 """
 
 from . import errors
@@ -50,7 +51,7 @@ from .errors import (
     SolveError,
     StateLimitError,
 )
-from . import lab, nav, supervisor
+from . import bt, lab, nav, supervisor
 
 __all__ = [
     "Arc",
@@ -73,6 +74,7 @@ __all__ = [
     "StateSpace",
     "Transition",
     "__version__",
+    "bt",
     "errors",
     "family",
     "formats",

@@ -6,6 +6,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Union, final
 import numpy as np
 import numpy.typing as npt
 
+from . import bt as bt
 from . import errors as errors
 from . import lab as lab
 from . import nav as nav

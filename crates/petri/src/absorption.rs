@@ -1,0 +1,425 @@
+//! Absorbing chains: where a run ends, how long it takes, and the
+//! distribution of that time — for nets that *finish* (a behaviour tree's
+//! execution, a mission), rather than run forever.
+//!
+//! The CTMC's bottom strongly connected components are its ends (a dead
+//! marking is a component of one state). With `T` the transient states and
+//! `π0` the initial distribution after vanishing elimination:
+//!
+//! - expected time in each transient state, `x (−Q_TT) = π0_T`;
+//! - probability of ending in component `B`, `π0_B + Σ_{s∈T} x_s q_{sB}`;
+//! - mean time to the end, `Σ_s x_s` (finite when every run ends);
+//! - mean time of the runs that end in `B`, `Σ_s x_s h_B(s) / P(B)` with
+//!   `h_B` the absorption probabilities from each state, `(−Q_TT) h_B = q_{·B}`
+//!   — computed for every `B` at once as `Σ_i z_i q_{iB} / P(B)` with
+//!   `z (−Q_TT) = x`;
+//! - `P(T ≤ t)` by uniformisation (Jensen's method): with `Λ ≥` every exit
+//!   rate and `P = I + Q/Λ`, `P(T > t) = Σ_k Poisson(k; Λt) ‖π0_T P_TT^k‖₁`,
+//!   the sum cut when the Poisson tail is below the tolerance.
+//!
+//! - the same on a grid by Crank–Nicolson (`absorption_cdf_grid`), whose
+//!   cost does not grow with the fastest rate.
+//!
+//! Both linear systems, and every implicit time step, are solved block by
+//! block over the chain's strongly connected components in topological
+//! order ([`crate::blocks`]): a finishing chain is mostly small components
+//! in sequence, which a sparse LU of the whole matrix would fill in.
+
+use crate::blocks::BlockSystem;
+use crate::ctmc::CompiledGspn;
+use crate::error::{Error, Result};
+use crate::net::TransitionId;
+
+/// What an absorbing chain does from its initial marking.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Absorption {
+    /// Probability of ending in each bottom component, in the order of
+    /// [`CompiledGspn::bottom_components`].
+    pub end_probability: Vec<f64>,
+    /// Mean time to reach any end (over the runs that end; all do when the
+    /// end probabilities sum to 1).
+    pub mean_time: f64,
+    /// Mean time of the runs ending in each component (0 where its
+    /// probability is 0).
+    pub mean_time_to: Vec<f64>,
+    /// Expected time spent in each tangible state before the end (0 for the
+    /// states of bottom components).
+    pub sojourn: Vec<f64>,
+    /// For each bottom component and timed transition: the probability that
+    /// the run ends there through a firing of that transition (the last
+    /// timed event before the end). Ends reached at time 0 are not counted.
+    pub entered_by: Vec<Vec<(TransitionId, f64)>>,
+}
+
+/// The transient part of a compiled chain, with its rates bound.
+struct Transient {
+    /// Tangible state → index among the transient states (`u32::MAX` otherwise).
+    local: Vec<u32>,
+    states: Vec<u32>,
+    /// Bottom component of each state (`u32::MAX` for transient ones).
+    bottom_of: Vec<u32>,
+    /// `(from, to, rate)` among transient states, `from != to`.
+    inner: Vec<(u32, u32, f64)>,
+    /// `(from, bottom component, transition, rate)`.
+    exits: Vec<(u32, u32, TransitionId, f64)>,
+    /// Exit rate of each transient state (to anything but itself).
+    out_rate: Vec<f64>,
+}
+
+fn transient(chain: &CompiledGspn, rates: &[f64]) -> Result<Transient> {
+    let n = chain.num_tangible();
+    if chain.is_ergodic() {
+        return Err(Error::Invalid(
+            "the chain is irreducible: no run ever ends (no absorbing marking)".into(),
+        ));
+    }
+    let mut bottom_of = vec![u32::MAX; n];
+    for (b, states) in chain.bottom_components().iter().enumerate() {
+        for &s in states {
+            bottom_of[s as usize] = b as u32;
+        }
+    }
+    let states: Vec<u32> = (0..n as u32)
+        .filter(|&s| bottom_of[s as usize] == u32::MAX)
+        .collect();
+    let mut local = vec![u32::MAX; n];
+    for (i, &s) in states.iter().enumerate() {
+        local[s as usize] = i as u32;
+    }
+    let mut inner = Vec::new();
+    let mut exits = Vec::new();
+    let mut out_rate = vec![0.0; states.len()];
+    for (i, &s) in states.iter().enumerate() {
+        for (d, t, c) in chain.entries_from(s as usize) {
+            let r = rates[t.index()] * c;
+            if !(r.is_finite() && r >= 0.0) {
+                return Err(Error::InvalidValue {
+                    element: format!("transition `{}`", chain.gspn().transition_names()[t.index()]),
+                    what: "the rate",
+                    requirement: "a finite number ≥ 0",
+                    value: rates[t.index()],
+                });
+            }
+            if d == s || r == 0.0 {
+                continue;
+            }
+            out_rate[i] += r;
+            match local[d as usize] {
+                u32::MAX => exits.push((i as u32, bottom_of[d as usize], t, r)),
+                j => inner.push((i as u32, j, r)),
+            }
+        }
+    }
+    Ok(Transient {
+        local,
+        states,
+        bottom_of,
+        inner,
+        exits,
+        out_rate,
+    })
+}
+
+/// `P(T > t)` on the grid `t_k = k·h`, `k = 0, 1, …`, by Crank–Nicolson on
+/// the forward equation `dp/dt = p Q_TT`: `p_{k+1} (I + (h/2) A) = p_k (I −
+/// (h/2) A)` with `A = −Q_TT`, one block-triangular factorisation
+/// ([`crate::blocks`]) for every step. Second order in `h` and stable for
+/// any rate, so its cost does not grow with the fastest rate as
+/// uniformisation's does. The first two steps are four backward-Euler half
+/// steps (Rannacher's start, same matrix), which damp the components far
+/// faster than `1/h` that Crank–Nicolson alone would carry as oscillations.
+/// Stops after `max_steps` steps, or once the survival is at most `stop_below`.
+fn survival_crank_nicolson(
+    tr: &Transient,
+    p0: &[f64],
+    h: f64,
+    max_steps: usize,
+    stop_below: f64,
+) -> Result<Vec<f64>> {
+    let sys = BlockSystem::new(
+        "the time distribution (Crank–Nicolson)",
+        &tr.out_rate,
+        &tr.inner,
+        1.0,
+        0.5 * h,
+    )?;
+    let mut p = p0.to_vec();
+    let mut rhs = vec![0.0; p.len()];
+    let mut out = Vec::with_capacity(max_steps + 1);
+    out.push(p.iter().sum::<f64>());
+    for k in 0..max_steps {
+        if k < 2 {
+            sys.solve_row(&mut p);
+            sys.solve_row(&mut p);
+        } else {
+            // rhs = p (I − (h/2) A)
+            for (i, v) in rhs.iter_mut().enumerate() {
+                *v = p[i] * (1.0 - 0.5 * h * tr.out_rate[i]);
+            }
+            for &(i, j, r) in &tr.inner {
+                rhs[j as usize] += 0.5 * h * r * p[i as usize];
+            }
+            sys.solve_row(&mut rhs);
+            std::mem::swap(&mut p, &mut rhs);
+        }
+        let survival = p.iter().sum::<f64>();
+        out.push(survival);
+        if !survival.is_finite() {
+            return Err(Error::NotFinite {
+                what: "the time distribution".into(),
+                value: survival,
+                cause: "the Crank–Nicolson steps lost all precision".into(),
+            });
+        }
+        if survival <= stop_below {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+impl CompiledGspn {
+    /// `P(end reached by t)` on the grid `t_k = k·t_max/steps`, `k = 0…steps`,
+    /// by Crank–Nicolson (error O(h²), `h = t_max/steps`; any rates):
+    /// cheaper than [`absorption_cdf`](Self::absorption_cdf) when rates are
+    /// far apart (a fast rate makes uniformisation take `Λ t` steps).
+    pub fn absorption_cdf_grid(&self, rates: &[f64], t_max: f64, steps: usize) -> Result<Vec<f64>> {
+        if !(t_max.is_finite() && t_max > 0.0) || steps == 0 {
+            return Err(Error::Invalid(format!(
+                "a time grid needs t_max > 0 and steps ≥ 1 (got {t_max}, {steps})"
+            )));
+        }
+        self.absorption_cdf_steps(rates, t_max / steps as f64, steps, 2.0)
+    }
+
+    /// `P(end reached by k·h)` for `k = 0, 1, …` as for
+    /// [`absorption_cdf_grid`](Self::absorption_cdf_grid), stopped after
+    /// `max_steps` steps or at the first point where it reaches `level`
+    /// (the last value returned): the grid of a quantile need not be longer
+    /// than the quantile.
+    pub fn absorption_cdf_steps(
+        &self,
+        rates: &[f64],
+        h: f64,
+        max_steps: usize,
+        level: f64,
+    ) -> Result<Vec<f64>> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::Invalid(format!("a time step must be > 0 (got {h})")));
+        }
+        let tr = transient(self, rates)?;
+        let mut p = vec![0.0; tr.states.len()];
+        for &(s, w) in self.initial_distribution() {
+            let i = tr.local[s as usize];
+            if i != u32::MAX {
+                p[i as usize] += w;
+            }
+        }
+        let survival = survival_crank_nicolson(&tr, &p, h, max_steps, 1.0 - level)?;
+        Ok(survival.into_iter().map(|v| (1.0 - v).clamp(0.0, 1.0)).collect())
+    }
+
+    /// Absorption probabilities, mean times and sojourn times for `rates`
+    /// (one per transition, as for [`CompiledGspn::solve_rates`]).
+    ///
+    /// Errors: an irreducible chain (nothing ends), a singular system (a
+    /// transient state from which no end is reachable).
+    pub fn absorption(&self, rates: &[f64]) -> Result<Absorption> {
+        let tr = transient(self, rates)?;
+        let m = tr.states.len();
+        let nb = self.bottom_components().len();
+        let mut pi0_t = vec![0.0; m];
+        let mut end_probability = vec![0.0; nb];
+        for &(s, p) in self.initial_distribution() {
+            match tr.local[s as usize] {
+                u32::MAX => end_probability[tr.bottom_of[s as usize] as usize] += p,
+                i => pi0_t[i as usize] += p,
+            }
+        }
+        // x (−Q_TT) = π0_T.
+        let sys = BlockSystem::new("the absorption equations", &tr.out_rate, &tr.inner, 0.0, 1.0)?;
+        let mut x = pi0_t;
+        sys.solve_row(&mut x);
+        let mut entered: Vec<std::collections::BTreeMap<TransitionId, f64>> = vec![Default::default(); nb];
+        for &(i, b, t, r) in &tr.exits {
+            end_probability[b as usize] += x[i as usize] * r;
+            *entered[b as usize].entry(t).or_insert(0.0) += x[i as usize] * r;
+        }
+        // Σ_s x_s h_B(s) = x (−Q_TT)⁻¹ q_{·B} = z q_{·B} with z (−Q_TT) = x:
+        // one more row solve serves every end.
+        let mut z = x.clone();
+        sys.solve_row(&mut z);
+        let mut weighted = vec![0.0; nb];
+        for &(i, b, _, r) in &tr.exits {
+            weighted[b as usize] += z[i as usize] * r;
+        }
+        let mean_time_to = weighted
+            .iter()
+            .zip(&end_probability)
+            .map(|(&w, &p)| if p > 0.0 { w / p } else { 0.0 })
+            .collect();
+        let total: f64 = end_probability.iter().sum();
+        let mean_time = x.iter().sum::<f64>() / total.max(f64::MIN_POSITIVE);
+        let mut sojourn = vec![0.0; self.num_tangible()];
+        for (i, &s) in tr.states.iter().enumerate() {
+            sojourn[s as usize] = x[i];
+        }
+        let all = [mean_time]
+            .into_iter()
+            .chain(end_probability.iter().copied())
+            .chain(x.iter().copied());
+        if let Some(v) = all.into_iter().find(|v| !v.is_finite()) {
+            return Err(Error::NotFinite {
+                what: "an absorption measure".into(),
+                value: v,
+                cause: "the absorption equations lost all precision".into(),
+            });
+        }
+        Ok(Absorption {
+            end_probability,
+            mean_time,
+            mean_time_to,
+            sojourn,
+            entered_by: entered.into_iter().map(|m| m.into_iter().collect()).collect(),
+        })
+    }
+
+    /// `P(end reached by t)` for each time in `times` (ascending or not),
+    /// by uniformisation with truncation error below `tolerance`.
+    ///
+    /// Cost: `O((Λ t_max + √(Λ t_max)) · entries)` with `Λ` the largest exit
+    /// rate; an error beyond `max_steps` steps.
+    pub fn absorption_cdf(
+        &self,
+        rates: &[f64],
+        times: &[f64],
+        tolerance: f64,
+        max_steps: usize,
+    ) -> Result<Vec<f64>> {
+        let tr = transient(self, rates)?;
+        let m = tr.states.len();
+        let mut p = vec![0.0; m];
+        for &(s, w) in self.initial_distribution() {
+            let i = tr.local[s as usize];
+            if i != u32::MAX {
+                p[i as usize] += w;
+            }
+        }
+        let lambda = tr.out_rate.iter().copied().fold(0.0, f64::max) * 1.02;
+        if lambda == 0.0 || m == 0 {
+            return Ok(times.iter().map(|_| 1.0 - p.iter().sum::<f64>()).collect());
+        }
+        let t_max = times.iter().copied().fold(0.0, f64::max);
+        // Survival after k uniformised steps, for k = 0, 1, …
+        let mut survival = vec![p.iter().sum::<f64>()];
+        let need = |lt: f64| (lt + 10.0 * lt.sqrt() + 20.0).ceil() as usize;
+        let steps = need(lambda * t_max);
+        if steps > max_steps {
+            return Err(Error::Invalid(format!(
+                "the time distribution needs {steps} uniformisation steps (more than {max_steps}): rates up to {lambda:.3e} over a time of {t_max:.3e}"
+            )));
+        }
+        let mut next = vec![0.0; m];
+        for _ in 0..steps {
+            for (i, v) in next.iter_mut().enumerate() {
+                *v = p[i] * (1.0 - tr.out_rate[i] / lambda);
+            }
+            for &(i, j, r) in &tr.inner {
+                next[j as usize] += p[i as usize] * r / lambda;
+            }
+            std::mem::swap(&mut p, &mut next);
+            survival.push(p.iter().sum::<f64>());
+        }
+        Ok(times
+            .iter()
+            .map(|&t| {
+                let lt = lambda * t.max(0.0);
+                // Poisson weights in log form (no overflow for large Λt).
+                let mut acc = 0.0;
+                let mut weight_sum = 0.0;
+                let mut ln_k_factorial = 0.0;
+                for (k, &s) in survival.iter().enumerate() {
+                    if k > 0 {
+                        ln_k_factorial += (k as f64).ln();
+                    }
+                    let lw = -lt + (k as f64) * lt.max(f64::MIN_POSITIVE).ln() - ln_k_factorial;
+                    let w = lw.exp();
+                    acc += w * s;
+                    weight_sum += w;
+                    if k as f64 > lt && 1.0 - weight_sum < tolerance {
+                        break;
+                    }
+                }
+                (1.0 - acc).clamp(0.0, 1.0)
+            })
+            .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{CompiledGspn, ExploreParams, Net, Params};
+
+    /// start → (rate a) ok, or (rate b) ko: P(ok) = a/(a+b), E[T] = 1/(a+b).
+    #[test]
+    fn race_of_two_exponentials() {
+        let mut net = Net::new("race");
+        let s = net.add_place("s", 1u32);
+        let ok = net.add_place("ok", 0u32);
+        let ko = net.add_place("ko", 0u32);
+        let a = net.add_timed("a", 3.0);
+        let b = net.add_timed("b", 1.0);
+        net.input(s, a);
+        net.output(a, ok);
+        net.input(s, b);
+        net.output(b, ko);
+        let g = net.instantiate(&Params::new()).unwrap();
+        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
+        let rates = g.rates(&Params::new(), None).unwrap();
+        let r = c.absorption(&rates).unwrap();
+        let okb = c
+            .bottom_components()
+            .iter()
+            .position(|b| c.tangible_marking(b[0] as usize)[1] == 1)
+            .unwrap();
+        assert!((r.end_probability[okb] - 0.75).abs() < 1e-12);
+        assert!((r.mean_time - 0.25).abs() < 1e-12);
+        assert!((r.mean_time_to[okb] - 0.25).abs() < 1e-12);
+        let cdf = c.absorption_cdf(&rates, &[0.1, 1.0], 1e-12, 100_000).unwrap();
+        for (t, p) in [0.1f64, 1.0].iter().zip(cdf) {
+            assert!((p - (1.0 - (-4.0 * t).exp())).abs() < 1e-9, "{t}: {p}");
+        }
+    }
+
+    /// Two exponential stages (Erlang 2, rate 2 each): mean 1, P(T ≤ t) = 1 − e^{−2t}(1 + 2t).
+    #[test]
+    fn erlang_two_stages() {
+        let mut net = Net::new("erlang");
+        let p0 = net.add_place("p0", 1u32);
+        let p1 = net.add_place("p1", 0u32);
+        let p2 = net.add_place("p2", 0u32);
+        let t1 = net.add_timed("t1", 2.0);
+        let t2 = net.add_timed("t2", 2.0);
+        net.input(p0, t1);
+        net.output(t1, p1);
+        net.input(p1, t2);
+        net.output(t2, p2);
+        let g = net.instantiate(&Params::new()).unwrap();
+        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
+        let rates = g.rates(&Params::new(), None).unwrap();
+        let r = c.absorption(&rates).unwrap();
+        assert!((r.mean_time - 1.0).abs() < 1e-12);
+        let t = 0.7;
+        let cdf = c.absorption_cdf(&rates, &[t], 1e-12, 100_000).unwrap()[0];
+        let exact = |t: f64| 1.0 - (-2.0 * t).exp() * (1.0 + 2.0 * t);
+        assert!((cdf - exact(t)).abs() < 1e-9);
+        // Crank–Nicolson on 0…1.4 in 400 steps: second order, close to 1e-5.
+        let grid = c.absorption_cdf_grid(&rates, 1.4, 400).unwrap();
+        assert!(
+            (grid[200] - exact(t)).abs() < 1e-5,
+            "{} vs {}",
+            grid[200],
+            exact(t)
+        );
+    }
+}
