@@ -49,14 +49,20 @@ pub mod invariants;
 pub mod io;
 pub mod krylov;
 mod linear;
+mod descriptor;
 mod marking;
+mod mdd;
 pub mod net;
+mod product_search;
 pub mod properties;
 pub mod reachability;
 mod rows;
 pub mod scc;
 pub mod simulation;
 pub mod steady_state;
+pub mod structure;
+pub mod structured;
+mod sweep;
 mod vanishing;
 
 pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
@@ -81,3 +87,5 @@ pub use reachability::{
 };
 pub use simulation::{Estimate, SimParams, SimProgress, SimResult, simulate, simulate_observed};
 pub use steady_state::{Method, SolveInfo, SolveParams};
+pub use structure::{Component, GroupInfo, Structure, StructureParams};
+pub use structured::{StructuredGspn, StructuredParams, StructuredSolution, StructuredStats};
