@@ -127,10 +127,51 @@ pub(crate) struct Descriptor {
 }
 
 impl Descriptor {
+    /// Renumbers each component's local states in breadth-first order from
+    /// the initial marking's local state over the events' local moves
+    /// (states never met keep their relative order, after the others), and
+    /// builds the descriptor over the renumbered structure.
+    pub(crate) fn with_flow_order(gspn: &Gspn, structure: &mut Structure) -> Result<Descriptor> {
+        let first = Self::build(gspn, structure)?;
+        let m0 = structure
+            .locals_of(gspn.initial_marking())
+            .ok_or_else(|| Error::Invalid("internal: the initial marking is not a product state".into()))?;
+        for (k, comp) in structure.components_mut().iter_mut().enumerate() {
+            let n = comp.len();
+            let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
+            for e in &first.events {
+                for m in e.maps.iter().filter(|m| m.level == k && m.moves) {
+                    for (l, &s) in m.succ.iter().enumerate() {
+                        if s != NONE && s as usize != l {
+                            adj[l].push(s);
+                        }
+                    }
+                }
+            }
+            let mut order = Vec::with_capacity(n);
+            let mut seen = vec![false; n];
+            seen[m0[k]] = true;
+            order.push(m0[k] as u32);
+            let mut head = 0;
+            while head < order.len() {
+                let l = order[head] as usize;
+                head += 1;
+                for &s in &adj[l] {
+                    if !std::mem::replace(&mut seen[s as usize], true) {
+                        order.push(s);
+                    }
+                }
+            }
+            order.extend((0..n as u32).filter(|&l| !seen[l as usize]));
+            comp.reorder(&order);
+        }
+        Self::build(gspn, structure)
+    }
+
     /// Builds the local maps of every transition over `structure`.
     /// Fails if a transition leaves a component's local space while every
     /// component enables it somewhere (the structure would be wrong).
-    pub(crate) fn new(gspn: &Gspn, structure: &Structure) -> Result<Descriptor> {
+    fn build(gspn: &Gspn, structure: &Structure) -> Result<Descriptor> {
         let comps = structure.components();
         let sizes: Vec<usize> = comps.iter().map(|c| c.len()).collect();
         let mut strides = vec![1u64; sizes.len()];

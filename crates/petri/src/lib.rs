@@ -38,6 +38,7 @@
 //! | scalable benchmark nets | [`families`] |
 #![warn(missing_docs)]
 
+mod aggregation;
 pub mod ctmc;
 pub mod error;
 pub mod expr;
@@ -50,6 +51,7 @@ pub mod io;
 pub mod krylov;
 mod linear;
 mod descriptor;
+mod marginals;
 mod marking;
 mod mdd;
 pub mod net;

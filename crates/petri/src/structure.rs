@@ -68,9 +68,13 @@ pub struct StructureParams {
 pub struct Component {
     /// Its places, in the order of the local markings' entries.
     pub places: Vec<PlaceId>,
-    /// Local markings, lexicographically sorted, `places.len()` counts each
-    /// (the local state `l` is `states[l·w .. (l+1)·w]`).
+    /// Local markings, `places.len()` counts each (the local state `l` is
+    /// `states[l·w .. (l+1)·w]`), lexicographically sorted unless
+    /// [`reorder`](Self::reorder)ed.
     states: Vec<u32>,
+    /// The local states in lexicographic order of their markings, for
+    /// ranking; empty while the states themselves are in that order.
+    sorted: Vec<u32>,
 }
 
 impl Component {
@@ -98,16 +102,34 @@ impl Component {
 
     /// The local state with these counts, if it is one.
     pub fn rank(&self, counts: &[u32]) -> Option<usize> {
+        let at = |i: usize| if self.sorted.is_empty() { i } else { self.sorted[i] as usize };
         let (mut lo, mut hi) = (0, self.len());
         while lo < hi {
             let mid = (lo + hi) / 2;
-            match self.state(mid).cmp(counts) {
+            match self.state(at(mid)).cmp(counts) {
                 std::cmp::Ordering::Less => lo = mid + 1,
                 std::cmp::Ordering::Greater => hi = mid,
-                std::cmp::Ordering::Equal => return Some(mid),
+                std::cmp::Ordering::Equal => return Some(at(mid)),
             }
         }
         None
+    }
+
+    /// Renumbers the local states: the new state `i` is the old
+    /// `order[i]` (a permutation).
+    pub(crate) fn reorder(&mut self, order: &[u32]) {
+        let w = self.places.len();
+        if w == 0 {
+            return;
+        }
+        let mut states = Vec::with_capacity(self.states.len());
+        for &o in order {
+            states.extend_from_slice(self.state(o as usize));
+        }
+        self.states = states;
+        let mut sorted: Vec<u32> = (0..self.len() as u32).collect();
+        sorted.sort_by(|&a, &b| self.state(a as usize).cmp(self.state(b as usize)));
+        self.sorted = sorted;
     }
 
     /// Heap bytes of the local markings.
@@ -226,6 +248,11 @@ impl Structure {
     /// The components, outermost first.
     pub fn components(&self) -> &[Component] {
         &self.components
+    }
+
+    /// Mutable access to the components (to renumber their local states).
+    pub(crate) fn components_mut(&mut self) -> &mut [Component] {
+        &mut self.components
     }
 
     /// Reachable markings of the P/T net (see the module docs).
@@ -477,6 +504,7 @@ fn segment(mdd: &Mdd, root: u32, start: usize, end: usize, gspn: &Gspn) -> Resul
     Ok(Component {
         places: (start..end).map(|d| PlaceId(mdd.place_at(d))).collect(),
         states,
+        sorted: Vec::new(),
     })
 }
 
@@ -508,6 +536,7 @@ fn product(a: &Component, b: &Component) -> Component {
     Component {
         places: a.places.iter().chain(&b.places).copied().collect(),
         states,
+        sorted: Vec::new(),
     }
 }
 

@@ -68,14 +68,25 @@ use crate::sweep::{Kinds, Plan, TANGIBLE, UNREACHABLE};
 /// as a marginal; beyond, the measure decodes every state.
 pub const MAX_JOINT: usize = 1 << 22;
 
-/// Sweeps per window of the relaxation control.
+/// Sweeps per window of the relaxation control (two aggregation cycles).
 const WINDOW: usize = 8;
 /// Sweeps after a change of ω not counted in its window.
-const SETTLE: usize = 2;
+const SETTLE: usize = 8;
+/// Sweeps at ω = 1 before its first window (the first sweeps converge
+/// faster than the asymptotic rate, and over-relaxation slower).
+const WARMUP: usize = 16;
+/// Step of ω between windows.
+const OMEGA_STEP: f64 = 0.05;
 /// Largest ω tried.
-const MAX_OMEGA: f64 = 1.9;
-/// A new ω is kept when its window converges at least this much faster.
-const GAIN: f64 = 0.97;
+const MAX_OMEGA: f64 = 1.15;
+/// A new ω is kept when its window's convergence speed (`−ln` of the
+/// imbalance's factor per sweep) is at least this fraction of the previous
+/// window's: later windows converge more slowly at any ω (the fast
+/// components of the error are gone), so demanding a gain would stop the
+/// search below the best ω (`EXPERIMENTS.md`).
+const GAIN: f64 = 0.8;
+/// Sweeps between two aggregation steps.
+const AGGREGATE_EVERY: usize = 4;
 
 /// Options of the structured engine.
 #[derive(Debug, Clone)]
@@ -150,6 +161,8 @@ pub struct StructuredSolution {
     pub omega: f64,
     /// Sweeps at each ω tried, in order.
     pub omega_history: Vec<(f64, usize)>,
+    /// Aggregation steps done (each over every component).
+    pub aggregations: usize,
     /// Probability of each product state (0 for unreachable and vanishing
     /// ones; vanishing ones hold their flow per unit time).
     x: Vec<f64>,
@@ -172,7 +185,7 @@ impl StructuredGspn {
     pub fn build(gspn: &Gspn, params: &StructuredParams, stop: Interrupt<'_>) -> Result<StructuredGspn> {
         stop.check("finding the structure")?;
         stop.stage(Stage::Generating);
-        let structure = Structure::detect(gspn, &params.structure).map_err(|e| match e {
+        let mut structure = Structure::detect(gspn, &params.structure).map_err(|e| match e {
             Error::Invalid(m) => unstructured(m),
             other => other,
         })?;
@@ -205,7 +218,7 @@ impl StructuredGspn {
                 edges: 0,
             });
         }
-        let desc = Descriptor::new(gspn, &structure).map_err(|e| match e {
+        let desc = Descriptor::with_flow_order(gspn, &mut structure).map_err(|e| match e {
             Error::Invalid(m) => unstructured(m),
             other => other,
         })?;
@@ -289,7 +302,8 @@ impl StructuredGspn {
         let scaled: Vec<f64> = rates.iter().map(|r| r / scale).collect();
         let plan = Plan::new(&self.desc, self.kinds.as_ref(), &scaled);
         let mut x = self.initial_vector();
-        let run = iterate(&plan, &mut x, params, omega_fixed, stop)?;
+        let aggregate = self.kinds.is_none() && self.desc.levels() > 1;
+        let run = iterate(&plan, &mut x, params, omega_fixed, stop, aggregate.then_some((&self.desc, &scaled[..])))?;
         // Normalise over the tangible states.
         let mass = self.tangible_mass(&x);
         if !(mass.is_finite() && mass > 0.0) {
@@ -325,6 +339,7 @@ impl StructuredGspn {
             info,
             omega: run.omega,
             omega_history: run.history,
+            aggregations: run.aggregations,
             x,
         };
         self.fill_measures(&mut solution, rates);
@@ -645,6 +660,7 @@ struct Run {
     sweeps: usize,
     omega: f64,
     history: Vec<(f64, usize)>,
+    aggregations: usize,
 }
 
 /// The relaxation control (see the module docs).
@@ -656,7 +672,8 @@ struct Relaxation {
     window_start: f64,
     /// The best ω so far and its rate.
     best: Option<(f64, f64)>,
-    /// +0.1 while searching upwards, −0.1 downwards, 0 once settled.
+    /// [`OMEGA_STEP`] while searching upwards, minus it downwards, 0 once
+    /// settled.
     step: f64,
     history: Vec<(f64, usize)>,
 }
@@ -667,6 +684,12 @@ struct Relaxation {
 const STAGNATION: f64 = 0.9995;
 /// Smallest ω tried.
 const MIN_OMEGA: f64 = 0.5;
+
+/// Whether a window of factor `rate` per sweep converges faster than one
+/// of factor `than`, by [`GAIN`].
+fn faster(rate: f64, than: f64) -> bool {
+    rate < 1.0 && (than >= 1.0 || -rate.ln() > -than.ln() * GAIN)
+}
 
 impl Relaxation {
     fn new(fixed: Option<f64>) -> Relaxation {
@@ -682,44 +705,53 @@ impl Relaxation {
     }
 
     fn set(&mut self, omega: f64, proxy: f64) {
-        self.omega = (omega * 10.0).round() / 10.0;
+        self.omega = (omega * 100.0).round() / 100.0;
         self.at = 0;
         self.window_start = proxy;
         self.history.push((self.omega, 0));
     }
 
-    /// Takes the proxy residual after a sweep; may change ω.
-    fn observe(&mut self, proxy: f64) {
+    /// Takes the proxy residual after a sweep, and whether the iterate is
+    /// positive; may change ω.
+    fn observe(&mut self, proxy: f64, positive: bool) {
         if let Some(h) = self.history.last_mut() {
             h.1 += 1;
         }
         if self.fixed {
             return;
         }
+        if !positive && self.omega > 1.0 {
+            // Over-relaxation went too far: back to Gauss–Seidel for good.
+            self.step = 0.0;
+            self.best = Some((1.0, 1.0));
+            self.set(1.0, proxy);
+            return;
+        }
         self.at += 1;
-        if self.at == SETTLE {
+        let settle = if self.best.is_none() { WARMUP } else { SETTLE };
+        if self.at == settle {
             self.window_start = proxy;
         }
-        if self.at < SETTLE + WINDOW {
+        if self.at < settle + WINDOW {
             return;
         }
         let rate = (proxy / self.window_start).powf(1.0 / WINDOW as f64);
-        self.at = SETTLE;
+        self.at = settle;
         self.window_start = proxy;
         let rate = if rate.is_nan() { f64::INFINITY } else { rate };
         match self.best {
             None => {
                 // The first window, at ω = 1: up if it converges, down if not.
                 self.best = Some((self.omega, rate));
-                self.step = if rate < STAGNATION { 0.1 } else { -0.1 };
+                self.step = if rate < STAGNATION { OMEGA_STEP } else { -OMEGA_STEP };
                 self.set(self.omega + self.step, proxy);
             }
             Some((w, r)) if self.step != 0.0 => {
                 let next = self.omega + self.step;
-                if rate < r * GAIN && (MIN_OMEGA..=MAX_OMEGA).contains(&next) {
+                if faster(rate, r) && (MIN_OMEGA - 1e-9..=MAX_OMEGA + 1e-9).contains(&next) {
                     self.best = Some((self.omega, rate));
                     self.set(next, proxy);
-                } else if rate < r * GAIN {
+                } else if faster(rate, r) {
                     self.best = Some((self.omega, rate));
                     self.step = 0.0;
                 } else {
@@ -729,25 +761,50 @@ impl Relaxation {
             }
             Some(_) => {
                 // Settled: a window that does not converge lowers ω.
-                if rate >= STAGNATION && self.omega - 0.1 >= MIN_OMEGA {
-                    self.best = Some((self.omega - 0.1, rate));
-                    self.set(self.omega - 0.1, proxy);
+                if rate >= STAGNATION && self.omega - OMEGA_STEP >= MIN_OMEGA {
+                    self.best = Some((self.omega - OMEGA_STEP, rate));
+                    self.set(self.omega - OMEGA_STEP, proxy);
                 }
             }
         }
     }
 }
 
-/// Sweeps until the residual is at most the tolerance.
-fn iterate(plan: &Plan<'_>, x: &mut [f64], params: &SolveParams, fixed: Option<f64>, stop: Interrupt<'_>) -> Result<Run> {
+/// Sweeps until the residual is at most the tolerance; every
+/// [`AGGREGATE_EVERY`] sweeps, one aggregation step per component (when
+/// `aggregate` gives the descriptor and the scaled rates, and the iterate
+/// is positive: SOR may leave negative entries, on which the coarse chains
+/// are not chains).
+fn iterate(
+    plan: &Plan<'_>,
+    x: &mut [f64],
+    params: &SolveParams,
+    fixed: Option<f64>,
+    stop: Interrupt<'_>,
+    aggregate: Option<(&Descriptor, &[f64])>,
+) -> Result<Run> {
     let mut relax = Relaxation::new(fixed);
     let mut last = f64::INFINITY;
+    let mut aggregate = aggregate;
+    let mut aggregations = 0;
+    let mut positive = true;
     for it in 1..=params.max_iterations {
         stop.check(SOLVING)?;
+        if let Some((desc, rates)) = aggregate.filter(|_| positive && it % AGGREGATE_EVERY == 0) {
+            for level in 0..desc.levels() {
+                if crate::aggregation::correct(desc, rates, x, level).is_err() {
+                    // A coarse chain the solver refuses: go on without.
+                    aggregate = None;
+                    break;
+                }
+            }
+            aggregations += 1;
+        }
         let sums = plan.sweep(x, relax.omega);
         if !(sums.total.is_finite() && sums.total > 0.0) {
             break;
         }
+        positive = sums.min > 0.0;
         if !(1e-200..=1e200).contains(&sums.total) {
             let s = 1.0 / sums.total;
             x.iter_mut().for_each(|v| *v *= s);
@@ -758,7 +815,7 @@ fn iterate(plan: &Plan<'_>, x: &mut [f64], params: &SolveParams, fixed: Option<f
             sums.imbalance
         };
         stop.iterated(it, proxy);
-        relax.observe(proxy);
+        relax.observe(proxy, positive);
         if proxy <= params.tolerance {
             let r = plan.residual(x);
             last = if r.flow > 0.0 { r.imbalance / r.flow } else { r.imbalance };
@@ -767,6 +824,7 @@ fn iterate(plan: &Plan<'_>, x: &mut [f64], params: &SolveParams, fixed: Option<f
                     sweeps: it,
                     omega: relax.omega,
                     history: relax.history,
+                    aggregations,
                 });
             }
         } else {

@@ -122,7 +122,7 @@ pub(crate) struct Plan<'a> {
 }
 
 /// What a pass accumulates.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Sums {
     /// `Σ_j |inflow_j − exit_j x_j|` with the values before each update.
     pub imbalance: f64,
@@ -130,6 +130,19 @@ pub(crate) struct Sums {
     pub flow: f64,
     /// `Σ_j x_j` after.
     pub total: f64,
+    /// Smallest entry after.
+    pub min: f64,
+}
+
+impl Default for Sums {
+    fn default() -> Sums {
+        Sums {
+            imbalance: 0.0,
+            flow: 0.0,
+            total: 0.0,
+            min: f64::INFINITY,
+        }
+    }
 }
 
 impl Sums {
@@ -138,6 +151,7 @@ impl Sums {
             imbalance: self.imbalance + o.imbalance,
             flow: self.flow + o.flow,
             total: self.total + o.total,
+            min: self.min.min(o.min),
         }
     }
 }
@@ -368,21 +382,37 @@ impl<'a> Plan<'a> {
         for (i, &d) in inv.iter_mut().zip(exit) {
             *i = 1.0 / d;
         }
-        for c in 0..n {
-            let mut v = acc[c];
-            let (a, b) = (in_off[c] as usize, in_off[c + 1] as usize);
-            for (&g, &ip) in in_g[a..b].iter().zip(&in_ip[a..b]) {
-                v += g * row[ip as usize];
+        // `old + ω (new − old)` is not `new` to the last bit at ω = 1: two
+        // loops, so that Gauss–Seidel is exactly Gauss–Seidel.
+        if omega == 1.0 {
+            for c in 0..n {
+                let mut v = acc[c];
+                let (a, b) = (in_off[c] as usize, in_off[c + 1] as usize);
+                for (&g, &ip) in in_g[a..b].iter().zip(&in_ip[a..b]) {
+                    v += g * row[ip as usize];
+                }
+                let old = row[c];
+                row[c] = v * inv[c];
+                acc[c] = v - exit[c] * old;
             }
-            let old = row[c];
-            let new = v * inv[c];
-            row[c] = if omega == 1.0 { new } else { old + omega * (new - old) };
-            acc[c] = v - exit[c] * old;
+        } else {
+            for c in 0..n {
+                let mut v = acc[c];
+                let (a, b) = (in_off[c] as usize, in_off[c + 1] as usize);
+                for (&g, &ip) in in_g[a..b].iter().zip(&in_ip[a..b]) {
+                    v += g * row[ip as usize];
+                }
+                let old = row[c];
+                row[c] = old + omega * (v * inv[c] - old);
+                acc[c] = v - exit[c] * old;
+            }
         }
+        let (imbalance, flow, total, min) = row_sums(acc, exit, row);
         Sums {
-            imbalance: sum4(acc.iter().map(|v| v.abs())),
-            flow: dot4(exit, row),
-            total: sum4(row.iter().copied()),
+            imbalance,
+            flow,
+            total,
+            min,
         }
     }
 
@@ -401,6 +431,7 @@ impl<'a> Plan<'a> {
             row[c] = x;
             sums.flow += d * x;
             sums.total += x;
+            sums.min = sums.min.min(x);
         }
         sums
     }
@@ -482,10 +513,13 @@ impl<'a> Plan<'a> {
     /// `row_start` whose outer local states are `sc.locals`, into `sc.acc`
     /// and `sc.exit`.
     fn gather(&self, row_start: usize, own: &[f64], own_base: usize, readers: &[Option<&[f64]>], sc: &mut Scratch) {
-        sc.acc.fill(0.0);
         sc.exit.copy_from_slice(&self.inner_exit);
         sc.pred.copy_from_slice(&sc.locals);
         let mut scalar_exit = 0.0;
+        // Plain sources (a whole row times a number) are summed in one pass
+        // at the end; the others are added as they come.
+        let mut plain: Vec<(f64, &[f64])> = Vec::with_capacity(self.gathered.len());
+        let mut others: Vec<(usize, Source<'_>)> = Vec::new();
         for &b in &self.gathered {
             let ev = &self.events[b];
             if let Some((f, deg)) = self.outer_factor(ev, &sc.locals) {
@@ -493,9 +527,17 @@ impl<'a> Plan<'a> {
             }
             if ev.moves_outer {
                 if let Some(src) = self.source(ev, &sc.locals, &mut sc.pred, row_start, own, own_base, readers) {
-                    self.add_inflow(ev, &src, &mut sc.acc);
+                    if ev.inner.is_none() && self.kinds.is_none() {
+                        plain.push((src.factor * ev.rate, src.values));
+                    } else {
+                        others.push((b, src));
+                    }
                 }
             }
+        }
+        fused_sum(&mut sc.acc, &plain);
+        for (b, src) in &others {
+            self.add_inflow(&self.events[*b], src, &mut sc.acc);
         }
         if scalar_exit != 0.0 {
             sc.exit.iter_mut().for_each(|v| *v += scalar_exit);
@@ -724,29 +766,78 @@ fn bind(desc: &Descriptor, kinds: Option<&Kinds>, ei: usize, rates: &[f64]) -> B
     }
 }
 
-/// `Σ v` on four accumulators (a fixed order: the same bits every time).
+/// `(Σ |a_i|, Σ e_i x_i, Σ x_i, min x_i)` in one pass, on four lanes (a
+/// fixed order: the same bits every time).
 #[inline]
-fn sum4(v: impl Iterator<Item = f64>) -> f64 {
-    let mut s = [0.0f64; 4];
-    for (k, x) in v.enumerate() {
-        s[k % 4] += x;
-    }
-    (s[0] + s[1]) + (s[2] + s[3])
-}
-
-/// `Σ a_i b_i` on four accumulators.
-#[inline]
-fn dot4(a: &[f64], b: &[f64]) -> f64 {
-    let mut s = [0.0f64; 4];
-    let mut ca = a.chunks_exact(4);
-    let mut cb = b.chunks_exact(4);
-    for (x, y) in (&mut ca).zip(&mut cb) {
+fn row_sums(a: &[f64], e: &[f64], x: &[f64]) -> (f64, f64, f64, f64) {
+    let (mut s, mut f, mut t) = ([0.0f64; 4], [0.0f64; 4], [0.0f64; 4]);
+    let mut m = f64::INFINITY;
+    let n = a.len().min(e.len()).min(x.len());
+    let (ca, ce, cx) = (a[..n].chunks_exact(4), e[..n].chunks_exact(4), x[..n].chunks_exact(4));
+    let (ra, re, rx) = (ca.remainder(), ce.remainder(), cx.remainder());
+    for ((a, e), x) in ca.zip(ce).zip(cx) {
         for k in 0..4 {
-            s[k] += x[k] * y[k];
+            s[k] += a[k].abs();
+            f[k] += e[k] * x[k];
+            t[k] += x[k];
+            m = m.min(x[k]);
         }
     }
-    for (k, (x, y)) in ca.remainder().iter().zip(cb.remainder()).enumerate() {
-        s[k] += x * y;
+    for k in 0..ra.len() {
+        s[k] += ra[k].abs();
+        f[k] += re[k] * rx[k];
+        t[k] += rx[k];
+        m = m.min(rx[k]);
     }
-    (s[0] + s[1]) + (s[2] + s[3])
+    let sum = |v: [f64; 4]| (v[0] + v[1]) + (v[2] + v[3]);
+    (sum(s), sum(f), sum(t), m)
+}
+
+/// `acc = Σ_j s_j · x_j` over the plain sources `(s_j, x_j)` (rows of the
+/// same length), four sources per pass over `acc`.
+fn fused_sum(acc: &mut [f64], sources: &[(f64, &[f64])]) {
+    let n = acc.len();
+    let mut groups = sources.chunks(4);
+    match groups.next() {
+        None => acc.fill(0.0),
+        Some(first) => {
+            acc.fill(0.0);
+            add_group(acc, first, n);
+        }
+    }
+    for g in groups {
+        add_group(acc, g, n);
+    }
+}
+
+/// `acc += Σ_j s_j · x_j` for up to four sources.
+#[inline]
+fn add_group(acc: &mut [f64], g: &[(f64, &[f64])], n: usize) {
+    match g {
+        [(a, xa), (b, xb), (c, xc), (d, xd)] => {
+            let (xa, xb, xc, xd) = (&xa[..n], &xb[..n], &xc[..n], &xd[..n]);
+            for i in 0..n {
+                acc[i] += (a * xa[i] + b * xb[i]) + (c * xc[i] + d * xd[i]);
+            }
+        }
+        [(a, xa), (b, xb), (c, xc)] => {
+            let (xa, xb, xc) = (&xa[..n], &xb[..n], &xc[..n]);
+            for i in 0..n {
+                acc[i] += (a * xa[i] + b * xb[i]) + c * xc[i];
+            }
+        }
+        [(a, xa), (b, xb)] => {
+            let (xa, xb) = (&xa[..n], &xb[..n]);
+            for i in 0..n {
+                acc[i] += a * xa[i] + b * xb[i];
+            }
+        }
+        [(a, xa)] => {
+            let xa = &xa[..n];
+            for i in 0..n {
+                acc[i] += a * xa[i];
+            }
+        }
+        _ => {}
+    }
 }
