@@ -19,7 +19,7 @@
 //! The work behind the command line's commands, shared with the Python
 //! package (`crates/py`) so that both say and print the same: [`gspn`]
 //! (loading, solving, analysing, simulating nets; the supervisor's
-//! decision), [`tours`] (the guide robot between named places),
+//! decision), [`engine`] (which GSPN engine solves a net), [`tours`] (the guide robot between named places),
 //! [`batch`] (a suite run into a results folder), [`map_file`] (map
 //! files).
 #![warn(missing_docs)]
@@ -27,6 +27,7 @@
 pub mod batch;
 pub mod charts;
 pub mod encode;
+pub mod engine;
 pub mod experiment;
 pub mod foxglove;
 pub mod gspn;

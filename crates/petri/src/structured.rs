@@ -184,7 +184,7 @@ impl StructuredGspn {
     /// module docs); [`Error::Unstructured`] says why it does not apply.
     pub fn build(gspn: &Gspn, params: &StructuredParams, stop: Interrupt<'_>) -> Result<StructuredGspn> {
         stop.check("finding the structure")?;
-        stop.stage(Stage::Generating);
+        stop.stage(Stage::Structuring);
         let mut structure = Structure::detect(gspn, &params.structure).map_err(|e| match e {
             Error::Invalid(m) => unstructured(m),
             other => other,
@@ -205,7 +205,6 @@ impl StructuredGspn {
         }
         let start = Instant::now();
         stop.check("building the descriptor")?;
-        stop.stage(Stage::Compiling);
         let immediate = gspn.num_immediate() > 0;
         let tables: u64 = structure.components().iter().map(|c| c.heap_bytes() as u64).sum::<u64>() * 4;
         let per_state = 8.0 + if immediate { 2.0 + 3.0 / 8.0 } else { 0.0 };
@@ -280,6 +279,36 @@ impl StructuredGspn {
     /// Bytes a solve allocates: the vector of the product space.
     pub fn solve_bytes(&self) -> u64 {
         self.desc.states * 8
+    }
+
+    /// Where the memory goes (the explicit engine's account, with the
+    /// structured engine's parts): the local spaces and maps and the state
+    /// classes while building, the vector while solving.
+    pub fn memory_account(&self, solution: Option<&StructuredSolution>) -> crate::MemoryAccount {
+        let n = self.stats.tangible.max(1) as f64;
+        let part = |component: &'static str, stage: &'static str, bytes: u64| crate::MemoryPart {
+            component,
+            stage,
+            bytes,
+            bytes_per_marking: bytes as f64 / n,
+        };
+        let tables = self.stats.descriptor_bytes;
+        let classes = self.stats.class_bytes;
+        let vector = solution.map_or(self.solve_bytes(), |s| s.info.vector_bytes);
+        let parts = vec![
+            part("local spaces and transitions' local maps", "chain", tables),
+            part("state classes (vanishing markings)", "chain", classes),
+            part("probability vector over the product space", "solve", vector),
+        ];
+        crate::MemoryAccount {
+            tangible_markings: self.stats.tangible as usize,
+            parts,
+            generation_bytes: tables + classes,
+            compile_bytes: tables + classes,
+            solve_bytes: tables + classes + vector,
+            peak_bytes: tables + classes + vector,
+            guard_estimate_bytes: self.stats.estimate_bytes,
+        }
     }
 
     /// Solves for `rates` (by transition; immediate ones ignored).
