@@ -354,7 +354,7 @@ pub fn polling(n: u32, k: u32) -> Net {
 }
 
 /// An open tandem line of `stations` stations with buffers of `n` places:
-/// jobs arrive at rate `arrive` while the first buffer has room; station
+/// jobs arrive at rate `lambda` while the first buffer has room; station
 /// `i` has `Jobs_i` and `Free_i` (`Jobs_i + Free_i = n`) and two servers,
 /// each moving a job on (`move_i`, rate `serve_i`) when the next buffer has
 /// room — its enabling degree is `min(#Jobs_i, #Free_{i+1})` (at most 2), a
@@ -368,7 +368,7 @@ pub fn tandem(n: u32, stations: u32) -> Net {
     let free: Vec<PlaceId> = (1..=stations)
         .map(|i| net.add_place(format!("Free_{i}"), Expr::param("N")))
         .collect();
-    let a = rate(&mut net, "arrive", 1.0);
+    let a = rate(&mut net, "lambda", 1.0);
     let t = net.add_timed("arrive", a);
     arcs(&mut net, t, &[free[0]], &[jobs[0]]);
     for i in 0..stations as usize {

@@ -59,6 +59,10 @@ pub(crate) struct MddLimits {
     pub max_nodes: usize,
     /// Largest token count of a place without a structural bound.
     pub max_tokens: u32,
+    /// Most operations computed (firings and unions not found in their
+    /// caches): bounds the time and the caches' memory of a search whose
+    /// place order makes the diagram's intermediate sets explode.
+    pub max_operations: u64,
 }
 
 impl Default for MddLimits {
@@ -66,6 +70,7 @@ impl Default for MddLimits {
         MddLimits {
             max_nodes: 4_000_000,
             max_tokens: 1 << 16,
+            max_operations: 20_000_000,
         }
     }
 }
@@ -160,6 +165,8 @@ pub(crate) struct Mdd {
     /// Events by top depth.
     by_top: Vec<Vec<u32>>,
     limits: MddLimits,
+    /// Operations computed so far (see [`MddLimits::max_operations`]).
+    operations: u64,
     /// Names of places, for errors.
     place_names: Vec<String>,
 }
@@ -199,6 +206,7 @@ impl Mdd {
             events: Vec::new(),
             by_top: vec![Vec::new(); order.len()],
             limits,
+            operations: 0,
             place_names: gspn.place_names().to_vec(),
         };
         for t in 0..gspn.num_transitions() {
@@ -270,6 +278,19 @@ impl Mdd {
         Ok(id)
     }
 
+    /// Counts one computed operation; past [`MddLimits::max_operations`], an
+    /// error.
+    fn count_operation(&mut self) -> Result<()> {
+        self.operations += 1;
+        if self.operations > self.limits.max_operations {
+            return Err(Error::Invalid(format!(
+                "the symbolic search needs more than {} operations (the place order makes its intermediate sets large)",
+                self.limits.max_operations
+            )));
+        }
+        Ok(())
+    }
+
     /// The union of two nodes at the same depth.
     pub(crate) fn union(&mut self, a: u32, b: u32) -> Result<u32> {
         if a == EMPTY || a == b {
@@ -282,6 +303,7 @@ impl Mdd {
         if let Some(&r) = self.union_cache.get(&key) {
             return Ok(r);
         }
+        self.count_operation()?;
         let d = self.depth(a);
         let (ca, cb) = (self.children(a).to_vec(), self.children(b).to_vec());
         let mut ch = vec![EMPTY; ca.len().max(cb.len())];
@@ -389,6 +411,7 @@ impl Mdd {
         if let Some(&r) = self.fire_cache.get(&(e, q)) {
             return Ok(r);
         }
+        self.count_operation()?;
         let children = self.children(q).to_vec();
         let mut s: Vec<u32> = Vec::new();
         for (i, &c) in children.iter().enumerate() {
