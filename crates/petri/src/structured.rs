@@ -349,6 +349,15 @@ impl StructuredGspn {
         } else {
             final_sums.imbalance
         };
+        // Vanishing states hold flows per unit of the scaled time: back to
+        // the model's time unit (the immediate transitions' throughputs).
+        if let Some(k) = &self.kinds {
+            for (v, &c) in x.iter_mut().zip(&k.class) {
+                if c != TANGIBLE {
+                    *v *= scale;
+                }
+            }
+        }
         let info = SolveInfo {
             method: if run.omega == 1.0 && run.history.len() <= 1 {
                 "structured-gauss-seidel"

@@ -132,3 +132,14 @@ fn the_structured_solution_is_identical_on_one_two_and_three_threads() {
         assert_eq!(one.info.residual.to_bits(), other.info.residual.to_bits(), "{threads} threads");
     }
 }
+
+/// Regression: the vanishing states' flows were left in the solver's
+/// scaled time unit (the fastest rate, a power of two), so immediate
+/// throughputs came out 2^k too small whenever a rate exceeded 2 (the
+/// supervisor net's were 512 times too small).
+#[test]
+fn immediate_throughputs_are_in_the_model_time_unit_when_rates_are_fast() {
+    let g = families::fms(2, false).instantiate(&Params::new()).unwrap();
+    let rates: Vec<f64> = g.rates(&Params::new(), None).unwrap().iter().map(|r| r * 1000.0).collect();
+    compare(&g, &rates, &["#P1 >= 1"]);
+}
