@@ -439,7 +439,8 @@ fn structure_info(a: &InfoArgs) -> Result<()> {
         return print_json(&lab::engine::structure_json(&gspn, &s));
     }
     let names = gspn.place_names();
-    let product = |v: &mut dyn Iterator<Item = u128>| v.map(|x| x.to_string()).collect::<Vec<_>>().join(" × ");
+    let product =
+        |v: &mut dyn Iterator<Item = u128>| v.map(|x| x.to_string()).collect::<Vec<_>>().join(" × ");
     out!(
         "{}",
         fields(&[
@@ -451,7 +452,11 @@ fn structure_info(a: &InfoArgs) -> Result<()> {
                     "{} = {}{}",
                     product(&mut s.components().iter().map(|c| c.len() as u128)),
                     s.product(),
-                    if s.is_exact() { " (exactly the reachable set)" } else { " (NOT the reachable set)" }
+                    if s.is_exact() {
+                        " (exactly the reachable set)"
+                    } else {
+                        " (NOT the reachable set)"
+                    }
                 )
             ),
             (
@@ -481,7 +486,11 @@ fn structure_info(a: &InfoArgs) -> Result<()> {
         t.row([
             (k + 1).to_string(),
             c.len().to_string(),
-            c.places.iter().map(|p| names[p.index()].as_str()).collect::<Vec<_>>().join(" "),
+            c.places
+                .iter()
+                .map(|p| names[p.index()].as_str())
+                .collect::<Vec<_>>()
+                .join(" "),
         ]);
     }
     outln!("\n{}", t.render())?;

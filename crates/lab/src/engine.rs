@@ -130,7 +130,11 @@ pub fn parse_partition(gspn: &Gspn, text: &str) -> Result<Vec<Vec<PlaceId>>> {
         .collect()
 }
 
-fn structured_params(gspn: &Gspn, options: &SolveOptions, partition: Option<&str>) -> Result<StructuredParams> {
+fn structured_params(
+    gspn: &Gspn,
+    options: &SolveOptions,
+    partition: Option<&str>,
+) -> Result<StructuredParams> {
     Ok(StructuredParams {
         structure: StructureParams {
             partition: partition.map(|p| parse_partition(gspn, p)).transpose()?,
@@ -166,7 +170,10 @@ pub fn solve(
     let iterative = matches!(options.solve.method, Method::Auto | Method::GaussSeidel);
     if engine == Engine::Auto && !iterative {
         return explicit(
-            format!("--method {:?} is a method of the explicit engine", options.solve.method),
+            format!(
+                "--method {:?} is a method of the explicit engine",
+                options.solve.method
+            ),
             phase,
         );
     }
@@ -174,7 +181,9 @@ pub fn solve(
     let params = structured_params(gspn, options, partition)?;
     let model = match StructuredGspn::build(gspn, &params, stop) {
         Ok(m) => m,
-        Err(e @ (petri::Error::Unstructured { .. } | petri::Error::MemoryLimit { .. })) if engine == Engine::Auto => {
+        Err(e @ (petri::Error::Unstructured { .. } | petri::Error::MemoryLimit { .. }))
+            if engine == Engine::Auto =>
+        {
             return explicit(e.to_string(), phase);
         }
         Err(e) => return Err(e.into()),
@@ -191,7 +200,9 @@ pub fn solve(
             );
         }
         let markings = st.tangible + st.vanishing;
-        if st.vanishing > 0 && markings.saturating_mul(EXPLICIT_BYTES_PER_MARKING) <= options.explore.max_memory {
+        if st.vanishing > 0
+            && markings.saturating_mul(EXPLICIT_BYTES_PER_MARKING) <= options.explore.max_memory
+        {
             return explicit(
                 format!(
                     "{} vanishing markings, which the explicit engine eliminates (faster here)",
@@ -204,7 +215,11 @@ pub fn solve(
     let sizes: Vec<String> = st.components.iter().map(usize::to_string).collect();
     let reason = format!(
         "{} ({} component{}: {} local states)",
-        if engine == Engine::Auto { "a product structure" } else { "asked for (--engine structured)" },
+        if engine == Engine::Auto {
+            "a product structure"
+        } else {
+            "asked for (--engine structured)"
+        },
         sizes.len(),
         if sizes.len() == 1 { "" } else { "s" },
         sizes.join(" × ")

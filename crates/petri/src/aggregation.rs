@@ -56,7 +56,12 @@ pub(crate) fn correct(desc: &Descriptor, rates: &[f64], x: &mut [f64], level: us
     for e in &moving {
         let s: Vec<usize> = e.maps.iter().map(|m| m.level).collect();
         let idx = subsets.iter().position(|x| *x == s).unwrap_or(0);
-        let map = e.maps.iter().find(|m| m.level == level).map(|m| &m.succ[..]).unwrap_or(&[]);
+        let map = e
+            .maps
+            .iter()
+            .find(|m| m.level == level)
+            .map(|m| &m.succ[..])
+            .unwrap_or(&[]);
         let rate = rates[e.transition as usize];
         for (j, &mass) in marg[idx].iter().enumerate() {
             if mass == 0.0 {
@@ -117,7 +122,11 @@ fn coarse_solution(n: usize, mut entries: Vec<(u32, u32, f64)>) -> Result<Vec<f6
         exit[s as usize] += v;
     }
     let values: Vec<f64> = merged.iter().map(|e| e.2).collect();
-    let ids: Vec<(u32, u32, u32)> = merged.iter().enumerate().map(|(k, e)| (e.0, e.1, k as u32)).collect();
+    let ids: Vec<(u32, u32, u32)> = merged
+        .iter()
+        .enumerate()
+        .map(|(k, e)| (e.0, e.1, k as u32))
+        .collect();
     let rows = Rows::from_entries(n, ids, values.len());
     let chain = Chain {
         incoming: &rows,

@@ -245,7 +245,11 @@ struct Part {
 /// `t`'s parts per component, components ascending.
 fn parts_by_level(gspn: &Gspn, pos: &[(usize, usize)], t: TransitionId) -> Vec<(usize, Vec<Part>)> {
     let mut by: std::collections::BTreeMap<(usize, usize), Part> = std::collections::BTreeMap::new();
-    fn at<'a>(by: &'a mut std::collections::BTreeMap<(usize, usize), Part>, pos: &[(usize, usize)], p: u32) -> &'a mut Part {
+    fn at<'a>(
+        by: &'a mut std::collections::BTreeMap<(usize, usize), Part>,
+        pos: &[(usize, usize)],
+        p: u32,
+    ) -> &'a mut Part {
         let (k, i) = pos[p as usize];
         by.entry((k, i)).or_insert(Part {
             position: i,
@@ -332,7 +336,12 @@ fn local_map(comp: &crate::structure::Component, k: usize, parts: &[Part]) -> (L
 /// enables it). A successor outside a component's local space while every
 /// component enables `t` somewhere would contradict the exact product: an
 /// error, never a silently dropped flow.
-fn event(gspn: &Gspn, structure: &Structure, pos: &[(usize, usize)], t: TransitionId) -> Result<Option<Event>> {
+fn event(
+    gspn: &Gspn,
+    structure: &Structure,
+    pos: &[(usize, usize)],
+    t: TransitionId,
+) -> Result<Option<Event>> {
     let comps = structure.components();
     let levels = parts_by_level(gspn, pos, t);
     let mut maps = Vec::with_capacity(levels.len());

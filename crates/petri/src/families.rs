@@ -332,7 +332,9 @@ pub fn polling(n: u32, k: u32) -> Net {
     let at: Vec<PlaceId> = (0..n)
         .map(|i| net.add_place(format!("At_{}", i + 1), u32::from(i == 0)))
         .collect();
-    let walking: Vec<PlaceId> = (0..n).map(|i| net.add_place(format!("Walk_{}", i + 1), 0u32)).collect();
+    let walking: Vec<PlaceId> = (0..n)
+        .map(|i| net.add_place(format!("Walk_{}", i + 1), 0u32))
+        .collect();
     for i in 0..n as usize {
         let name = i + 1;
         let think = net.add_place(format!("Think_{name}"), k);
@@ -364,7 +366,9 @@ pub fn polling(n: u32, k: u32) -> Net {
 pub fn tandem(n: u32, stations: u32) -> Net {
     let mut net = Net::new(format!("tandem{n}"));
     net.set_param("N", Some(f64::from(n)), ParamKind::Int);
-    let jobs: Vec<PlaceId> = (1..=stations).map(|i| net.add_place(format!("Jobs_{i}"), 0u32)).collect();
+    let jobs: Vec<PlaceId> = (1..=stations)
+        .map(|i| net.add_place(format!("Jobs_{i}"), 0u32))
+        .collect();
     let free: Vec<PlaceId> = (1..=stations)
         .map(|i| net.add_place(format!("Free_{i}"), Expr::param("N")))
         .collect();

@@ -40,6 +40,7 @@
 
 mod aggregation;
 pub mod ctmc;
+mod descriptor;
 pub mod error;
 pub mod expr;
 pub mod families;
@@ -50,7 +51,6 @@ pub mod invariants;
 pub mod io;
 pub mod krylov;
 mod linear;
-mod descriptor;
 mod marginals;
 mod marking;
 mod mdd;

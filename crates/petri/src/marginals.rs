@@ -17,7 +17,12 @@ const PARTS: usize = 4;
 /// counting only tangible states when `kinds` is given. Entry `j` of a
 /// subset's marginal is the tuple of its levels' local states in mixed
 /// radix (the last level fastest).
-pub(crate) fn marginals(desc: &Descriptor, kinds: Option<&Kinds>, x: &[f64], subsets: &[Vec<usize>]) -> Vec<Vec<f64>> {
+pub(crate) fn marginals(
+    desc: &Descriptor,
+    kinds: Option<&Kinds>,
+    x: &[f64],
+    subsets: &[Vec<usize>],
+) -> Vec<Vec<f64>> {
     let sizes = &desc.sizes;
     let k = sizes.len();
     let n = sizes[k - 1];
@@ -60,7 +65,11 @@ pub(crate) fn marginals(desc: &Descriptor, kinds: Option<&Kinds>, x: &[f64], sub
                     None => w.copy_from_slice(&x[start..start + n]),
                     Some(kd) => {
                         for (c, v) in w.iter_mut().enumerate() {
-                            *v = if kd.class[start + c] == TANGIBLE { x[start + c] } else { 0.0 };
+                            *v = if kd.class[start + c] == TANGIBLE {
+                                x[start + c]
+                            } else {
+                                0.0
+                            };
                         }
                     }
                 }

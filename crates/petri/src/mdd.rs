@@ -135,7 +135,11 @@ impl Event {
 
     #[inline]
     fn apply(&self, f: &LocalFn, v: u32) -> Option<u32> {
-        if self.backward { f.backward(v) } else { f.forward(v) }
+        if self.backward {
+            f.backward(v)
+        } else {
+            f.forward(v)
+        }
     }
 }
 
@@ -179,9 +183,7 @@ impl Mdd {
         let depth_of = inverse(order, gspn.num_places());
         let cap: Vec<u32> = order
             .iter()
-            .map(|&p| {
-                bounds[p as usize].map_or(limits.max_tokens, |b| u32::try_from(b).unwrap_or(u32::MAX))
-            })
+            .map(|&p| bounds[p as usize].map_or(limits.max_tokens, |b| u32::try_from(b).unwrap_or(u32::MAX)))
             .collect();
         let strict = order.iter().map(|&p| bounds[p as usize].is_none()).collect();
         let mut mdd = Mdd {
@@ -370,7 +372,9 @@ impl Mdd {
         loop {
             let mut changed = false;
             for &e in &events {
-                let mut work: Vec<u32> = (0..ch.len() as u32).filter(|&i| ch[i as usize] != EMPTY).collect();
+                let mut work: Vec<u32> = (0..ch.len() as u32)
+                    .filter(|&i| ch[i as usize] != EMPTY)
+                    .collect();
                 while let Some(i) = work.pop() {
                     let Some(j) = self.step(e, depth, i)? else {
                         continue;
@@ -474,7 +478,11 @@ impl Mdd {
     pub(crate) fn backward_covers(&mut self, reach: u32, m0: &[u32]) -> Result<bool> {
         let maxima = self.max_counts(reach);
         let forward_events = self.events.len();
-        let saved = (self.cap.clone(), self.strict.clone(), std::mem::take(&mut self.by_top));
+        let saved = (
+            self.cap.clone(),
+            self.strict.clone(),
+            std::mem::take(&mut self.by_top),
+        );
         self.by_top = vec![Vec::new(); self.depths()];
         self.cap = maxima;
         self.strict = vec![false; self.depths()];

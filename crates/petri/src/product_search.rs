@@ -145,7 +145,8 @@ pub(crate) fn classify(desc: &Descriptor, m0: u64, stop: Interrupt<'_>) -> Resul
                 let mut j = i;
                 for m in &e.maps {
                     let s = m.succ[l[m.level] as usize];
-                    j = j + u64::from(s) * desc.strides[m.level] - u64::from(l[m.level]) * desc.strides[m.level];
+                    j = j + u64::from(s) * desc.strides[m.level]
+                        - u64::from(l[m.level]) * desc.strides[m.level];
                 }
                 if visited.set(j) {
                     next.set(j);

@@ -102,7 +102,13 @@ impl Component {
 
     /// The local state with these counts, if it is one.
     pub fn rank(&self, counts: &[u32]) -> Option<usize> {
-        let at = |i: usize| if self.sorted.is_empty() { i } else { self.sorted[i] as usize };
+        let at = |i: usize| {
+            if self.sorted.is_empty() {
+                i
+            } else {
+                self.sorted[i] as usize
+            }
+        };
         let (mut lo, mut hi) = (0, self.len());
         while lo < hi {
             let mid = (lo + hi) / 2;
@@ -220,7 +226,9 @@ impl Structure {
             components = coarsen(components);
             // The largest component innermost: the solver's rows are then
             // as long as possible (see `crate::sweep`).
-            if let Some(big) = (0..components.len()).max_by_key(|&k| (components[k].len(), std::cmp::Reverse(k))) {
+            if let Some(big) =
+                (0..components.len()).max_by_key(|&k| (components[k].len(), std::cmp::Reverse(k)))
+            {
                 let c = components.remove(big);
                 components.push(c);
             }
@@ -346,7 +354,10 @@ fn checked_partition(gspn: &Gspn, partition: &[Vec<PlaceId>]) -> Result<Vec<Vec<
         let mut out = Vec::new();
         for p in g {
             if p.index() >= n {
-                return Err(Error::Invalid(format!("place index {} is out of range", p.index())));
+                return Err(Error::Invalid(format!(
+                    "place index {} is out of range",
+                    p.index()
+                )));
             }
             if std::mem::replace(&mut seen[p.index()], true) {
                 return Err(Error::Invalid(format!(

@@ -176,7 +176,9 @@ impl StructuredSolution {
 }
 
 fn unstructured(reason: impl Into<String>) -> Error {
-    Error::Unstructured { reason: reason.into() }
+    Error::Unstructured {
+        reason: reason.into(),
+    }
 }
 
 impl StructuredGspn {
@@ -206,7 +208,12 @@ impl StructuredGspn {
         let start = Instant::now();
         stop.check("building the descriptor")?;
         let immediate = gspn.num_immediate() > 0;
-        let tables: u64 = structure.components().iter().map(|c| c.heap_bytes() as u64).sum::<u64>() * 4;
+        let tables: u64 = structure
+            .components()
+            .iter()
+            .map(|c| c.heap_bytes() as u64)
+            .sum::<u64>()
+            * 4;
         let per_state = 8.0 + if immediate { 2.0 + 3.0 / 8.0 } else { 0.0 };
         let estimate = (states as f64 * per_state) as u64 + tables + (1 << 20);
         if estimate > params.max_memory {
@@ -248,7 +255,11 @@ impl StructuredGspn {
             build_seconds: start.elapsed().as_secs_f64(),
             mdd_nodes: structure.mdd_nodes(),
             descriptor_bytes: (desc.heap_bytes()
-                + structure.components().iter().map(|c| c.heap_bytes()).sum::<usize>()) as u64,
+                + structure
+                    .components()
+                    .iter()
+                    .map(|c| c.heap_bytes())
+                    .sum::<usize>()) as u64,
             class_bytes: kinds.as_ref().map_or(0, |k| k.class.capacity() as u64 * 2),
             estimate_bytes: estimate,
         };
@@ -312,7 +323,12 @@ impl StructuredGspn {
     }
 
     /// Solves for `rates` (by transition; immediate ones ignored).
-    pub fn solve_rates(&self, rates: &[f64], params: &SolveParams, stop: Interrupt<'_>) -> Result<StructuredSolution> {
+    pub fn solve_rates(
+        &self,
+        rates: &[f64],
+        params: &SolveParams,
+        stop: Interrupt<'_>,
+    ) -> Result<StructuredSolution> {
         params.validate()?;
         self.check_rates(rates)?;
         let omega_fixed = match params.method {
@@ -332,7 +348,14 @@ impl StructuredGspn {
         let plan = Plan::new(&self.desc, self.kinds.as_ref(), &scaled);
         let mut x = self.initial_vector();
         let aggregate = self.kinds.is_none() && self.desc.levels() > 1;
-        let run = iterate(&plan, &mut x, params, omega_fixed, stop, aggregate.then_some((&self.desc, &scaled[..])))?;
+        let run = iterate(
+            &plan,
+            &mut x,
+            params,
+            omega_fixed,
+            stop,
+            aggregate.then_some((&self.desc, &scaled[..])),
+        )?;
         // Normalise over the tangible states.
         let mass = self.tangible_mass(&x);
         if !(mass.is_finite() && mass > 0.0) {
@@ -417,8 +440,14 @@ impl StructuredGspn {
             .filter(|e| e.immediate.is_none() && !e.self_loop)
             .map(|e| e.transition as usize)
             .collect();
-        let fastest = timed.iter().copied().max_by(|&a, &b| rates[a].total_cmp(&rates[b]));
-        let slowest = timed.iter().copied().min_by(|&a, &b| rates[a].total_cmp(&rates[b]));
+        let fastest = timed
+            .iter()
+            .copied()
+            .max_by(|&a, &b| rates[a].total_cmp(&rates[b]));
+        let slowest = timed
+            .iter()
+            .copied()
+            .min_by(|&a, &b| rates[a].total_cmp(&rates[b]));
         let (Some(f), Some(s)) = (fastest, slowest) else {
             return Ok(1.0);
         };
@@ -509,7 +538,8 @@ impl StructuredGspn {
                         arr[base + c] += self.weight(x, start + c);
                     }
                 } else {
-                    let sum = *row_sum.get_or_insert_with(|| (0..n).map(|c| self.weight(x, start + c)).sum::<f64>());
+                    let sum = *row_sum
+                        .get_or_insert_with(|| (0..n).map(|c| self.weight(x, start + c)).sum::<f64>());
                     arr[base] += sum;
                 }
             }
@@ -638,7 +668,10 @@ impl StructuredGspn {
             let v = compiled.eval(marking, &mut stack);
             if !v.is_finite() {
                 return Err(Error::NotFinite {
-                    what: format!("the measure `{expr}` in marking {}", self.gspn.format_marking(marking)),
+                    what: format!(
+                        "the measure `{expr}` in marking {}",
+                        self.gspn.format_marking(marking)
+                    ),
                     value: v,
                     cause: "the expression divides by zero or overflows there".into(),
                 });
@@ -781,7 +814,11 @@ impl Relaxation {
             None => {
                 // The first window, at ω = 1: up if it converges, down if not.
                 self.best = Some((self.omega, rate));
-                self.step = if rate < STAGNATION { OMEGA_STEP } else { -OMEGA_STEP };
+                self.step = if rate < STAGNATION {
+                    OMEGA_STEP
+                } else {
+                    -OMEGA_STEP
+                };
                 self.set(self.omega + self.step, proxy);
             }
             Some((w, r)) if self.step != 0.0 => {
@@ -856,7 +893,11 @@ fn iterate(
         relax.observe(proxy, positive);
         if proxy <= params.tolerance {
             let r = plan.residual(x);
-            last = if r.flow > 0.0 { r.imbalance / r.flow } else { r.imbalance };
+            last = if r.flow > 0.0 {
+                r.imbalance / r.flow
+            } else {
+                r.imbalance
+            };
             if last <= params.tolerance {
                 return Ok(Run {
                     sweeps: it,

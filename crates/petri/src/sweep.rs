@@ -277,7 +277,12 @@ impl<'a> Plan<'a> {
         let mut used = Vec::new();
         for l in 0..n0 {
             used.clear();
-            used.extend(adj[l].iter().map(|&m| colors[m as usize]).filter(|&c| c != u32::MAX));
+            used.extend(
+                adj[l]
+                    .iter()
+                    .map(|&m| colors[m as usize])
+                    .filter(|&c| c != u32::MAX),
+            );
             let mut c = 0;
             while used.contains(&c) {
                 c += 1;
@@ -427,7 +432,11 @@ impl<'a> Plan<'a> {
             let old = row[c];
             sums.imbalance += (v - d * old).abs();
             let new = v / d;
-            let x = if omega == 1.0 { new } else { old + omega * (new - old) };
+            let x = if omega == 1.0 {
+                new
+            } else {
+                old + omega * (new - old)
+            };
             row[c] = x;
             sums.flow += d * x;
             sums.total += x;
@@ -512,7 +521,14 @@ impl<'a> Plan<'a> {
     /// Exit rates and the inflow from other rows of the row at global index
     /// `row_start` whose outer local states are `sc.locals`, into `sc.acc`
     /// and `sc.exit`.
-    fn gather(&self, row_start: usize, own: &[f64], own_base: usize, readers: &[Option<&[f64]>], sc: &mut Scratch) {
+    fn gather(
+        &self,
+        row_start: usize,
+        own: &[f64],
+        own_base: usize,
+        readers: &[Option<&[f64]>],
+        sc: &mut Scratch,
+    ) {
         sc.exit.copy_from_slice(&self.inner_exit);
         sc.pred.copy_from_slice(&sc.locals);
         let mut scalar_exit = 0.0;
@@ -526,7 +542,9 @@ impl<'a> Plan<'a> {
                 self.add_exit(ev, f, deg, &mut scalar_exit, &mut sc.exit, row_start);
             }
             if ev.moves_outer {
-                if let Some(src) = self.source(ev, &sc.locals, &mut sc.pred, row_start, own, own_base, readers) {
+                if let Some(src) =
+                    self.source(ev, &sc.locals, &mut sc.pred, row_start, own, own_base, readers)
+                {
                     if ev.inner.is_none() && self.kinds.is_none() {
                         plain.push((src.factor * ev.rate, src.values));
                     } else {
@@ -578,7 +596,11 @@ impl<'a> Plan<'a> {
         let (factor, degree) = found?;
         let start = start as usize;
         let values = if ev.moves_level0 {
-            let p0 = e.maps.iter().find(|m| m.level == 0).map(|m| m.pred[locals[0] as usize])?;
+            let p0 = e
+                .maps
+                .iter()
+                .find(|m| m.level == 0)
+                .map(|m| m.pred[locals[0] as usize])?;
             let slice = readers[p0 as usize]?;
             let off = start - p0 as usize * self.slice_len();
             &slice[off..off + self.n]
@@ -773,7 +795,11 @@ fn row_sums(a: &[f64], e: &[f64], x: &[f64]) -> (f64, f64, f64, f64) {
     let (mut s, mut f, mut t) = ([0.0f64; 4], [0.0f64; 4], [0.0f64; 4]);
     let mut m = f64::INFINITY;
     let n = a.len().min(e.len()).min(x.len());
-    let (ca, ce, cx) = (a[..n].chunks_exact(4), e[..n].chunks_exact(4), x[..n].chunks_exact(4));
+    let (ca, ce, cx) = (
+        a[..n].chunks_exact(4),
+        e[..n].chunks_exact(4),
+        x[..n].chunks_exact(4),
+    );
     let (ra, re, rx) = (ca.remainder(), ce.remainder(), cx.remainder());
     for ((a, e), x) in ca.zip(ce).zip(cx) {
         for k in 0..4 {

@@ -11,18 +11,43 @@ fn compare(gspn: &Gspn, rates: &[f64], measures: &[&str]) {
     let params = SolveParams::default();
     let sol = explicit.solve_rates(rates, &params).unwrap();
     let s = StructuredGspn::build(gspn, &StructuredParams::default(), Interrupt::NEVER).unwrap();
-    assert_eq!(s.stats().tangible as usize, explicit.num_tangible(), "{}", gspn.name());
+    assert_eq!(
+        s.stats().tangible as usize,
+        explicit.num_tangible(),
+        "{}",
+        gspn.name()
+    );
     let ssol = s.solve_rates(rates, &params, Interrupt::NEVER).unwrap();
-    assert!(ssol.info.residual <= params.tolerance, "{}: {:?}", gspn.name(), ssol.info);
+    assert!(
+        ssol.info.residual <= params.tolerance,
+        "{}: {:?}",
+        gspn.name(),
+        ssol.info
+    );
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1.0);
     for (t, (a, b)) in sol.throughput.iter().zip(&ssol.throughput).enumerate() {
-        assert!(close(*a, *b), "{}: throughput of {}: {a} vs {b}", gspn.name(), gspn.transition_names()[t]);
+        assert!(
+            close(*a, *b),
+            "{}: throughput of {}: {a} vs {b}",
+            gspn.name(),
+            gspn.transition_names()[t]
+        );
     }
     for (p, (a, b)) in sol.mean_tokens.iter().zip(&ssol.mean_tokens).enumerate() {
-        assert!(close(*a, *b), "{}: E[#{}]: {a} vs {b}", gspn.name(), gspn.place_names()[p]);
+        assert!(
+            close(*a, *b),
+            "{}: E[#{}]: {a} vs {b}",
+            gspn.name(),
+            gspn.place_names()[p]
+        );
     }
     for (p, (a, b)) in sol.prob_nonempty.iter().zip(&ssol.prob_nonempty).enumerate() {
-        assert!(close(*a, *b), "{}: P(#{} > 0): {a} vs {b}", gspn.name(), gspn.place_names()[p]);
+        assert!(
+            close(*a, *b),
+            "{}: P(#{} > 0): {a} vs {b}",
+            gspn.name(),
+            gspn.place_names()[p]
+        );
     }
     for m in measures {
         let e = Expr::parse(m).unwrap();
@@ -36,7 +61,11 @@ fn kanban_one_to_four_agree_with_the_explicit_engine() {
     for n in 1..=4 {
         let g = families::kanban(n).instantiate(&Params::new()).unwrap();
         let rates = g.rates(&Params::new(), None).unwrap();
-        compare(&g, &rates, &["#Pm1 >= 1", "#Pkan2 + #Pout4 * 2", "#Pm1 = 1 and #Pm4 > 0"]);
+        compare(
+            &g,
+            &rates,
+            &["#Pm1 >= 1", "#Pkan2 + #Pout4 * 2", "#Pm1 = 1 and #Pm4 > 0"],
+        );
     }
 }
 
@@ -63,7 +92,10 @@ fn every_real_net_agrees_with_the_explicit_engine_or_gets_a_reason() {
         ("mcc/FMS-PT-00002.pnml", Params::new()),
         ("greatspn/2PhaseLockViolation.PNPRO", Params::new()),
         ("greatspn/Cycle_of_Four_Seasons.PNPRO", Params::new()),
-        ("greatspn/FlexibleManufacturingSystem.PNPRO", Params::new().with("N", 3.0)),
+        (
+            "greatspn/FlexibleManufacturingSystem.PNPRO",
+            Params::new().with("N", 3.0),
+        ),
         ("greatspn/Philosophers4.PNPRO", Params::new()),
         ("greatspn/ReaderWriter.PNPRO", Params::new().with("K", 1.0)),
         ("greatspn/ReaderWriter.PNPRO", Params::new().with("K", 2.0)),
@@ -103,7 +135,12 @@ fn philosophers_deadlock_so_the_engine_says_why_it_does_not_apply() {
 
 #[test]
 fn polling_and_tandem_families_agree_with_the_explicit_engine() {
-    for net in [families::polling(3, 3), families::polling(4, 2), families::tandem(3, 4), families::tandem(4, 5)] {
+    for net in [
+        families::polling(3, 3),
+        families::polling(4, 2),
+        families::tandem(3, 4),
+        families::tandem(4, 5),
+    ] {
         let g = net.instantiate(&Params::new()).unwrap();
         let rates = g.rates(&Params::new(), None).unwrap();
         let s = StructuredGspn::build(&g, &StructuredParams::default(), Interrupt::NEVER).unwrap();
@@ -119,17 +156,33 @@ fn the_structured_solution_is_identical_on_one_two_and_three_threads() {
     let rates = g.rates(&Params::new(), None).unwrap();
     let s = StructuredGspn::build(&g, &StructuredParams::default(), Interrupt::NEVER).unwrap();
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| s.solve_rates(&rates, &SolveParams::default(), Interrupt::NEVER).unwrap())
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            s.solve_rates(&rates, &SolveParams::default(), Interrupt::NEVER)
+                .unwrap()
+        })
     };
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     let one = run(1);
     for threads in [2, 3] {
         let other = run(threads);
         assert_eq!(one.info.iterations, other.info.iterations, "{threads} threads");
-        assert!(bits(&one.throughput) == bits(&other.throughput), "{threads} threads");
-        assert!(bits(&one.mean_tokens) == bits(&other.mean_tokens), "{threads} threads");
-        assert_eq!(one.info.residual.to_bits(), other.info.residual.to_bits(), "{threads} threads");
+        assert!(
+            bits(&one.throughput) == bits(&other.throughput),
+            "{threads} threads"
+        );
+        assert!(
+            bits(&one.mean_tokens) == bits(&other.mean_tokens),
+            "{threads} threads"
+        );
+        assert_eq!(
+            one.info.residual.to_bits(),
+            other.info.residual.to_bits(),
+            "{threads} threads"
+        );
     }
 }
 
@@ -140,6 +193,11 @@ fn the_structured_solution_is_identical_on_one_two_and_three_threads() {
 #[test]
 fn immediate_throughputs_are_in_the_model_time_unit_when_rates_are_fast() {
     let g = families::fms(2, false).instantiate(&Params::new()).unwrap();
-    let rates: Vec<f64> = g.rates(&Params::new(), None).unwrap().iter().map(|r| r * 1000.0).collect();
+    let rates: Vec<f64> = g
+        .rates(&Params::new(), None)
+        .unwrap()
+        .iter()
+        .map(|r| r * 1000.0)
+        .collect();
     compare(&g, &rates, &["#P1 >= 1"]);
 }
