@@ -301,8 +301,8 @@ fn local_map(comp: &crate::structure::Component, k: usize, parts: &[Part]) -> (L
             if v < part.need || v >= part.inhibit {
                 continue 'states;
             }
-            if part.need > 0 {
-                deg = deg.min(v / part.need);
+            if let Some(d) = v.checked_div(part.need) {
+                deg = deg.min(d);
             }
             let w = i64::from(v) + part.delta;
             if w < 0 || w > i64::from(part.capacity) {
