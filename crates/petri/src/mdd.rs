@@ -70,7 +70,7 @@ impl Default for MddLimits {
         MddLimits {
             max_nodes: 4_000_000,
             max_tokens: 1 << 16,
-            max_operations: 20_000_000,
+            max_operations: 2_000_000,
         }
     }
 }
