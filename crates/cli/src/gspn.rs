@@ -72,7 +72,7 @@ pub enum GspnCommand {
         /// Family.
         #[arg(value_enum)]
         family: Family,
-        /// Size parameter (kanbans per cell, pallets, philosophers, robots).
+        /// Size parameter (kanbans per cell, pallets, philosophers, robots, stations, buffer places).
         n: u32,
         /// Output file (format by extension); standard output (TOML) if absent.
         #[arg(short, long)]
@@ -94,6 +94,10 @@ pub enum Family {
     /// N robots choosing among 3 corridors, fast and risky to slow and
     /// safe: a net with decisions (gspn optimize; N = 100: 216,751 states).
     Corridors,
+    /// A server polling N stations of 3 customers each (4N · 4^N states).
+    Polling,
+    /// 5 stations in tandem with buffers of N places, 2 servers each, blocking ((N+1)^5 states).
+    Tandem,
 }
 
 /// Options shared by commands that load and instantiate a net.
@@ -144,6 +148,17 @@ pub struct InfoArgs {
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
+    /// Show the product structure instead: the components (places tied
+    /// together), their local state counts, the reachable markings against
+    /// the potential ones; found symbolically, so it also works for nets
+    /// far too large to generate.
+    #[arg(long)]
+    structure: bool,
+    /// With --structure: components to use, outermost first, `;` between
+    /// components and `,` between places (merged where the reachable set
+    /// does not factor between them).
+    #[arg(long, value_name = "PLACES;PLACES…")]
+    partition: Option<String>,
 }
 
 #[derive(Args, Debug)]
@@ -169,6 +184,18 @@ pub struct SolveArgs {
     /// --policy-out`): its choice markings resolved, every measure applies.
     #[arg(long, value_name = "FILE")]
     policy: Option<PathBuf>,
+    /// Engine: explicit = reachability graph and sparse generator;
+    /// structured = product of components' local spaces, no generator
+    /// stored (nets far beyond the explicit engine's memory); auto = the
+    /// structured engine for chains of 100,000 states or more with a product
+    /// structure and no vanishing markings, the explicit one otherwise (the
+    /// reason is printed).
+    #[arg(long, value_enum, default_value_t = EngineArg::Auto)]
+    engine: EngineArg,
+    /// Structured engine: components to use, outermost first, `;` between
+    /// components and `,` between places.
+    #[arg(long, value_name = "PLACES;PLACES…")]
+    partition: Option<String>,
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
@@ -178,6 +205,13 @@ pub struct SolveArgs {
     /// with --json).
     #[arg(long)]
     stats: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum EngineArg {
+    Auto,
+    Explicit,
+    Structured,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -317,6 +351,9 @@ pub(crate) fn print_json(v: &Value) -> Result<()> {
 }
 
 fn info(a: &InfoArgs) -> Result<()> {
+    if a.structure {
+        return structure_info(a);
+    }
     let (net, gspn) = load(&a.net)?;
     let phase = Phase::new();
     let analysis = lab::gspn::analyse(&gspn, &explore_params(&a.net), Interrupt::NEVER, &mut |m| {
@@ -424,6 +461,91 @@ fn info(a: &InfoArgs) -> Result<()> {
                 shown.join(", ")
             }
         )?;
+    }
+    Ok(())
+}
+
+/// `gspn info --structure`.
+fn structure_info(a: &InfoArgs) -> Result<()> {
+    let (_, gspn) = load(&a.net)?;
+    let phase = Phase::new();
+    phase.show("finding the product structure");
+    let s = lab::engine::structure(&gspn, a.partition.as_deref())?;
+    drop(phase);
+    if a.json {
+        return print_json(&lab::engine::structure_json(&gspn, &s));
+    }
+    let names = gspn.place_names();
+    let product =
+        |v: &mut dyn Iterator<Item = u128>| v.map(|x| x.to_string()).collect::<Vec<_>>().join(" × ");
+    out!(
+        "{}",
+        fields(&[
+            ("net", format!("{} ({})", gspn.name(), a.net.file.display())),
+            ("reachable markings", s.reachable().to_string()),
+            (
+                "components",
+                format!(
+                    "{} = {}{}",
+                    product(&mut s.components().iter().map(|c| c.len() as u128)),
+                    s.product(),
+                    if s.is_exact() {
+                        " (exactly the reachable set)"
+                    } else {
+                        " (NOT the reachable set)"
+                    }
+                )
+            ),
+            (
+                "P-invariant groups",
+                format!(
+                    "{} = {} potential markings",
+                    product(&mut s.groups().iter().map(|g| g.projected_states)),
+                    s.potential()
+                )
+            ),
+            (
+                "home state",
+                match s.reversible() {
+                    Some(true) => "yes: every marking reaches M0 (irreducible chain)".to_string(),
+                    Some(false) => "no: some marking does not reach M0 back".to_string(),
+                    None => "decided when solving (immediate transitions)".to_string(),
+                }
+            ),
+            (
+                "symbolic search",
+                format!("{} decision-diagram nodes, {:.3} s", s.mdd_nodes(), s.seconds())
+            ),
+        ])
+    )?;
+    let mut t = Table::new(["component", "local states", "places"]);
+    for (k, c) in s.components().iter().enumerate() {
+        t.row([
+            (k + 1).to_string(),
+            c.len().to_string(),
+            c.places
+                .iter()
+                .map(|p| names[p.index()].as_str())
+                .collect::<Vec<_>>()
+                .join(" "),
+        ]);
+    }
+    outln!("\n{}", t.render())?;
+    let mut t = Table::new(["P-invariant group", "projected states", "places"]);
+    for (k, g) in s.groups().iter().enumerate() {
+        t.row([
+            (k + 1).to_string(),
+            if g.exact {
+                g.projected_states.to_string()
+            } else {
+                format!("≤ {}", g.projected_states)
+            },
+            g.places.join(" "),
+        ]);
+    }
+    outln!("{}", t.render())?;
+    for n in s.notes() {
+        outln!("note: {n}")?;
     }
     Ok(())
 }
@@ -548,9 +670,11 @@ fn progress_message(now: &ProgressSnapshot, markings_per_second: f64) -> String 
             markings_per_second / 1e6
         ),
         Stage::Compiling => format!("compiling the CTMC of {} markings", now.markings),
+        Stage::Structuring if now.markings == 0 => "finding the product structure".into(),
+        Stage::Structuring => format!("preparing the structured engine: {} states", now.markings),
         Stage::Solving if now.iteration == 0 => "solving the steady state".into(),
         Stage::Solving => format!(
-            "solving the steady state: iteration {}, residual estimate {:.1e}",
+            "solving the steady state: sweep or iteration {}, residual estimate {:.1e}",
             now.iteration, now.residual
         ),
     }
@@ -576,22 +700,29 @@ fn solve(a: &SolveArgs) -> Result<()> {
         solve: solve_params(a.method, a.tolerance),
         default_rate: a.default_rate,
     };
+    let engine = match a.engine {
+        EngineArg::Auto => lab::engine::Engine::Auto,
+        EngineArg::Explicit => lab::engine::Engine::Explicit,
+        EngineArg::Structured => lab::engine::Engine::Structured,
+    };
+    let partition = a.partition.as_deref();
     let steady = if std::io::stderr().is_terminal() {
         let progress = Progress::new();
         with_progress_line(&progress, || {
-            lab::gspn::solve(
+            lab::engine::solve(
                 &gspn,
                 &options,
+                engine,
+                partition,
                 Interrupt::NEVER.with_progress(&progress),
                 &mut |_| {},
             )
         })?
     } else {
-        lab::gspn::solve(&gspn, &options, Interrupt::NEVER, &mut |_| {})?
+        lab::engine::solve(&gspn, &options, engine, partition, Interrupt::NEVER, &mut |_| {})?
     };
     let values = steady.measures(&measures)?;
-    let (compiled, sol) = (&steady.space.compiled, &steady.solution);
-    let vanishing = steady.space.vanishing_markings;
+    let sol = steady.summary();
     let places = gspn.place_names();
     let trans = gspn.transition_names();
     if a.json {
@@ -610,15 +741,15 @@ fn solve(a: &SolveArgs) -> Result<()> {
             ("net", format!("{} ({})", gspn.name(), a.net.file.display())),
             (
                 "state space",
-                format!(
-                    "{} tangible, {} vanishing markings",
-                    compiled.num_tangible(),
-                    vanishing
-                )
+                format!("{} tangible, {} vanishing markings", sol.tangible, sol.vanishing)
+            ),
+            (
+                "engine",
+                format!("{}: {}", steady.choice.engine, steady.choice.reason)
             ),
             (
                 "long run",
-                if compiled.is_ergodic() {
+                if sol.ergodic {
                     "ergodic (one recurrent class)".to_string()
                 } else {
                     format!(
@@ -946,6 +1077,8 @@ fn family_cmd(family: Family, n: u32, output: Option<&Path>) -> Result<()> {
         Family::Philosophers => F::Philosophers,
         Family::Robots => F::Robots,
         Family::Corridors => F::Corridors,
+        Family::Polling => F::Polling,
+        Family::Tandem => F::Tandem,
     }
     .build(n)?;
     match output {

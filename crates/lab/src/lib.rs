@@ -20,7 +20,8 @@
 //! package (`crates/py`) so that both say and print the same: [`gspn`]
 //! (loading, solving, analysing, simulating nets; the supervisor's
 //! decision), [`optimize`] (nets with decisions and DRN files optimised,
-//! policies), [`tours`] (the guide robot between named places),
+//! policies), [`engine`] (which GSPN engine solves a net), [`tours`]
+//! (the guide robot between named places),
 //! [`batch`] (a suite run into a results folder), [`map_file`] (map
 //! files).
 #![warn(missing_docs)]
@@ -28,6 +29,7 @@
 pub mod batch;
 pub mod charts;
 pub mod encode;
+pub mod engine;
 pub mod experiment;
 pub mod foxglove;
 pub mod gspn;

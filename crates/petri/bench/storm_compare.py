@@ -28,7 +28,9 @@ Usage (from the repository root, after `cargo build --release -p petrinav`):
 Options: --petrinav PATH (default target/release/petrinav, or
 $CARGO_TARGET_DIR/release/petrinav), --storm-timeout SECONDS (default 1800),
 --workdir DIR (where the PNPRO files go; default a temporary directory),
---markdown (print the table as Markdown for BENCHMARKS.md).
+--markdown (print the table as Markdown for BENCHMARKS.md), --engine
+auto|explicit|structured (petrinav's `gspn solve --engine`, default auto;
+the engine used is a column).
 """
 
 import argparse
@@ -106,10 +108,12 @@ def run_storm(path, formula, timeout):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def run_petrinav(exe, path, measure):
+def run_petrinav(exe, path, measure, engine):
     t0 = time.perf_counter()
     out = subprocess.run(
-        [exe, "gspn", "solve", path, "-m", measure, "--json"], capture_output=True, text=True
+        [exe, "gspn", "solve", path, "-m", measure, "--engine", engine, "--json"],
+        capture_output=True,
+        text=True,
     )
     wall = time.perf_counter() - t0
     if out.returncode != 0:
@@ -120,6 +124,7 @@ def run_petrinav(exe, path, measure):
         "states": j["tangible_markings"],
         "residual": j["residual"],
         "solver": j["solver"],
+        "engine": j.get("engine", "explicit"),
         "seconds": wall,
     }
 
@@ -147,6 +152,7 @@ def main():
     ap.add_argument("--storm-timeout", type=float, default=1800.0)
     ap.add_argument("--workdir")
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--engine", default="auto", choices=["auto", "explicit", "structured"])
     a = ap.parse_args()
     workdir = a.workdir or tempfile.mkdtemp(prefix="storm_compare_")
     os.makedirs(workdir, exist_ok=True)
@@ -158,7 +164,7 @@ def main():
         have_storm = False
         print("stormpy is not installed (pip install stormpy): Storm columns stay empty", file=sys.stderr)
     rows = []
-    header = ("net", "states", "petrinav s", "Storm s", "Storm/petrinav", "petrinav value", "Storm value", "|diff|")
+    header = ("net", "engine", "states", "petrinav s", "Storm s", "Storm/petrinav", "petrinav value", "Storm value", "|diff|")
     if a.markdown:
         print("| " + " | ".join(header) + " |")
         print("|" + "---|" * len(header))
@@ -168,12 +174,13 @@ def main():
         path = os.path.join(workdir, f"{family}-{n}.PNPRO")
         subprocess.run([a.petrinav, "gspn", "family", family, str(n), "-o", path], check=True)
         measure, formula = MEASURES[family]
-        ours = run_petrinav(a.petrinav, path, measure)
+        ours = run_petrinav(a.petrinav, path, measure, a.engine)
         theirs = run_storm(path, formula, a.storm_timeout) if have_storm else {"error": "no stormpy"}
         ov, tv = ours.get("value"), theirs.get("value")
         ratio = theirs["seconds"] / ours["seconds"] if "seconds" in theirs and "seconds" in ours else None
         cells = (
             f"{family} {n}",
+            ours.get("engine", "-"),
             str(ours.get("states", theirs.get("states", "?"))),
             f"{ours['seconds']:.3f}" if "seconds" in ours else ours["error"],
             f"{theirs['seconds']:.3f}" if "seconds" in theirs else theirs["error"],

@@ -313,6 +313,14 @@ pub enum Error {
         /// The largest size accepted.
         limit: u64,
     },
+    /// The structured engine does not apply to this net (no product
+    /// structure, a component too large, a chain that is not irreducible):
+    /// the explicit engine is the one to use.
+    #[error("the structured engine does not apply: {reason}")]
+    Unstructured {
+        /// Why.
+        reason: String,
+    },
     /// A simulation ran out of its wall-clock budget
     /// (`SimParams::max_wall_s`).
     #[error(

@@ -8,6 +8,8 @@
 //! | [`robots_corridors`] | N robots sharing K one-way corridors (immediate choice of a free corridor) | C(N+K, K)-ish |
 //! | [`corridors_decide`] | N robots choosing among 3 corridors, fast and risky to slow and safe (decisions) | N = 40: 18,701 states, N = 100: 216,751 |
 //! | [`mm1k`] | M/M/1/K queue | K + 1 |
+//! | [`polling`] | a server cycling over N stations of 3 customers each, exhaustive service | 4N · 4^N |
+//! | [`tandem`] | 5 stations in series with buffers of N places and 2 servers each, blocking | (N + 1)^5 |
 
 use crate::error::{Error, Result};
 use crate::expr::{BinOp, Expr};
@@ -33,6 +35,10 @@ pub enum Family {
     /// [`corridors_decide`]: `n` robots choosing corridors (decisions;
     /// fixed structure).
     Corridors,
+    /// [`polling`]: `n` stations (`4n` places, `4n` transitions).
+    Polling,
+    /// [`tandem`]: buffers of `n` places (fixed structure).
+    Tandem,
 }
 
 impl Family {
@@ -44,6 +50,8 @@ impl Family {
             Family::Philosophers => "philosophers",
             Family::Robots => "robots",
             Family::Corridors => "corridors",
+            Family::Polling => "polling",
+            Family::Tandem => "tandem",
         }
     }
 
@@ -51,6 +59,7 @@ impl Family {
     pub fn nodes(self, n: u32) -> u64 {
         match self {
             Family::Philosophers => 10 * u64::from(n),
+            Family::Polling => 8 * u64::from(n),
             // The others' structure does not grow with n (only tokens).
             _ => {
                 let net = self.make(1);
@@ -66,6 +75,8 @@ impl Family {
             Family::Philosophers => philosophers(n),
             Family::Robots => robots_corridors(n, 3),
             Family::Corridors => corridors_decide(n),
+            Family::Polling => polling(n, POLLING_CUSTOMERS),
+            Family::Tandem => tandem(n, TANDEM_STATIONS),
         }
     }
 
@@ -360,6 +371,86 @@ pub fn corridors_decide(n: u32) -> Net {
         rate: None,
         impulses: crossings,
     });
+    net
+}
+
+/// Customers per station of [`Family::Polling`].
+pub const POLLING_CUSTOMERS: u32 = 3;
+/// Stations of [`Family::Tandem`].
+pub const TANDEM_STATIONS: u32 = 5;
+
+/// A polling system: one server visits `n` stations in a cycle; station `i`
+/// has `k` customers that think (`Think_i`, infinite servers: each arrives
+/// at rate `arrive`) and queue (`Queue_i`). The server at a station
+/// (`At_i`) serves its queue exhaustively (`serve_i`, rate `serve`), leaves
+/// when it is empty (`leave_i`, rate `switch`, inhibited by the queue) and
+/// walks to the next station (`Walk_i` → `At_{i+1}`, rate `walk`). All
+/// transitions timed; the server's places form one P-invariant and each
+/// station's another, and every combination is reachable, so the reachable
+/// set is the product `2n · (k+1)^n` (the structured engine's components).
+/// Rates differ by station (`arrive` 0.3 + 0.05·i, `serve` 2.0 − 0.1·i).
+pub fn polling(n: u32, k: u32) -> Net {
+    let mut net = Net::new(format!("polling{n}"));
+    let switch = rate(&mut net, "switch", 5.0);
+    let walk = rate(&mut net, "walk", 2.0);
+    let at: Vec<PlaceId> = (0..n)
+        .map(|i| net.add_place(format!("At_{}", i + 1), u32::from(i == 0)))
+        .collect();
+    let walking: Vec<PlaceId> = (0..n)
+        .map(|i| net.add_place(format!("Walk_{}", i + 1), 0u32))
+        .collect();
+    for i in 0..n as usize {
+        let name = i + 1;
+        let think = net.add_place(format!("Think_{name}"), k);
+        let queue = net.add_place(format!("Queue_{name}"), 0u32);
+        let a = rate(&mut net, &format!("arrive{name}"), 0.3 + 0.05 * i as f64);
+        let t = net.add_timed(format!("arrive_{name}"), a);
+        net.set_servers(t, Servers::Infinite);
+        arcs(&mut net, t, &[think], &[queue]);
+        let sv = rate(&mut net, &format!("serve{name}"), 2.0 - 0.1 * i as f64);
+        let t = net.add_timed(format!("serve_{name}"), sv);
+        arcs(&mut net, t, &[queue, at[i]], &[think, at[i]]);
+        let t = net.add_timed(format!("leave_{name}"), switch.clone());
+        arcs(&mut net, t, &[at[i]], &[walking[i]]);
+        net.inhibitor(queue, t);
+        let t = net.add_timed(format!("walk_{name}"), walk.clone());
+        arcs(&mut net, t, &[walking[i]], &[at[(i + 1) % n as usize]]);
+    }
+    net
+}
+
+/// An open tandem line of `stations` stations with buffers of `n` places:
+/// jobs arrive at rate `lambda` while the first buffer has room; station
+/// `i` has `Jobs_i` and `Free_i` (`Jobs_i + Free_i = n`) and two servers,
+/// each moving a job on (`move_i`, rate `serve_i`) when the next buffer has
+/// room — its enabling degree is `min(#Jobs_i, #Free_{i+1})` (at most 2), a
+/// rate that depends on two stations' markings; the last station's jobs
+/// leave (`depart`, two servers). The reachable set is the product of the
+/// stations' `n + 1` local states.
+pub fn tandem(n: u32, stations: u32) -> Net {
+    let mut net = Net::new(format!("tandem{n}"));
+    net.set_param("N", Some(f64::from(n)), ParamKind::Int);
+    let jobs: Vec<PlaceId> = (1..=stations)
+        .map(|i| net.add_place(format!("Jobs_{i}"), 0u32))
+        .collect();
+    let free: Vec<PlaceId> = (1..=stations)
+        .map(|i| net.add_place(format!("Free_{i}"), Expr::param("N")))
+        .collect();
+    let a = rate(&mut net, "lambda", 1.0);
+    let t = net.add_timed("arrive", a);
+    arcs(&mut net, t, &[free[0]], &[jobs[0]]);
+    for i in 0..stations as usize {
+        let r = rate(&mut net, &format!("serve{}", i + 1), 0.8 + 0.15 * i as f64);
+        if i + 1 < stations as usize {
+            let t = net.add_timed(format!("move_{}", i + 1), r);
+            net.set_servers(t, Servers::K(2));
+            arcs(&mut net, t, &[jobs[i], free[i + 1]], &[free[i], jobs[i + 1]]);
+        } else {
+            let t = net.add_timed("depart", r);
+            net.set_servers(t, Servers::K(2));
+            arcs(&mut net, t, &[jobs[i]], &[free[i]]);
+        }
+    }
     net
 }
 

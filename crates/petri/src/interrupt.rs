@@ -60,6 +60,10 @@ pub enum Stage {
     /// Solving a linear system ([`ProgressSnapshot::iteration`] and
     /// [`ProgressSnapshot::residual`] change for iterative methods).
     Solving,
+    /// Finding the product structure of the reachable set and building the
+    /// structured engine's descriptor ([`crate::StructuredGspn::build`];
+    /// [`ProgressSnapshot::markings`] is the reachable count once known).
+    Structuring,
 }
 
 impl Stage {
@@ -68,6 +72,7 @@ impl Stage {
             1 => Stage::Generating,
             2 => Stage::Compiling,
             3 => Stage::Solving,
+            4 => Stage::Structuring,
             _ => Stage::Idle,
         }
     }

@@ -41,9 +41,11 @@
 #![warn(missing_docs)]
 
 pub mod absorption;
+mod aggregation;
 mod blocks;
 pub mod ctmc;
 pub mod decision;
+mod descriptor;
 pub mod error;
 pub mod expr;
 pub mod families;
@@ -54,9 +56,12 @@ pub mod invariants;
 pub mod io;
 pub mod krylov;
 mod linear;
+mod marginals;
 mod marking;
+mod mdd;
 pub mod mdp;
 pub mod net;
+mod product_search;
 pub use gspn::policy;
 pub mod properties;
 pub mod reachability;
@@ -64,7 +69,10 @@ mod rows;
 pub mod scc;
 pub mod simulation;
 pub mod steady_state;
+pub mod structure;
+pub mod structured;
 pub mod suggest;
+mod sweep;
 mod vanishing;
 
 pub use absorption::Absorption;
@@ -92,4 +100,6 @@ pub use reachability::{
 };
 pub use simulation::{Estimate, SimParams, SimProgress, SimResult, simulate, simulate_observed};
 pub use steady_state::{Method, SolveInfo, SolveParams};
+pub use structure::{Component, GroupInfo, Structure, StructureParams};
+pub use structured::{StructuredGspn, StructuredParams, StructuredSolution, StructuredStats};
 pub use suggest::closest;

@@ -742,7 +742,7 @@ pub(crate) fn loads(
 
 /// A member of a scalable benchmark family, as ``petrinav gspn family``:
 /// ``"kanban"`` (``n`` kanbans per cell; parameter ``N``), ``"fms"``,
-/// ``"philosophers"``, ``"robots"``.
+/// ``"philosophers"``, ``"robots"``, ``"polling"``, ``"tandem"``.
 #[pyfunction]
 #[pyo3(signature = (name, n, params=None))]
 pub(crate) fn family(
@@ -754,10 +754,19 @@ pub(crate) fn family(
     use petri::families::Family as F;
     let assignments = assignments(params)?;
     guarded(py, Kind::Parameter, || {
-        let f = [F::Kanban, F::Fms, F::Philosophers, F::Robots]
-            .into_iter()
-            .find(|f| f.name() == name)
-            .ok_or_else(|| anyhow::anyhow!("unknown family `{name}`: kanban, fms, philosophers, robots"))?;
+        let f = [
+            F::Kanban,
+            F::Fms,
+            F::Philosophers,
+            F::Robots,
+            F::Polling,
+            F::Tandem,
+        ]
+        .into_iter()
+        .find(|f| f.name() == name)
+        .ok_or_else(|| {
+            anyhow::anyhow!("unknown family `{name}`: kanban, fms, philosophers, robots, polling, tandem")
+        })?;
         Net::new(f.build(n)?, assignments)
     })
 }
