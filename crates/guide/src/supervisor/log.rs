@@ -19,7 +19,6 @@ use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use super::Behaviour;
-use super::credit_learning::Segment;
 
 /// One stretch of time in one state.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -47,6 +46,43 @@ pub enum StateName {
     Abnormal,
 }
 
+/// How a segment ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SegmentEnd {
+    /// The localizer changed state.
+    Localizer,
+    /// The planner changed state.
+    Planner,
+    /// The behaviour changed.
+    Behaviour,
+    /// The crowd context changed.
+    Context,
+    /// The mission ended.
+    Mission,
+}
+
+/// A stretch of a mission in one state: the crediting supervisor learns
+/// from these ([`super::credit_learning`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Segment {
+    /// The behaviour in control.
+    pub behaviour: Behaviour,
+    /// The localizer in Success.
+    pub localized: bool,
+    /// AutoMove's planner Normal (always true for contour tracking).
+    pub normal: bool,
+    /// The crowd context (0 quiet, 1 busy, 2 crowded).
+    pub context: usize,
+    /// Duration, seconds.
+    pub duration_s: f64,
+    /// Progress towards the goal along AutoMove's reference, metres
+    /// (`None` where there was no reference to measure it on).
+    pub progress_m: Option<f64>,
+    /// How it ended.
+    pub end: SegmentEnd,
+}
+
 /// A decision of the supervisor during a mission.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DecisionLog {
@@ -70,6 +106,22 @@ pub struct DecisionLog {
     /// The crowd context the rates were taken for (crediting supervisor).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub context: Option<usize>,
+    /// The route the rates were taken for (crediting supervisor, where
+    /// missions go between several places).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub route: Option<String>,
+    /// λ1 first, the rates of the contour hypothesis where they differ from
+    /// `rates` (crediting supervisor: λ3, λ4 are each behaviour's own).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub contour_rates: Vec<f64>,
+    /// The supervisor net's places marked at the decision (crediting
+    /// supervisor): `P0` (deciding), the localizer's and the planner's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub marking: Vec<String>,
+    /// The choice explores: a behaviour never driven on the route, tried
+    /// (crediting supervisor).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub explore: bool,
 }
 
 /// A calibration run: one behaviour alone from the start to the goal.
@@ -91,6 +143,10 @@ pub struct CalibrationRun {
     /// Its segments, for the crediting supervisor ([`super::credit_learning`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub segments: Vec<Segment>,
+    /// The route it drove (`from → to`), where the log's missions go
+    /// between several places; `None`: the log's one route.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub route: Option<String>,
 }
 
 /// A mission: what the supervisor learns from.
@@ -117,6 +173,10 @@ pub struct MissionRecord {
     /// Its segments, for the crediting supervisor ([`super::credit_learning`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub segments: Vec<Segment>,
+    /// The route it drove (`from → to`, a leg of a tour), where missions go
+    /// between several places; `None`: the log's one route.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub route: Option<String>,
 }
 
 /// One line of the log.
@@ -363,6 +423,7 @@ mod tests {
             time_contour_s: 0.0,
             decisions: Vec::new(),
             segments: Vec::new(),
+            route: None,
         })
     }
 

@@ -1,0 +1,59 @@
+//! The tour-guide suite's galleries alone (its campaigns whose scenario
+//! starts with `galleries/`, optionally only some strategies), run into a
+//! results folder and reported as the suite reports them — for measuring
+//! the galleries without the museum:
+//!
+//! ```text
+//! cargo run --release -p lab --example galleries_batch -- OUT CAMPAIGNS [JOBS [STRATEGY…]]
+//! ```
+//!
+//! The records are those `lab run tourguide --runs CAMPAIGNS` writes for
+//! these scenarios (same jobs, same seeds); the report's galleries section
+//! is in `OUT/report.md`. A folder already holding some of the runs is
+//! resumed.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use lab::runner::{self, BatchParams};
+use lab::suite::Suite;
+use lab::suites::tourguide::TourGuideSuite;
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let out = PathBuf::from(args.first().context("OUT")?);
+    let campaigns: u32 = args.get(1).map_or(Ok(2), |s| s.parse())?;
+    let jobs: usize = args.get(2).map_or(Ok(2), |s| s.parse())?;
+    let strategies: Vec<&str> = args.iter().skip(3).map(String::as_str).collect();
+    let suite = TourGuideSuite::new(campaigns)?;
+    let selected: Vec<runner::Campaign> = suite
+        .campaigns()
+        .into_iter()
+        .filter(|c| {
+            c.jobs.first().is_some_and(|j| {
+                j.scenario
+                    .strip_prefix("galleries/")
+                    .is_some_and(|s| strategies.is_empty() || strategies.contains(&s))
+            })
+        })
+        .collect();
+    std::fs::create_dir_all(&out)?;
+    lab::batch::write_info(&out, suite.info())?;
+    let params = BatchParams {
+        results: out.join("results.jsonl"),
+        resume: out.join("results.jsonl").exists(),
+        jobs: Some(jobs),
+        progress: false,
+        stop: None,
+    };
+    let summary = runner::run_batch(&selected, &params, |job, earlier: &[serde_json::Value]| {
+        let earlier = earlier
+            .iter()
+            .map(lab::record::parse)
+            .collect::<Result<Vec<_>>>()?;
+        Ok(serde_json::to_value(suite.run(job, &earlier)?)?)
+    })?;
+    eprintln!("{summary:?}");
+    lab::report::write(&out, &suite, false)?;
+    Ok(())
+}
