@@ -394,6 +394,11 @@ fn show_credit(entries: &[Entry]) -> Result<()> {
             ),
         };
         outln!("{line}")?;
+        if let Entry::Mission(m) = e {
+            for d in &m.decisions {
+                outln!("       {}", decision_line(d))?;
+            }
+        }
     }
     outln!()?;
     match credit_text(entries) {
@@ -401,6 +406,44 @@ fn show_credit(entries: &[Entry]) -> Result<()> {
         Err(e) => outln!("no rates yet: {e}")?,
     }
     Ok(())
+}
+
+/// One decision of the crediting supervisor, as `guide log show` prints
+/// it: when and why, the context (route, crowd), the net's marking, the
+/// value of each choice (the expected time per completed mission, a
+/// failure costing the time limit: `1 / f`), the choice, and the rates
+/// used (λ3, λ4 each behaviour's; λ7, λ8 the completion rates from here).
+fn decision_line(d: &guide::supervisor::log::DecisionLog) -> String {
+    use guide::supervisor::credit_learning::CONTEXT_NAMES;
+    let per = |f: f64| if f > 0.0 { format!("{} s", num(1.0 / f)) } else { "never".into() };
+    let rate = |r: &[f64], i: usize| r.get(i - 1).map_or("-".to_string(), |v| format!("{v:.4}"));
+    let context = d
+        .context
+        .and_then(|c| CONTEXT_NAMES.get(c))
+        .copied()
+        .unwrap_or("-");
+    format!(
+        "decision at {} s ({}){}, {context}, marking {}: automove {} (f {:.5}), contour {} (f {:.5}) → {}{}; λ3 {}/{} λ4 {}/{} λ7 {} λ8 {} λ12 {} λ13 {} λ14 {}",
+        num(d.time_s),
+        d.reason,
+        d.route.as_ref().map(|r| format!(" on {r}")).unwrap_or_default(),
+        if d.marking.is_empty() { "-".into() } else { d.marking.join(" ") },
+        per(d.f_auto),
+        d.f_auto,
+        per(d.f_cont),
+        d.f_cont,
+        format!("{:?}", d.choice).to_lowercase(),
+        if d.explore { " (exploring)" } else { "" },
+        rate(&d.rates, 3),
+        rate(&d.contour_rates, 3),
+        rate(&d.rates, 4),
+        rate(&d.contour_rates, 4),
+        rate(&d.rates, 7),
+        rate(&d.rates, 8),
+        rate(&d.rates, 12),
+        rate(&d.rates, 13),
+        rate(&d.rates, 14),
+    )
 }
 
 /// Prints a credit log as JSON lines: the entries, then the model learnt

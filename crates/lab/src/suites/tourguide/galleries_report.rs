@@ -378,6 +378,9 @@ fn learners_text(g: &Gate, learners: &[Learner]) -> String {
         FIXED[g.best],
         percent(PRIMARY_TARGET)
     );
+    if learners.is_empty() {
+        text.push_str("No learner's campaign is complete yet.\n");
+    }
     for l in learners {
         let met =
             l.vs_best.mean <= PRIMARY_TARGET && l.vs_best.high() < 0.0 && l.success_vs_best.mean >= -0.03;
@@ -429,6 +432,7 @@ fn learners_text(g: &Gate, learners: &[Learner]) -> String {
             }
         );
     }
+    text.push('\n');
     text
 }
 
@@ -501,7 +505,7 @@ fn gate_text(g: &Gate) -> String {
     let h = &g.headroom_cost;
     let s = &g.headroom_success;
     format!(
-        "**The gate** (fixed strategies alone, {} campaigns of {TOURS} tours of {LEGS} legs, visitors {:?} by quarter of the day): the hindsight oracle — per leg, the cheapest fixed strategy on that leg's random numbers — against the best single fixed strategy, `{}`: tour cost **{} cheaper** ({} to {}, 95 % interval over campaigns), legs reached **{:+.3}** ({:+.3} to {:+.3}). The building {} the gate (at least {} in tour cost or {:+.2} in legs reached). Part of any oracle's headroom is luck — on legs where two strategies differ by chance it picks the luckier run — so the leg table below shows where the difference is systematic.",
+        "**The gate** (fixed strategies alone, {} campaigns of {TOURS} tours of {LEGS} legs, visitors {:?} by quarter of the day): the hindsight oracle — per leg, the cheapest fixed strategy on that leg's random numbers — against the best single fixed strategy, `{}`: tour cost **{} cheaper** ({} to {}, 95 % interval over campaigns), legs reached **{:+.3}** ({:+.3} to {:+.3}). The building {} the gate (at least {} in tour cost or {:+.2} in legs reached). Part of any oracle's headroom is luck — on legs where two strategies differ by chance it picks the luckier run — so the leg table below shows where the difference is systematic.\n\n",
         g.campaigns,
         galleries::VISITORS,
         FIXED[g.best],

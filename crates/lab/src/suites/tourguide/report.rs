@@ -1136,6 +1136,7 @@ fn write_logs(
         source_net.clone(),
     )];
     for cond in CONDITIONS {
+        // The crediting supervisor calibrates on its own missions.
         sets.push((
             cond.name.to_string(),
             "calibration",
@@ -1172,6 +1173,25 @@ fn write_logs(
                 continue;
             }
             let path = dir.join(format!("{prefix}-{strategy}-campaign{c}.jsonl"));
+            std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+            files.push(path);
+        }
+    }
+    // The galleries' supervisor: one log per museum day, leg by leg.
+    let legs = by_run(ctx.runs, &format!("{}/supervisor", super::galleries::CONDITION));
+    let per = super::galleries::CAMPAIGN_LEGS;
+    for c in 0..suite.info().runs {
+        let mut text = String::new();
+        for r in (0..per).filter_map(|k| legs.get(&(c * per + k))) {
+            let entry = super::galleries::LegState::of(r)?.entry;
+            text.push_str(&serde_json::to_string(&Line {
+                net: credit_net.clone(),
+                entry,
+            })?);
+            text.push('\n');
+        }
+        if !text.is_empty() {
+            let path = dir.join(format!("{}-supervisor-campaign{c}.jsonl", super::galleries::CONDITION));
             std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
             files.push(path);
         }
