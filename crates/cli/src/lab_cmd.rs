@@ -170,11 +170,11 @@ fn run_suite(a: &RunArgs) -> Result<()> {
     )?;
     let summary = &ran.summary;
     eprintln!(
-        "{} runs ({} already done, {} now, {} failed) -> {}",
+        "{} runs ({} already done, {} now: {}) -> {}",
         summary.total,
         summary.skipped,
         summary.ran,
-        summary.failures,
+        summary.outcomes_in_words(),
         ran.results.display()
     );
     if a.shard.is_some() {

@@ -22,9 +22,36 @@ use clap::{Parser, Subcommand};
 #[derive(Parser, Debug)]
 #[command(name = "petrinav", version, about, long_about = None, propagate_version = true)]
 struct Cli {
+    /// None: `petrinav` alone prints [`INTRODUCTION`].
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
+
+/// What `petrinav` alone prints, on standard output with exit code 0 (a
+/// request for orientation, not a mistake — as `cargo` or `docker` alone):
+/// what it is and the first five commands of the README's tour. `petrinav
+/// --help` lists every command.
+const INTRODUCTION: &str = "\
+petrinav: a workbench for behaviour-based mobile-robot navigation whose
+coordination logic is analysed as generalized stochastic Petri nets (GSPN):
+a GSPN engine, robot controllers, a 2D simulator, and experiment suites
+with reports that open in any browser.
+
+Five commands to start with (the README's tour):
+  petrinav lab run voting
+      the main job: 3,500 navigation runs; report in out/voting/index.html
+  petrinav gspn solve models/supervisor.toml
+      the steady state of a GSPN (.toml, .pnpro, .pnml)
+  petrinav nav tour maps/levine/levine.yaml --goals maps/levine/places.yaml --people 20
+      the tour-guide robot on a real building map, among 20 people
+  petrinav topo explore office -o office.fpn.json --picture office.png
+      a sonar robot builds a topological map (a fuzzy Petri net)
+  petrinav lab replay out/voting 'e4/field12#0' --html run.html
+      one run of the first command, to watch in a browser
+
+Every command: petrinav --help; each has --help with examples.
+Documentation: README.md and the book in docs/ (mdbook build docs).
+";
 
 #[derive(Subcommand, Debug)]
 enum Command {
@@ -53,8 +80,12 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    let result = match cli.command {
+    let Some(command) = Cli::parse().command else {
+        // A closed pipe (`petrinav | head -1`) is not an error.
+        let _ = std::io::Write::write_all(&mut std::io::stdout(), INTRODUCTION.as_bytes());
+        return ExitCode::SUCCESS;
+    };
+    let result = match command {
         Command::Gspn(cmd) => gspn::run(cmd),
         Command::Map(cmd) => map::run(cmd),
         Command::Sim(cmd) => sim_cmd::run(cmd),

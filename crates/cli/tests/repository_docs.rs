@@ -3,11 +3,15 @@
 //!
 //! 1. every Markdown document cited in a `.rs`, `.md`, `.toml` or `.py`
 //!    file exists in the repository;
-//! 2. `ARCHITECTURE.md` names every source file under `crates/*/src`.
+//! 2. `ARCHITECTURE.md` names every source file under `crates/*/src`;
+//! 3. every relative link and `#anchor` of the book (`docs/**/*.md`) and of
+//!    `README.md` resolves, the book links only within `docs/`, and
+//!    `docs/SUMMARY.md` lists every page (mdBook checks none of this).
 //!
-//! Both walk the tree rather than list files, so they keep holding when
+//! They walk the tree rather than list files, so they keep holding when
 //! crates are split or files move.
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 fn repo_root() -> PathBuf {
@@ -33,7 +37,8 @@ fn walk(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
     for p in entries {
         let name = p.file_name().unwrap().to_string_lossy().into_owned();
         if p.is_dir() {
-            if !skipped_dir(&name) {
+            // docs/book/ is the built book (`mdbook build docs`), not a source.
+            if !skipped_dir(&name) && !p.ends_with("docs/book") {
                 walk(&p, exts, out);
             }
         } else if p.extension().is_some_and(|e| exts.iter().any(|x| e == *x)) {
@@ -381,4 +386,231 @@ fn history_rule_examples() {
         (4, 2)
     );
     assert_eq!(module_doc_history("//! # Figures\n//!\n//! seeds 1-5\n"), (3, 0));
+}
+
+/// The lines of a Markdown text outside fenced code blocks (```` ``` ````
+/// or `~~~`), with their 1-based numbers.
+fn prose_lines(text: &str) -> Vec<(usize, &str)> {
+    let mut fence: Option<&str> = None;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim_start();
+        let marker = ["```", "~~~"].into_iter().find(|m| t.starts_with(m));
+        match (fence, marker) {
+            (None, Some(m)) => fence = Some(m),
+            (Some(f), Some(m)) if f == m => fence = None,
+            (None, None) => out.push((i + 1, line)),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// `line` without its code spans (`` `…` ``): links inside them are text.
+/// `in_code` says whether the line starts inside a code span (one that
+/// began on an earlier line of its paragraph) and is left as the line ends.
+fn without_code_spans(line: &str, in_code: &mut bool) -> String {
+    let mut out = String::new();
+    for c in line.chars() {
+        if c == '`' {
+            *in_code = !*in_code;
+        } else if !*in_code {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The targets of the inline links and images in `line` (`[text](target)`,
+/// `![alt](target "title")`), in order.
+fn link_targets(line: &str) -> Vec<String> {
+    link_targets_in(line, &mut false)
+}
+
+/// [`link_targets`] of a line of a paragraph whose code span may have
+/// begun on an earlier line (`in_code`, updated).
+fn link_targets_in(line: &str, in_code: &mut bool) -> Vec<String> {
+    let text = without_code_spans(line, in_code);
+    let mut out = Vec::new();
+    let mut rest = text.as_str();
+    while let Some(k) = rest.find("](") {
+        let after = &rest[k + 2..];
+        let mut depth = 0usize;
+        let end = after
+            .char_indices()
+            .find(|&(_, c)| match c {
+                '(' => {
+                    depth += 1;
+                    false
+                }
+                ')' if depth == 0 => true,
+                ')' => {
+                    depth -= 1;
+                    false
+                }
+                _ => false,
+            })
+            .map_or(after.len(), |(i, _)| i);
+        let target = after[..end].split_whitespace().next().unwrap_or("");
+        out.push(target.trim_matches(|c| c == '<' || c == '>').to_string());
+        rest = &after[end..];
+    }
+    out
+}
+
+/// The anchor mdBook gives a heading's text: the text as rendered (code
+/// spans' backticks, emphasis stars and link targets gone), trimmed and
+/// lowercased, whitespace turned into `-`, every character but letters,
+/// digits, `_` and `-` dropped (mdBook 0.5's `id_from_content` in
+/// `mdbook-html`; GitHub's README anchors agree for such text).
+fn heading_slug(heading: &str) -> String {
+    let mut text = String::new();
+    let mut rest = heading;
+    // Links keep their text only.
+    while let Some(k) = rest.find("](") {
+        text.push_str(&rest[..k]);
+        rest = rest[k + 2..].split_once(')').map_or("", |(_, r)| r);
+    }
+    text.push_str(rest);
+    text.trim()
+        .to_lowercase()
+        .chars()
+        .filter_map(|c| {
+            if c.is_alphanumeric() || c == '_' || c == '-' {
+                Some(c)
+            } else if c.is_whitespace() {
+                Some('-')
+            } else {
+                None
+            }
+        })
+        .collect()
+}
+
+/// The anchors of a Markdown document's ATX headings (`## …`), repeated
+/// ones numbered as mdBook does (`-1`, `-2`, …).
+fn anchors(text: &str) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    for (_, line) in prose_lines(text) {
+        let hashes = line.chars().take_while(|&c| c == '#').count();
+        let Some(title) = line[hashes..].strip_prefix(' ') else {
+            continue;
+        };
+        if !(1..=6).contains(&hashes) {
+            continue;
+        }
+        let slug = heading_slug(title.trim().trim_end_matches('#').trim());
+        let mut id = slug.clone();
+        let mut n = 0;
+        while out.contains(&id) {
+            n += 1;
+            id = format!("{slug}-{n}");
+        }
+        out.insert(id);
+    }
+    out
+}
+
+/// The pages of the book (`docs/**/*.md`, the built book `docs/book/` left
+/// out) and the README.
+fn book_and_readme(root: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    walk(&root.join("docs"), &["md"], &mut files);
+    files.push(root.join("README.md"));
+    files
+}
+
+/// The broken internal links of `file`: relative targets that are not in
+/// the repository, `#anchors` that name no heading of their Markdown page,
+/// and, from a page of the book (`docs/`), targets outside `docs/` (the
+/// book holds only that folder: cite other files by path in backticks).
+fn broken_links(root: &Path, file: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(file).unwrap();
+    let here = file.parent().unwrap();
+    let in_book = file.starts_with(root.join("docs"));
+    let docs = root.join("docs").canonicalize().unwrap();
+    let rel = file.strip_prefix(root).unwrap().display().to_string();
+    let mut broken = Vec::new();
+    let mut in_code = false;
+    for (line_no, line) in prose_lines(&text) {
+        if line.trim().is_empty() {
+            in_code = false;
+        }
+        for target in link_targets_in(line, &mut in_code) {
+            let external = target.contains("://") || target.starts_with("mailto:");
+            if external || target.is_empty() {
+                continue;
+            }
+            let (path, anchor) = target.split_once('#').unwrap_or((&target, ""));
+            let dest = if path.is_empty() {
+                file.to_path_buf()
+            } else {
+                here.join(path)
+            };
+            let Ok(dest) = dest.canonicalize() else {
+                broken.push(format!("{rel}:{line_no}: {target}: no such file"));
+                continue;
+            };
+            if in_book && !dest.starts_with(&docs) {
+                broken.push(format!(
+                    "{rel}:{line_no}: {target}: outside docs/, so not in the book (cite it as `path` instead)"
+                ));
+            }
+            let is_md = dest.extension().is_some_and(|e| e == "md");
+            if !anchor.is_empty() && is_md {
+                let ids = anchors(&std::fs::read_to_string(&dest).unwrap());
+                if !ids.contains(anchor) {
+                    broken.push(format!(
+                        "{rel}:{line_no}: {target}: no heading with anchor #{anchor}"
+                    ));
+                }
+            }
+        }
+    }
+    broken
+}
+
+/// Outcome 2 of issue 50: the book and the README link to nothing that is
+/// not there — every relative link of `docs/**/*.md` and `README.md`
+/// resolves to a file, every `#anchor` to a heading (mdBook's slugs), the
+/// book's pages link only within `docs/`, and `docs/SUMMARY.md` lists every
+/// page (mdBook renders only those, so a page left out is a broken link in
+/// the built book).
+#[test]
+fn book_and_readme_links_resolve() {
+    let root = repo_root();
+    let files = book_and_readme(&root);
+    let mut broken: Vec<String> = files.iter().flat_map(|f| broken_links(&root, f)).collect();
+    let summary = std::fs::read_to_string(root.join("docs/SUMMARY.md")).unwrap();
+    let listed: BTreeSet<String> = prose_lines(&summary)
+        .into_iter()
+        .flat_map(|(_, l)| link_targets(l))
+        .collect();
+    for f in files.iter().filter(|f| f.starts_with(root.join("docs"))) {
+        let page = f.strip_prefix(root.join("docs")).unwrap().display().to_string();
+        if page != "SUMMARY.md" && !listed.contains(&page) {
+            broken.push(format!("docs/SUMMARY.md: does not list the page docs/{page}"));
+        }
+    }
+    assert!(broken.is_empty(), "broken internal links:\n{}", broken.join("\n"));
+}
+
+#[test]
+fn links_and_anchors_are_read_as_mdbook_does() {
+    assert_eq!(
+        link_targets("see [a](gspn.md#the-model), ![p](img/x.png \"t\") and `[no](x.md)` [f(x)](a_(b).md)"),
+        ["gspn.md#the-model", "img/x.png", "a_(b).md"]
+    );
+    assert_eq!(
+        heading_slug("Disturbances (`disturbance.rs`)"),
+        "disturbances-disturbancers"
+    );
+    assert_eq!(heading_slug("The [lab](lab.md): I_R, *runs*"), "the-lab-i_r-runs");
+    let ids = anchors("# A\n```\n# not a heading\n```\n## A\n### B b\n#nope\n");
+    assert_eq!(ids.into_iter().collect::<Vec<_>>(), ["a", "a-1", "b-b"]);
+    assert_eq!(prose_lines("a\n~~~\nb\n~~~\nc").len(), 2);
+    // A code span over two lines hides the link-like text inside it.
+    let mut in_code = false;
+    assert!(link_targets_in("see `a", &mut in_code).is_empty() && in_code);
+    assert_eq!(link_targets_in("[x](y) b` and [c](d.md)", &mut in_code), ["d.md"]);
 }

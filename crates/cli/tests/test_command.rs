@@ -115,6 +115,11 @@ impl Sandbox {
         }
     }
 
+    /// A fake `mdbook` of the version the script pins.
+    fn fake_pinned_mdbook(&self) {
+        self.fake("mdbook", &format!("echo mdbook v{}", mdbook_version()));
+    }
+
     /// What a fake was called with, one line a call; `None` if never.
     fn calls(&self, name: &str) -> Option<String> {
         std::fs::read_to_string(self.root.join(format!("{name}.called"))).ok()
@@ -162,6 +167,17 @@ fn on_path(tool: &str) -> PathBuf {
         .map(|dir| dir.join(tool))
         .find(|p| p.is_file())
         .unwrap_or_else(|| panic!("no {tool} on PATH"))
+}
+
+/// The mdBook version `scripts/test` pins (its `MDBOOK_VERSION=` line).
+fn mdbook_version() -> String {
+    let script = std::fs::read_to_string(repo("scripts/test")).unwrap();
+    script
+        .lines()
+        .find_map(|l| l.strip_prefix("MDBOOK_VERSION="))
+        .expect("scripts/test pins MDBOOK_VERSION")
+        .trim()
+        .to_string()
 }
 
 fn is_root() -> bool {
@@ -258,11 +274,15 @@ fn with_chromium_it_runs_cargo_test_on_the_workspace_and_sums_up() {
         "echo 'test result: ok. 3 passed; 0 failed; 1 ignored; 0 measured; 0 filtered out; finished in 0.01s'\n\
          echo 'test result: ok. 2 passed; 0 failed; 0 ignored; 0 measured; 0 filtered out; finished in 0.01s'",
     );
+    sandbox.fake_pinned_mdbook();
     sandbox.real_tools_after_the_checks();
     let (status, stdout, stderr, _) = sandbox.run(&["--", "--nocapture"], &[]);
     assert!(status.success(), "{stdout}\n{stderr}");
     let calls = sandbox.calls("cargo").unwrap();
     assert_eq!(calls.trim(), "test --workspace --no-fail-fast -- --nocapture");
+    let book = sandbox.calls("mdbook").unwrap();
+    assert!(book.lines().any(|l| l == "build docs"), "{book}");
+    assert!(stdout.contains("book     ok"), "{stdout}");
     assert!(stdout.contains("Chromium 1.0"), "{stdout}");
     assert!(
         stdout.contains("rust     ok  5 passed, 0 failed, 1 ignored"),
@@ -280,6 +300,7 @@ fn a_failing_cargo_test_fails_it_and_says_so_in_the_summary() {
         "echo 'test result: FAILED. 3 passed; 1 failed; 0 ignored; 0 measured; 0 filtered out; finished in 0.01s'\n\
          exit 101",
     );
+    sandbox.fake_pinned_mdbook();
     sandbox.real_tools_after_the_checks();
     let (status, stdout, stderr, _) = sandbox.run(&[], &[]);
     assert_eq!(status.code(), Some(1), "{stdout}\n{stderr}");
@@ -287,4 +308,32 @@ fn a_failing_cargo_test_fails_it_and_says_so_in_the_summary() {
         stdout.contains("rust     FAILED  3 passed, 1 failed, 0 ignored"),
         "{stdout}"
     );
+}
+
+#[test]
+fn without_the_pinned_mdbook_it_installs_it_with_cargo_before_the_tests() {
+    let sandbox = Sandbox::new("mdbook");
+    sandbox.fake("chromium", "echo Chromium 1.0");
+    // An older mdbook on the PATH; `cargo install` puts the pinned one there.
+    sandbox.fake("mdbook", "echo mdbook v0.4.0");
+    let pinned = sandbox.root.join("bin/mdbook");
+    sandbox.fake(
+        "cargo",
+        &format!(
+            "if [ \"$1\" = install ]; then printf '#!/bin/sh\\necho mdbook v{}\\n' > '{}'; fi",
+            mdbook_version(),
+            pinned.display()
+        ),
+    );
+    sandbox.real_tools_after_the_checks();
+    let (status, stdout, stderr, _) = sandbox.run(&[], &[]);
+    assert!(status.success(), "{stdout}\n{stderr}");
+    let calls = sandbox.calls("cargo").unwrap();
+    let lines: Vec<&str> = calls.lines().collect();
+    assert!(
+        lines[0].starts_with(&format!("install mdbook --locked --version {}", mdbook_version())),
+        "{calls}"
+    );
+    assert!(lines[1].starts_with("test --workspace"), "{calls}");
+    assert!(stdout.contains("installing mdBook"), "{stdout}");
 }

@@ -25,14 +25,14 @@
 //! * `shard i/n` keeps every n-th campaign (the i-th of each n), so a sweep
 //!   can be spread over machines by a job-array scheduler; [`merge`] puts
 //!   the shards' files back together.
-//! * A progress bar (runs, failures, ETA) is drawn on standard error only
-//!   when it is a terminal.
+//! * A progress bar (runs, how many did not reach the goal, ETA) is drawn
+//!   on standard error only when it is a terminal.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::fs::{File, OpenOptions};
 use std::io::{BufRead, BufReader, IsTerminal, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result, bail};
@@ -200,8 +200,36 @@ pub struct BatchSummary {
     pub skipped: usize,
     /// Jobs run now.
     pub ran: usize,
-    /// Of those, runs whose record says `"success": false`.
-    pub failures: usize,
+    /// Of those, the runs that did not reach the goal (`"success": false`),
+    /// counted by their record's `outcome` (`time_limit`, `collision`,
+    /// `lost`, …; `unknown` when a record has none).
+    pub not_reached: BTreeMap<String, usize>,
+}
+
+impl BatchSummary {
+    /// Runs done now that did not reach the goal.
+    pub fn not_reached_total(&self) -> usize {
+        self.not_reached.values().sum()
+    }
+
+    /// The runs done now in words: `"3031 reached the goal, 469 did not
+    /// (312 time limits, 140 collisions, 17 lost)"`.
+    pub fn outcomes_in_words(&self) -> String {
+        let missed = self.not_reached_total();
+        let reached = self.ran - missed;
+        if missed == 0 {
+            return format!("{reached} reached the goal");
+        }
+        let causes: Vec<String> = self
+            .not_reached
+            .iter()
+            .map(|(outcome, &n)| crate::tables::outcome_in_words(outcome, n))
+            .collect();
+        format!(
+            "{reached} reached the goal, {missed} did not ({})",
+            causes.join(", ")
+        )
+    }
 }
 
 /// Reads a results file: the records of complete lines, and the byte length
@@ -311,7 +339,7 @@ where
         .open(&params.results)
         .with_context(|| format!("opening {}", params.results.display()))?;
     let sink = Mutex::new(file);
-    let failures = AtomicUsize::new(0);
+    let not_reached: Mutex<BTreeMap<String, usize>> = Mutex::new(BTreeMap::new());
     let bar = (params.progress && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::new(todo as u64);
         b.set_style(
@@ -330,9 +358,16 @@ where
         } else {
             bail!("run {} returned a record that is not a JSON object", job.key());
         }
-        if record.get("success") == Some(&Value::Bool(false)) {
-            failures.fetch_add(1, Ordering::Relaxed);
-        }
+        let missed = if record.get("success") == Some(&Value::Bool(false)) {
+            let outcome = record.get("outcome").and_then(Value::as_str).unwrap_or("unknown");
+            let mut counts = not_reached
+                .lock()
+                .map_err(|_| anyhow::anyhow!("outcome counts lock poisoned"))?;
+            *counts.entry(outcome.to_string()).or_default() += 1;
+            Some(counts.values().sum::<usize>())
+        } else {
+            None
+        };
         let mut line = serde_json::to_string(&record)?;
         // Hand on what the file holds, parsed back, so that a campaign's
         // later runs see the same numbers whether they follow now or after
@@ -348,7 +383,9 @@ where
         }
         if let Some(b) = &bar {
             b.inc(1);
-            b.set_message(format!("{} failed", failures.load(Ordering::Relaxed)));
+            if let Some(n) = missed {
+                b.set_message(format!("{n} did not reach the goal"));
+            }
         }
         Ok(record)
     };
@@ -388,7 +425,9 @@ where
         total: keys.len(),
         skipped,
         ran: todo,
-        failures: failures.into_inner(),
+        not_reached: not_reached
+            .into_inner()
+            .map_err(|_| anyhow::anyhow!("outcome counts lock poisoned"))?,
     })
 }
 
@@ -499,6 +538,25 @@ pub fn merge(parts: &[PathBuf], keys: &[String], out: &Path) -> Result<MergeSumm
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_summary_says_how_many_runs_did_not_reach_the_goal_and_why() {
+        let mut s = BatchSummary {
+            total: 10,
+            skipped: 2,
+            ran: 8,
+            not_reached: BTreeMap::new(),
+        };
+        assert_eq!(s.outcomes_in_words(), "8 reached the goal");
+        s.not_reached = [("time_limit", 2), ("collision", 1), ("gave_up", 1)]
+            .map(|(k, n)| (k.to_string(), n))
+            .into();
+        assert_eq!(
+            s.outcomes_in_words(),
+            "4 reached the goal, 4 did not (1 collision, 1 gave up, 2 time limits)"
+        );
+        assert!(!s.outcomes_in_words().contains("fail"));
+    }
 
     fn temp(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("petrinav-runner-{}-{name}", std::process::id()));

@@ -1,6 +1,6 @@
 //! Tables of summaries: the one-row-per-scenario table every suite can
-//! show (with the metric columns the suite chooses), CSV, and number
-//! formats shared by the suites' own tables.
+//! show (with the metric columns the suite chooses), CSV, and the number
+//! formats every report uses ([`sig`], [`rate`], [`num`]).
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -20,7 +20,56 @@ pub struct MetricColumn {
     pub decimals: usize,
 }
 
-/// A number with about six significant digits, in plain or scientific form.
+/// `v` with at most `digits` significant digits (1 to 17), trailing zeros
+/// dropped: in plain form when `1e-4 ≤ |v| < 1e7` (`0.0123`, `2.5`,
+/// `123457`), else in scientific form (`6.67e-5`, `1.5e9`). The one
+/// formatter of the numbers the reports print in prose and tables, so that
+/// no report shows a float's every digit (`0.0000666666666667`).
+///
+/// ```
+/// use lab::tables::sig;
+/// assert_eq!(sig(1.0 / 15_000.0, 3), "6.67e-5");
+/// assert_eq!(sig(0.005, 3), "0.005");
+/// assert_eq!(sig(2.0 / 3.0, 6), "0.666667");
+/// assert_eq!(sig(1_234_567.0, 3), "1230000");
+/// assert_eq!(sig(-0.5, 2), "-0.5");
+/// ```
+pub fn sig(v: f64, digits: usize) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = digits.clamp(1, 17);
+    // Round first, so that 9.9996 with 4 digits is 10 (two integer digits).
+    let rounded: f64 = format!("{v:.prec$e}", prec = digits - 1).parse().unwrap_or(v);
+    let a = rounded.abs();
+    if (1e-4..1e7).contains(&a) {
+        let magnitude = a.log10().floor() as i32;
+        let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+        let s = format!("{rounded:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        let s = format!("{rounded:.prec$e}", prec = digits - 1);
+        match s.split_once('e') {
+            Some((mantissa, exp)) if mantissa.contains('.') => {
+                let m = mantissa.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{exp}")
+            }
+            _ => s,
+        }
+    }
+}
+
+/// A number with six significant digits, in plain form when
+/// `1e-4 ≤ |v| < 1e7` (whole numbers up to 1e7 in full) and in scientific
+/// form with its six digits otherwise (`2.50000e-9`): the command line's
+/// tables of measures (`gspn solve`), whose columns keep one width.
 pub fn num(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
@@ -39,6 +88,23 @@ pub fn num(v: f64) -> String {
         }
     } else {
         format!("{v:.5e}")
+    }
+}
+
+/// A rate or a probability in prose: three significant digits ([`sig`];
+/// `0.000066667` is `6.67e-5`).
+pub fn rate(v: f64) -> String {
+    sig(v, 3)
+}
+
+/// `n` runs that ended with `outcome`, in words (`3 time limits`, `1 collision`, `2 lost`).
+pub fn outcome_in_words(outcome: &str, n: usize) -> String {
+    let plural = if n == 1 { "" } else { "s" };
+    match outcome {
+        "time_limit" => format!("{n} time limit{plural}"),
+        "collision" => format!("{n} collision{plural}"),
+        "gave_up" => format!("{n} gave up"),
+        other => format!("{n} {}", other.replace('_', " ")),
     }
 }
 

@@ -9,6 +9,7 @@ use super::{BEHAVIOURS, CROWDS, MAPS, metric};
 use crate::page::Block;
 use crate::record::{RunRecord, Runs};
 use crate::summary::Summary;
+use crate::tables;
 
 fn name(map: usize, behaviour: usize, people: usize) -> String {
     format!("{}/{}/{}p", MAPS[map], BEHAVIOURS[behaviour].1, CROWDS[people])
@@ -174,18 +175,18 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> Vec<Block> {
             let abnormal = mean(&records(runs, &name(map, 0, people)), metric::ABNORMAL_S);
             let _ = writeln!(
                 out,
-                "{} with {} people: AutoMove reached {} of {} legs ({} collisions, {} time limits, {} lost), contour tracking {} of {} ({} collisions, {} time limits, {} lost). On the {n} legs both reached, contour tracking took {} AutoMove's time (median of the ratios). AutoMove was Abnormal {:.1} s a leg on average, stopped and asking people to step aside.\n",
+                "{} with {} people: AutoMove reached {} of {} legs ({}, {}, {} lost), contour tracking {} of {} ({}, {}, {} lost). On the {n} legs both reached, contour tracking took {} AutoMove's time (median of the ratios). AutoMove was Abnormal {:.1} s a leg on average, stopped and asking people to step aside.\n",
                 map_name,
                 count,
                 a.reliability.successes,
                 a.runs,
-                a.collisions,
-                a.timeouts,
+                tables::outcome_in_words("collision", a.collisions),
+                tables::outcome_in_words("time_limit", a.timeouts),
                 a.lost,
                 c.reliability.successes,
                 c.runs,
-                c.collisions,
-                c.timeouts,
+                tables::outcome_in_words("collision", c.collisions),
+                tables::outcome_in_words("time_limit", c.timeouts),
                 c.lost,
                 if ratio.is_finite() {
                     format!("{ratio:.2}×")

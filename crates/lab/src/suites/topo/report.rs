@@ -276,7 +276,7 @@ fn exploration_row(world: &str, ex: &[(u32, &RunRecord)]) -> (String, String) {
     );
     let _ = write!(
         explanation,
-        "**{world}.** {} of {} explorations built a connected net (its graph in one piece) and {} a strongly connected one; on average the largest strongly connected part held {:.0} % of the places (the rest: places the robot left and never came back to, such as the first ones, found from where it happened to start, and the last ones, found just before the time ran out); {:.1} legs per exploration found no place, and after each the robot starts again from nowhere known, so the net falls into pieces unless it recognises the next place it stops at. Over all their stops the robot recognised a place it truly stood at {tp:.0} times, took a place for another {fp:.0} times and failed to recognise one it knew {fn_:.0} times: precision {precision:.2}, recall {recall:.2} (a stop is at a known place when the true pose is within {} m of where that place was recorded and the robot faces the same way within 45°). ",
+        "**{world}.** {} of {} explorations built a connected net (its graph in one piece) and {} a strongly connected one; on average the largest strongly connected part held {:.0} % of the places (the rest: places the robot left and never came back to, such as the first ones, found from where it happened to start, and the last ones, found just before the time ran out); {:.1} legs per exploration found no place, and after each the robot starts again from nowhere known, so the net falls into pieces unless it recognises the next place it stops at. Over all their stops the robot recognised a place it truly stood at {tp:.0} times, took a place for another {fp:.0} times and did not recognise one it knew {fn_:.0} times: precision {precision:.2}, recall {recall:.2} (a stop is at a known place when the true pose is within {} m of where that place was recorded and the robot faces the same way within 45°). ",
         weakly.successes,
         connected.n,
         connected.successes,
@@ -443,7 +443,7 @@ fn route_why(runs: &Runs, world: &str, rates: &BTreeMap<&str, Proportion>) -> St
         .count();
     let _ = write!(
         why,
-        "**{world}.** With its map the robot arrived on {} of the routes. Of the {} failures, {lost} declared arrival at a place that was not the goal (a place recognised wrongly), {timeouts} ran out of time and {gave_up} gave up; {failed_with_replans} of the failed routes had arrived somewhere the plan did not say at least once (a strategy that did not lead where it had led while exploring: a door passed or missed, a wall's end seen or not), {replans:.0} such surprises over all routes. ",
+        "**{world}.** With its map the robot arrived on {} of the routes. Of the {} routes that did not arrive, {lost} declared arrival at a place that was not the goal (a place recognised wrongly), {timeouts} ran out of time and {gave_up} gave up; {failed_with_replans} of these routes had arrived somewhere the plan did not say at least once (a strategy that did not lead where it had led while exploring: a door passed or missed, a wall's end seen or not), {replans:.0} such surprises over all routes. ",
         percent(p),
         map_runs.values().filter(|r| !r.success).count(),
     );
@@ -451,7 +451,7 @@ fn route_why(runs: &Runs, world: &str, rates: &BTreeMap<&str, Proportion>) -> St
     if legs.planned > 0 {
         let _ = write!(
             why,
-            "Judged against the true poses, {} of the {} planned legs ended elsewhere than planned: {} truly elsewhere (the driving: more than {} m or 45° from where the planned place was recorded), {} truly at the planned place but not recognised as it, {} at a place added after the exploration (no true pose to judge by). Of the failed routes, {} played a transition that had already ended elsewhere on the same route again and ended elsewhere again (a replay that reproduces the wrong outcome), and {} spent at least half of their legs at places without a route to the goal (off the net, playing untried actions). ",
+            "Judged against the true poses, {} of the {} planned legs ended elsewhere than planned: {} truly elsewhere (the driving: more than {} m or 45° from where the planned place was recorded), {} truly at the planned place but not recognised as it, {} at a place added after the exploration (no true pose to judge by). Of the routes that did not arrive, {} played a transition that had already ended elsewhere on the same route again and ended elsewhere again (a replay that reproduces the wrong outcome), and {} spent at least half of their legs at places without a route to the goal (off the net, playing untried actions). ",
             legs.surprises,
             legs.planned,
             legs.truly_elsewhere,

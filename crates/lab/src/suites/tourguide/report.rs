@@ -45,7 +45,7 @@ fn num(e: Option<&Event>, key: &str) -> f64 {
 
 fn fmt_rate(x: f64) -> String {
     if x.is_finite() {
-        format!("{x:.4}")
+        crate::tables::sig(x, 4)
     } else {
         "-".into()
     }
@@ -468,7 +468,7 @@ fn decision_charts(
     )?);
     Ok(Block::Charts {
         heading: "Decisions over the missions".into(),
-        caption: "At the start of every mission the supervisor solves the net under both hypotheses with the rates learnt so far: λ3, λ4 from the localizer's sojourns, λ5, λ6 from the planner's, λ7, λ8 from the calibration runs, λ9, λ10 from failures and successes.".into(),
+        caption: "At the start of every mission the supervisor solves the net under both hypotheses with the rates learnt so far: λ3, λ4 from the localizer's sojourns, λ5, λ6 from the planner's, λ7, λ8 from the calibration runs, λ9, λ10 from the missions that reached the goal and those that did not.".into(),
         figures,
     })
 }
@@ -501,9 +501,9 @@ fn loss_blocks(runs: &Runs) -> Vec<Block> {
     }
     blocks.push(Block::Text(format!(
         "Visitors push or turn the robot while it stands braked (0.3–2 m, up to 90°, unseen by the odometry; {} per visitor-second within reach), the wheels slip on the polished threshold between the galleries (up to {} % per wheel, every crossing), and groups of 6–10 visitors close round the robot for 20–60 s ({} per visitor-second), hiding every wall. A robot is *truly lost* while its estimate is more than 0.5 m or 20° off. All strategies meet the same draws, mission by mission; how often a push strikes depends on where and how long the robot stands.\n\n",
-        crate::runs::mission::PUSH_RATE_PER_PERSON_S,
-        100.0 * super::SLIP_MAX,
-        crate::runs::mission::SURROUND_RATE_PER_VISITOR_S,
+        crate::tables::rate(crate::runs::mission::PUSH_RATE_PER_PERSON_S),
+        crate::tables::num(100.0 * super::SLIP_MAX),
+        crate::tables::rate(crate::runs::mission::SURROUND_RATE_PER_VISITOR_S),
     )));
     blocks.push(Block::Table(md));
     blocks
@@ -890,8 +890,8 @@ fn day_why(runs: &Runs) -> String {
     let needs = [
         "began in contour tracking among visitors — chosen on little data of contour tracking in crowds (its speed is learnt only while localized, the calibration met the day's first, empty hall, and the learning assumes the crowd acts on both behaviours alike until their own data say otherwise): the net would need that data before the first crowded mission",
         "kept AutoMove at a Warning — λ12 is one exponential rate for every Warning, a short one that clears by itself and a kidnap alike: the net would need the Warning's cause or age (a Warning state per cause, or a phase-type sojourn) to tell them apart",
-        "chose contour tracking at a Warning and still failed — the choice the rule makes; no decision of the net would have saved these",
-        "met no Warning before failing — a true loss the localizer did not flag, or a collision while localized: the net had nothing to decide on; it would need the loss to be seen (sensing the push itself, e.g. an IMU)",
+        "chose contour tracking at a Warning and still did not reach the goal — the choice the rule makes; no decision of the net would have saved these",
+        "met no Warning before it stopped short of the goal — a true loss the localizer did not flag, or a collision while localized: the net had nothing to decide on; it would need the loss to be seen (sensing the push itself, e.g. an IMU)",
     ];
     for (n, need) in causes.iter().zip(needs) {
         if *n > 0 {
@@ -1050,7 +1050,7 @@ fn why(runs: &Runs, condition: &str, d: usize, cells: &BTreeMap<(usize, usize), 
         .rev()
         .find_map(|r| r.events.iter().rev().find(|e| e.kind == "decision"));
     format!(
-        "The supervisor took {} decisions ({}); it chose contour tracking by crowd context: {}. It reached {} of its missions; of the {} it failed, {} ran out of time, {} collided and {} ended lost, {} of them in contour tracking. Its last decision used λ12 (AutoMove fails while lost) = {}, λ13 (AutoMove fails localized) = {}, λ10 (contour fails while lost) = {}, λ14 (contour fails localized) = {}.",
+        "The supervisor took {} decisions ({}); it chose contour tracking by crowd context: {}. It reached {} of its missions; of the {} it did not, {} ran out of time, {} collided and {} ended lost, {} of them in contour tracking. Its last decision used λ12 (AutoMove fails while lost) = {}, λ13 (AutoMove fails localized) = {}, λ10 (contour fails while lost) = {}, λ14 (contour fails localized) = {}.",
         decisions.len(),
         if parts.is_empty() {
             "none".to_string()

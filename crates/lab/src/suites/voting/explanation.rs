@@ -15,6 +15,7 @@ use crate::stats::Proportion;
 use crate::suites::shared::DEADLOCKS;
 use crate::summary::CONFIDENCE;
 use crate::summary::{Summary, paired};
+use crate::tables;
 
 /// A share `I_R` counts as "reliable" (field 1) and "sufficient, only a few
 /// failures" (fields 1–6) from here: at most 5 and 7.5 failures in 50.
@@ -100,7 +101,7 @@ impl View<'_> {
     }
 
     /// (collisions, time limits, lost, runs) of `e` over fields `a..=b`.
-    fn failures(&self, e: u32, a: u32, b: u32) -> (usize, usize, usize, usize) {
+    fn short_of_goal(&self, e: u32, a: u32, b: u32) -> (usize, usize, usize, usize) {
         (a..=b).filter_map(|f| self.get(e, f)).fold((0, 0, 0, 0), |t, s| {
             (t.0 + s.collisions, t.1 + s.timeouts, t.2 + s.lost, t.3 + s.runs)
         })
@@ -109,8 +110,12 @@ impl View<'_> {
     fn breakdown(&self, a: u32, b: u32, es: &[u32]) -> String {
         es.iter()
             .map(|&e| {
-                let (c, t, l, n) = self.failures(e, a, b);
-                format!("e{e} {c} collisions, {t} time limits, {l} lost of {n}")
+                let (c, t, l, n) = self.short_of_goal(e, a, b);
+                format!(
+                    "e{e} {}, {}, {l} lost of {n}",
+                    tables::outcome_in_words("collision", c),
+                    tables::outcome_in_words("time_limit", t)
+                )
             })
             .collect::<Vec<_>>()
             .join("; ")
@@ -180,7 +185,7 @@ pub fn explanation(summaries: &[Summary], runs: &Runs) -> String {
     let mut out = String::from("\n## The source's observations, checked against this batch\n\n");
     let _ = writeln!(
         out,
-        "Each observation of the source (docs/voting.md, \"What the source observed\") is tested on the numbers above; the thresholds are the words' plain reading: *reliably* is I_R ≥ {RELIABLE}, *sufficient, with only a few failures* is I_R ≥ {SUFFICIENT} on every field, *rarely* is a mean I_R ≤ {RARELY} over the traps, *several-fold* is at least {SEVERAL}×; comparisons of groups of fields use the mean over the group's fields.\n"
+        "Each observation of the source (docs/voting.md, \"What the source observed\") is tested on the numbers above; the thresholds are the words' plain reading: *reliably* is I_R ≥ {RELIABLE}, *sufficient, with only a few runs short of the goal* is I_R ≥ {SUFFICIENT} on every field, *rarely* is a mean I_R ≤ {RARELY} over the traps, *several-fold* is at least {SEVERAL}×; comparisons of groups of fields use the mean over the group's fields.\n"
     );
 
     out.push_str(&simple_fields(&v));
@@ -212,7 +217,7 @@ fn simple_fields(v: &View<'_>) -> String {
         if ok {
             ""
         } else {
-            " Where it fails, odometry drift put the goal elsewhere (the lost runs in the table of all scenarios)."
+            " Where a run does not reach it, odometry drift put the goal elsewhere (the lost runs in the table of all scenarios)."
         }
     );
 
@@ -227,7 +232,7 @@ fn simple_fields(v: &View<'_>) -> String {
     let ok = w1 >= SUFFICIENT && w2 >= SUFFICIENT;
     let _ = writeln!(
         out,
-        "2. *IR alone and sonar alone are sufficient on the simple fields 1–6, with only a few failures.* {} The lowest I_R on fields 1–6 is {} for IR alone (field {wf1}) and {} for sonar alone (field {wf2}); mean {} and {}. Failures: {}. The obstacles of fields 2–5 are solid and at least 0.5 m across, and no gap is narrower than a corridor; {}{}\n",
+        "2. *IR alone and sonar alone are sufficient on the simple fields 1–6, with only a few runs short of the goal.* {} The lowest I_R on fields 1–6 is {} for IR alone (field {wf1}) and {} for sonar alone (field {wf2}); mean {} and {}. Did not reach the goal: {}. The obstacles of fields 2–5 are solid and at least 0.5 m across, and no gap is narrower than a corridor; {}{}\n",
         mark(ok),
         f2(w1),
         f2(w2),
@@ -235,9 +240,9 @@ fn simple_fields(v: &View<'_>) -> String {
         f2(v.ir(2, 1, 6)),
         v.breakdown(1, 6, &[1, 2]),
         {
-            let c = v.failures(1, 1, 6).0 + v.failures(2, 1, 6).0;
+            let c = v.short_of_goal(1, 1, 6).0 + v.short_of_goal(2, 1, 6).0;
             if c == 0 {
-                "no run of either collided: the few failures are runs that ended lost, where odometry drift put the goal more than the tolerance away.".to_string()
+                "no run of either collided: the few runs that did not reach the goal ended lost, where odometry drift put the goal more than the tolerance away.".to_string()
             } else {
                 format!(
                     "the {c} collisions are box corners passed at a grazing angle, between two IR beams or beside the sonar cones, as the source describes; the rest are runs lost to odometry drift."
@@ -265,7 +270,7 @@ fn narrow_passages(v: &View<'_>) -> String {
     let ok_waste = it1 > it2;
     let _ = writeln!(
         out,
-        "3. *In narrow passages IR alone has low reliability and wastes time searching.* {} Mean I_R over fields 8–11: {} IR alone, {} sonar alone, {} IR+sonar.{} Mean I_T on the fields where both single-sensor teams succeed: {} IR alone against {} sonar alone. Failures: {}. The opening is 1.0 m off the line to the goal: the robot meets a solid wall, slides along it one way or the other and, the wrong way, turns round in the corner. With one IR beam through the opening and its neighbours on the wall, the votes for the arcs into it are low, so the robot passes it and comes back. IR alone's collisions here are not a search that went wrong: replayed (14 of its failures on fields 8–11, every third), each happens at the first meeting with the wall, about 5 s in. Met head-on with the goal straight beyond it, the side to turn follows the sign of the goal's bearing, which odometry noise flips from tick to tick; the robot alternates Left and Right, one 0.1 s tick each, and so drives straight on until the wall is about 0.5 m ahead and one turn wins; that 60° arc (radius 0.43 m) then sweeps into the wall ahead, which the three detectors covering it (30°, 60°, 90°) do not see. The sonar's vote judges an echo on the ground the whole arc sweeps, so it sees that wall on the arc. These failures are short, so I_T over the successful runs hides no wasted search: that is why IR alone's I_T is barely above sonar alone's. Not tried: keeping the side of a turn once chosen (a commitment the source does not describe).{}{}\n",
+        "3. *In narrow passages IR alone has low reliability and wastes time searching.* {} Mean I_R over fields 8–11: {} IR alone, {} sonar alone, {} IR+sonar.{} Mean I_T on the fields where both single-sensor teams succeed: {} IR alone against {} sonar alone. Did not reach the goal: {}. The opening is 1.0 m off the line to the goal: the robot meets a solid wall, slides along it one way or the other and, the wrong way, turns round in the corner. With one IR beam through the opening and its neighbours on the wall, the votes for the arcs into it are low, so the robot passes it and comes back. IR alone's collisions here are not a search that went wrong: replayed (14 of its runs that did not reach the goal on fields 8–11, every third), each happens at the first meeting with the wall, about 5 s in. Met head-on with the goal straight beyond it, the side to turn follows the sign of the goal's bearing, which odometry noise flips from tick to tick; the robot alternates Left and Right, one 0.1 s tick each, and so drives straight on until the wall is about 0.5 m ahead and one turn wins; that 60° arc (radius 0.43 m) then sweeps into the wall ahead, which the three detectors covering it (30°, 60°, 90°) do not see. The sonar's vote judges an echo on the ground the whole arc sweeps, so it sees that wall on the arc. These runs end early, so I_T over the successful runs hides no wasted search: that is why IR alone's I_T is barely above sonar alone's. Not tried: keeping the side of a turn once chosen (a commitment the source does not describe).{}{}\n",
         mark(ok_low && ok_waste),
         f2(n[0]),
         f2(n[1]),
@@ -282,7 +287,7 @@ fn narrow_passages(v: &View<'_>) -> String {
         if ok_waste {
             ""
         } else {
-            " IR alone is not slower than sonar alone: its failures are collisions with the slot's edges, not time spent searching; the runs that succeed are those that found the opening at once, so its I_T (successful runs only) is short."
+            " IR alone is not slower than sonar alone: its runs that do not reach the goal end in collisions with the slot's edges, not time spent searching; the runs that succeed are those that found the opening at once, so its I_T (successful runs only) is short."
         }
     );
     let ok_sonar = n[1] > n[0] && it2 < it1;
@@ -349,7 +354,7 @@ fn traps_without_planning(v: &View<'_>) -> String {
         .collect();
     let _ = writeln!(
         out,
-        "6. *On the traps, without planning, the robot escapes only by chance — rarely, but not never.* {} Escapes over fields 12–14: {} (mean I_R {}; with planning {}). Failures: {}. Inside a U facing the start the goal's Π-function vote points into the back wall while the obstacle team vetoes the way forward; the robot turns away, the goal pulls it back, and it circles.{}{}\n",
+        "6. *On the traps, without planning, the robot escapes only by chance — rarely, but not never.* {} Escapes over fields 12–14: {} (mean I_R {}; with planning {}). Did not reach the goal: {}. Inside a U facing the start the goal's Π-function vote points into the back wall while the obstacle team vetoes the way forward; the robot turns away, the goal pulls it back, and it circles.{}{}\n",
         mark(none.is_empty() && often.is_empty()),
         esc.iter()
             .enumerate()
@@ -507,11 +512,11 @@ fn causes(v: &View<'_>) -> String {
     let mut out = String::new();
     // Why: the causes found and fixed.
     out.push_str("## Why the simulator behaves like this: causes found and fixed\n\n");
-    let lost_all: usize = (1..=4).map(|e| v.failures(e, 1, 14).2).sum();
-    let runs_all: usize = (1..=4).map(|e| v.failures(e, 1, 14).3).sum();
+    let lost_all: usize = (1..=4).map(|e| v.short_of_goal(e, 1, 14).2).sum();
+    let runs_all: usize = (1..=4).map(|e| v.short_of_goal(e, 1, 14).3).sum();
     let _ = writeln!(
         out,
-        "Failures have three causes, counted apart in the table of all scenarios: a collision (the run ends at the first contact), the time limit (the robot circles or hesitates), and *lost* — the controller stopped where its odometry put the goal, more than the tolerance from the true goal; {lost_all} of {runs_all} runs of e1–e4 ({:.1} %) end lost.\n",
+        "A run that does not reach the goal ends in one of three ways, counted apart in the table of all scenarios: a collision (the run ends at the first contact), the time limit (the robot circles or hesitates), and *lost* — the controller stopped where its odometry put the goal, more than the tolerance from the true goal; {lost_all} of {runs_all} runs of e1–e4 ({:.1} %) end lost.\n",
         100.0 * lost_all as f64 / runs_all.max(1) as f64
     );
     out.push_str(
