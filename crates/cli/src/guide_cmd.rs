@@ -415,7 +415,13 @@ fn show_credit(entries: &[Entry]) -> Result<()> {
 /// used (λ3, λ4 each behaviour's; λ7, λ8 the completion rates from here).
 fn decision_line(d: &guide::supervisor::log::DecisionLog) -> String {
     use guide::supervisor::credit_learning::CONTEXT_NAMES;
-    let per = |f: f64| if f > 0.0 { format!("{} s", num(1.0 / f)) } else { "never".into() };
+    let per = |f: f64| {
+        if f > 0.0 {
+            format!("{} s", num(1.0 / f))
+        } else {
+            "never".into()
+        }
+    };
     let rate = |r: &[f64], i: usize| r.get(i - 1).map_or("-".to_string(), |v| format!("{v:.4}"));
     let context = d
         .context
@@ -427,7 +433,11 @@ fn decision_line(d: &guide::supervisor::log::DecisionLog) -> String {
         num(d.time_s),
         d.reason,
         d.route.as_ref().map(|r| format!(" on {r}")).unwrap_or_default(),
-        if d.marking.is_empty() { "-".into() } else { d.marking.join(" ") },
+        if d.marking.is_empty() {
+            "-".into()
+        } else {
+            d.marking.join(" ")
+        },
         per(d.f_auto),
         d.f_auto,
         per(d.f_cont),

@@ -7,10 +7,12 @@
 //! cargo run --release -p lab --example galleries_batch -- OUT CAMPAIGNS [JOBS [STRATEGY…]]
 //! ```
 //!
-//! The records are those `lab run tourguide --runs CAMPAIGNS` writes for
-//! these scenarios (same jobs, same seeds); the report's galleries section
-//! is in `OUT/report.md`. A folder already holding some of the runs is
-//! resumed.
+//! A STRATEGY names a galleries strategy (`supervisor`), or any of the
+//! suite's scenarios whole (`day/supervisor`); none, every galleries
+//! strategy. The records are those `lab run tourguide
+//! --runs CAMPAIGNS` writes for these scenarios (same jobs, same seeds);
+//! the report is in `OUT/tables.md`. A folder already holding some of the
+//! runs is resumed.
 
 use std::path::PathBuf;
 
@@ -19,6 +21,16 @@ use lab::runner::{self, BatchParams};
 use lab::suite::Suite;
 use lab::suites::tourguide::TourGuideSuite;
 
+/// Whether a campaign of `scenario` is run: a galleries scenario whose
+/// strategy is listed (all of them if none is), or a scenario named whole
+/// (`condition/strategy`, e.g. `day/supervisor`: the museum's too).
+fn selected(scenario: &str, strategies: &[&str]) -> bool {
+    let galleries = scenario
+        .strip_prefix("galleries/")
+        .is_some_and(|s| strategies.is_empty() || strategies.contains(&s));
+    galleries || strategies.contains(&scenario)
+}
+
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let out = PathBuf::from(args.first().context("OUT")?);
@@ -26,16 +38,10 @@ fn main() -> Result<()> {
     let jobs: usize = args.get(2).map_or(Ok(2), |s| s.parse())?;
     let strategies: Vec<&str> = args.iter().skip(3).map(String::as_str).collect();
     let suite = TourGuideSuite::new(campaigns)?;
-    let selected: Vec<runner::Campaign> = suite
+    let chosen: Vec<runner::Campaign> = suite
         .campaigns()
         .into_iter()
-        .filter(|c| {
-            c.jobs.first().is_some_and(|j| {
-                j.scenario
-                    .strip_prefix("galleries/")
-                    .is_some_and(|s| strategies.is_empty() || strategies.contains(&s))
-            })
-        })
+        .filter(|c| c.jobs.first().is_some_and(|j| selected(&j.scenario, &strategies)))
         .collect();
     std::fs::create_dir_all(&out)?;
     lab::batch::write_info(&out, suite.info())?;
@@ -46,7 +52,7 @@ fn main() -> Result<()> {
         progress: false,
         stop: None,
     };
-    let summary = runner::run_batch(&selected, &params, |job, earlier: &[serde_json::Value]| {
+    let summary = runner::run_batch(&chosen, &params, |job, earlier: &[serde_json::Value]| {
         let earlier = earlier
             .iter()
             .map(lab::record::parse)

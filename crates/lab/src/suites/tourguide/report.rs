@@ -1191,7 +1191,10 @@ fn write_logs(
             text.push('\n');
         }
         if !text.is_empty() {
-            let path = dir.join(format!("{}-supervisor-campaign{c}.jsonl", super::galleries::CONDITION));
+            let path = dir.join(format!(
+                "{}-supervisor-campaign{c}.jsonl",
+                super::galleries::CONDITION
+            ));
             std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
             files.push(path);
         }
