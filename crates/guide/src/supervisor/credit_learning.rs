@@ -466,31 +466,17 @@ mod tests {
         // The door route: 36 m of AutoMove's route, AutoMove 80 s, contour
         // 35 s (it passes the door: the remaining length drops at once).
         // Another route: AutoMove 45 s, contour 150 s.
+        let runs = [
+            ("door", a, 80.0, 36.0),
+            ("door", c, 35.0, 36.0),
+            ("hall", a, 45.0, 20.0),
+            ("hall", c, 150.0, 20.0),
+        ];
         for k in 0..3 {
-            log.push(mission(
-                k,
-                "door",
-                "goal",
-                vec![seg(a, true, 0, 80.0, 36.0, Mission)],
-            ));
-            log.push(mission(
-                k,
-                "door",
-                "goal",
-                vec![seg(c, true, 0, 35.0, 36.0, Mission)],
-            ));
-            log.push(mission(
-                k,
-                "hall",
-                "goal",
-                vec![seg(a, true, 0, 45.0, 20.0, Mission)],
-            ));
-            log.push(mission(
-                k,
-                "hall",
-                "goal",
-                vec![seg(c, true, 0, 150.0, 20.0, Mission)],
-            ));
+            for (route, b, time_s, length_m) in runs {
+                let segments = vec![seg(b, true, 0, time_s, length_m, Mission)];
+                log.push(mission(k, route, "goal", segments));
+            }
         }
         let m = CreditModel::learn(&log).unwrap();
         let door = m.rates("door", 0, 36.0, 36.0);
