@@ -48,20 +48,39 @@ pub enum LabCommand {
     /// order of an unsharded run, and writes its report.
     ///
     /// The parts must come from the same batch (suite, runs, seed). A run found in two
-    /// parts must be identical in both. Runs in no part are listed; `lab run … --resume
-    /// --out OUT` completes them. Example:
+    /// parts must be identical in both. When runs are in no part, the merge says which
+    /// shards are incomplete and writes nothing (run them again with --resume, then merge
+    /// again), unless --partial. Merging the same parts again leaves the merged file as it
+    /// is. Example:
     ///
     ///   petrinav lab merge out/voting out/part1 out/part2 out/part3
     Merge {
-        /// The merged folder (must not hold results yet).
+        /// The merged folder (must not hold other results).
         out: PathBuf,
-        /// The shards' folders.
+        /// The shards' folders (a folder without suite.json holds no run yet and is left
+        /// out).
         #[arg(required = true)]
         parts: Vec<PathBuf>,
+        /// Merge even when runs are in no part: the report covers the others, and
+        /// `lab run … --resume --out OUT` completes the batch in the merged folder.
+        #[arg(long)]
+        partial: bool,
         /// Skip the pictures.
         #[arg(long)]
         no_pictures: bool,
     },
+    /// Writes a Slurm job array for a batch: one shard per task (`lab run … --shard i/n
+    /// --resume`) and a merge job after the array (`lab merge`), with absolute paths for
+    /// the nodes; --submit queues both. A task that failed or was cut short continues
+    /// where it stopped when submitted again (--array). docs/cluster.md explains the
+    /// scripts. Examples:
+    ///
+    ///   petrinav lab slurm voting --runs 50 --shards 20 -o /scratch/voting --submit
+    ///
+    ///   petrinav lab slurm tourguide --shards 8 --partition long --time 2:00:00 -o /scratch/tg
+    ///
+    ///   petrinav lab slurm voting --runs 50 --shards 20 -o /scratch/voting --submit --array 3,7
+    Slurm(crate::lab_slurm::SlurmArgs),
     /// Recomputes the report of a results folder (tables, pictures, index.html).
     Report {
         /// The folder of a batch (holds suite.json and results.jsonl).
@@ -135,8 +154,10 @@ pub fn run(cmd: LabCommand) -> Result<()> {
         LabCommand::Merge {
             out,
             parts,
+            partial,
             no_pictures,
-        } => merge(&out, &parts, !no_pictures),
+        } => merge(&out, &parts, partial, !no_pictures),
+        LabCommand::Slurm(a) => crate::lab_slurm::run(&a),
         LabCommand::Report { dir, no_pictures } => report(&dir, !no_pictures),
     }
 }
@@ -150,10 +171,6 @@ fn list() -> Result<()> {
 
 fn read_info(dir: &Path) -> Result<SuiteInfo> {
     lab::batch::read_info(dir)
-}
-
-fn write_info(dir: &Path, info: &SuiteInfo) -> Result<()> {
-    lab::batch::write_info(dir, info)
 }
 
 fn run_suite(a: &RunArgs) -> Result<()> {
@@ -203,37 +220,47 @@ fn report(dir: &Path, pictures: bool) -> Result<()> {
     print_report(dir, suite.as_ref(), pictures)
 }
 
-fn merge(out: &Path, parts: &[PathBuf], pictures: bool) -> Result<()> {
-    let first = parts.first().context("no folder to merge")?;
-    let info = read_info(first)?;
-    for p in &parts[1..] {
-        if !read_info(p)?.same_batch(&info) {
-            bail!(
-                "{} and {} are not parts of the same batch (suite, scenarios, runs or seed differ)",
-                first.display(),
-                p.display()
-            );
-        }
+fn merge(out: &Path, dirs: &[PathBuf], partial: bool, pictures: bool) -> Result<()> {
+    let parts = lab::batch::read_parts(dirs)?;
+    for dir in &parts.empty {
+        eprintln!("{}: no results yet (no suite.json), left out", dir.display());
     }
-    let suite = lab::suites::rebuild(&info)?;
-    let files: Vec<PathBuf> = parts.iter().map(|p| p.join("results.jsonl")).collect();
-    let keys = lab::runner::keys(&suite.campaigns());
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let summary = lab::runner::merge(&files, &keys, &out.join("results.jsonl"))?;
-    write_info(out, &info)?;
-    eprintln!(
-        "{} runs merged from {} folders ({} found twice, identical) -> {}",
-        summary.merged,
-        parts.len(),
-        summary.duplicates,
-        out.join("results.jsonl").display()
-    );
+    let suite = lab::suites::rebuild(&parts.info)?;
+    let merged = lab::batch::merge(out, &parts, suite.as_ref(), partial)?;
+    let summary = &merged.summary;
+    let results = out.join("results.jsonl");
+    if summary.unchanged {
+        eprintln!(
+            "{} already holds these {} runs (merged before): left as it is",
+            results.display(),
+            summary.merged
+        );
+    } else {
+        eprintln!(
+            "{} runs merged from {} folders ({} found twice, identical) -> {}",
+            summary.merged,
+            parts.parts.len(),
+            summary.duplicates,
+            results.display()
+        );
+    }
     if !summary.missing.is_empty() {
+        let lagging: Vec<String> = merged
+            .shards
+            .iter()
+            .flatten()
+            .filter(|s| !s.complete())
+            .map(|s| format!("shard {}: {} of {} done", s.shard, s.found, s.runs))
+            .collect();
         let shown: Vec<&str> = summary.missing.iter().take(5).map(String::as_str).collect();
         eprintln!(
-            "{} runs are in no part (e.g. {}); the report covers the others. To complete the batch, run it again with --resume --out {}",
+            "{} runs are in no part ({}); the report covers the others. To complete the batch, run it again with --resume --out {}",
             summary.missing.len(),
-            shown.join(", "),
+            if lagging.is_empty() {
+                format!("e.g. {}", shown.join(", "))
+            } else {
+                lagging.join(", ")
+            },
             out.display()
         );
     }

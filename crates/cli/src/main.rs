@@ -5,6 +5,7 @@ mod gspn;
 mod guide_cmd;
 mod interrupt;
 mod lab_cmd;
+mod lab_slurm;
 mod map;
 mod nav_cmd;
 mod output;

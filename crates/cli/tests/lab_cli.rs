@@ -474,19 +474,34 @@ fn three_merged_shards_equal_the_unsharded_batch() {
         std::fs::read(merged.join("tables.md")).unwrap(),
         std::fs::read(whole.join("tables.md")).unwrap()
     );
-    // Two shards only: the missing runs are named, and resuming in the
+    // Two shards only: refused, the missing shard named, nothing written;
+    // with --partial the missing runs are named, and resuming in the
     // merged folder completes the batch to the same file.
     let partial = fresh("merge_partial");
-    let out = petrinav(&[
+    let mut args = vec![
         "lab",
         "merge",
         partial.to_str().unwrap(),
         parts[0].to_str().unwrap(),
         parts[2].to_str().unwrap(),
         "--no-pictures",
-    ]);
+    ];
+    let out = petrinav(&args);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("shard 2/3: 0 of 47 runs done, no part holds it"),
+        "{err}"
+    );
+    assert!(!partial.join("results.jsonl").exists());
+    args.push("--partial");
+    let out = petrinav(&args);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("are in no part"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("47 runs are in no part (shard 2/3: 0 of 47 done)"),
+        "{err}"
+    );
     let out = run_voting(&partial, "2", "2", &["--resume"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(

@@ -110,7 +110,7 @@ impl Sandbox {
     /// The real tools the script runs once its checks pass (the checks
     /// themselves need none).
     fn real_tools_after_the_checks(&self) {
-        for tool in ["mktemp", "tee", "awk", "sed", "rm"] {
+        for tool in ["mktemp", "tee", "awk", "sed", "rm", "grep"] {
             self.real(tool);
         }
     }
@@ -272,6 +272,9 @@ fn with_chromium_it_runs_cargo_test_on_the_workspace_and_sums_up() {
     sandbox.fake(
         "cargo",
         "echo 'test result: ok. 3 passed; 0 failed; 1 ignored; 0 measured; 0 filtered out; finished in 0.01s'\n\
+         echo 'test a_real_cluster ... '\n\
+         echo 'skipped: slurm_cluster (a real Slurm cluster): needs root'\n\
+         echo 'ok'\n\
          echo 'test result: ok. 2 passed; 0 failed; 0 ignored; 0 measured; 0 filtered out; finished in 0.01s'",
     );
     sandbox.fake_pinned_mdbook();
@@ -289,6 +292,13 @@ fn with_chromium_it_runs_cargo_test_on_the_workspace_and_sums_up() {
         "{stdout}"
     );
     assert!(stdout.contains("python   none"), "{stdout}");
+    // A test skipped here (it printed why, past the harness's capture) is
+    // named in the summary.
+    let summary = &stdout[stdout.find("== summary").expect("a summary")..];
+    assert!(
+        summary.contains("rust     skipped: slurm_cluster (a real Slurm cluster): needs root"),
+        "{summary}"
+    );
 }
 
 #[test]

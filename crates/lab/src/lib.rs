@@ -40,6 +40,7 @@ pub mod runner;
 pub mod runs;
 pub mod scenario;
 pub mod scenario_suite;
+pub mod slurm;
 pub mod stats;
 pub mod suite;
 pub mod suites;

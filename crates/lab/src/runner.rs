@@ -23,8 +23,10 @@
 //!   bit-identical file whatever the number of threads, and an interrupted
 //!   and resumed batch gives the same file as an uninterrupted one.
 //! * `shard i/n` keeps every n-th campaign (the i-th of each n), so a sweep
-//!   can be spread over machines by a job-array scheduler; [`merge`] puts
-//!   the shards' files back together.
+//!   can be spread over machines by a job-array scheduler; [`gather`] reads
+//!   the shards' files back in job order and [`Gathered::write`] writes
+//!   them as one ([`merge`] does both); the same merge done twice leaves
+//!   the file as it is.
 //! * A progress bar (runs, how many did not reach the goal, ETA) is drawn
 //!   on standard error only when it is a terminal.
 
@@ -122,7 +124,7 @@ pub fn keys(campaigns: &[Campaign]) -> Vec<String> {
 }
 
 /// A deterministic slice of a batch: `index` of `count` (1-based index).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Shard {
     /// Which shard, 1..=count.
     pub index: u32,
@@ -159,9 +161,21 @@ impl Shard {
         campaigns
             .into_iter()
             .enumerate()
-            .filter(|(k, _)| *k as u64 % u64::from(self.count) == u64::from(self.index - 1))
+            .filter(|(k, _)| self.holds(*k))
             .map(|(_, c)| c)
             .collect()
+    }
+
+    /// Whether the campaign at position `campaign` (from 0, in the batch's
+    /// order) belongs to this shard.
+    pub fn holds(&self, campaign: usize) -> bool {
+        campaign as u64 % u64::from(self.count) == u64::from(self.index - 1)
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
     }
 }
 
@@ -280,23 +294,11 @@ fn unique_keys(keys: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// Runs `run` on every job not yet in the results file, appending one JSON
-/// record per finished run (the record gets `key`, `scenario`, `run` and
-/// `seed` fields added), then rewrites the file in job order.
-///
-/// `run(job, earlier)` gets the complete results lines of the campaign's
-/// earlier runs, in order — the lines as written to the file and parsed
-/// back, whether they were run now or read on resume, so a campaign's state
-/// is the same either way, to the last bit.
-pub fn run_batch<F>(campaigns: &[Campaign], params: &BatchParams, run: F) -> Result<BatchSummary>
-where
-    F: Fn(&Job, &[Value]) -> Result<Value> + Sync,
-{
-    let keys = keys(campaigns);
-    unique_keys(&keys)?;
-    if let Some(dir) = params.results.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+/// The runs already in the results file, by key (empty for a new file).
+/// Refuses a file that holds results unless `--resume` was given, drops a
+/// line cut mid-write, and refuses a campaign whose runs on file do not
+/// form a prefix of it.
+fn runs_on_file(campaigns: &[Campaign], params: &BatchParams) -> Result<HashMap<String, Value>> {
     let exists = params.results.exists() && std::fs::metadata(&params.results)?.len() > 0;
     let mut done: HashMap<String, Value> = HashMap::new();
     if exists {
@@ -331,6 +333,27 @@ where
             );
         }
     }
+    Ok(done)
+}
+
+/// Runs `run` on every job not yet in the results file, appending one JSON
+/// record per finished run (the record gets `key`, `scenario`, `run` and
+/// `seed` fields added), then rewrites the file in job order.
+///
+/// `run(job, earlier)` gets the complete results lines of the campaign's
+/// earlier runs, in order — the lines as written to the file and parsed
+/// back, whether they were run now or read on resume, so a campaign's state
+/// is the same either way, to the last bit.
+pub fn run_batch<F>(campaigns: &[Campaign], params: &BatchParams, run: F) -> Result<BatchSummary>
+where
+    F: Fn(&Job, &[Value]) -> Result<Value> + Sync,
+{
+    let keys = keys(campaigns);
+    unique_keys(&keys)?;
+    if let Some(dir) = params.results.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let done = runs_on_file(campaigns, params)?;
     let todo = keys.iter().filter(|k| !done.contains_key(*k)).count();
     let skipped = keys.len() - todo;
     let file = OpenOptions::new()
@@ -475,17 +498,31 @@ pub struct MergeSummary {
     pub duplicates: usize,
     /// Keys of the batch found in no part, in job order.
     pub missing: Vec<String>,
+    /// The output already held exactly this merge (a merge run twice):
+    /// nothing was written.
+    pub unchanged: bool,
 }
 
-/// Merges the results files of the shards of one batch into `out`, in job
-/// order (`keys`, see [`keys`]): the file an unsharded batch writes.
+/// The runs of a sharded batch gathered from its parts' results files, in
+/// job order, before anything is written ([`Gathered::write`]).
+#[derive(Debug, Clone)]
+pub struct Gathered {
+    /// The records found, in job order.
+    records: Vec<Value>,
+    /// Runs found in more than one part, identical in each.
+    pub duplicates: usize,
+    /// Keys of the batch found in no part, in job order.
+    pub missing: Vec<String>,
+}
+
+/// Reads the results files of the shards of one batch (`keys`, see
+/// [`keys`]): every run once, in job order.
 ///
 /// A run found in two parts must be identical in both; a record whose key
 /// is not a job of the batch is an error (the parts belong to another
 /// batch); a last line cut mid-write in a part is not a finished run and is
-/// left out. Runs in no part are listed in the summary: resuming the
-/// batch in the merged folder completes it.
-pub fn merge(parts: &[PathBuf], keys: &[String], out: &Path) -> Result<MergeSummary> {
+/// left out. Runs in no part are listed in [`Gathered::missing`].
+pub fn gather(parts: &[PathBuf], keys: &[String]) -> Result<Gathered> {
     unique_keys(keys)?;
     let wanted: HashSet<&str> = keys.iter().map(String::as_str).collect();
     let mut found: HashMap<String, (Value, &Path)> = HashMap::new();
@@ -515,24 +552,73 @@ pub fn merge(parts: &[PathBuf], keys: &[String], out: &Path) -> Result<MergeSumm
             }
         }
     }
-    if out.exists() && std::fs::metadata(out)?.len() > 0 {
-        bail!("{} already holds results: merge into a new folder", out.display());
-    }
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
     let missing: Vec<String> = keys.iter().filter(|k| !found.contains_key(*k)).cloned().collect();
     let records: Vec<Value> = keys
         .iter()
         .filter_map(|k| found.remove(k))
         .map(|(r, _)| r)
         .collect();
-    write_ordered(out, &records, keys)?;
-    Ok(MergeSummary {
-        merged: records.len(),
+    Ok(Gathered {
+        records,
         duplicates,
         missing,
     })
+}
+
+impl Gathered {
+    /// Runs found.
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    /// Whether no run was found.
+    pub fn is_empty(&self) -> bool {
+        self.records.is_empty()
+    }
+
+    /// Writes the runs to `out` (via a temporary file and an atomic
+    /// rename): the file an unsharded batch writes. An `out` that already
+    /// holds results is refused, unless it holds exactly these (the same
+    /// merge done before), which is left as it is.
+    pub fn write(self, out: &Path) -> Result<MergeSummary> {
+        let mut text = Vec::new();
+        for r in &self.records {
+            serde_json::to_writer(&mut text, r)?;
+            text.push(b'\n');
+        }
+        let summary = |unchanged| MergeSummary {
+            merged: self.records.len(),
+            duplicates: self.duplicates,
+            missing: self.missing.clone(),
+            unchanged,
+        };
+        if out.exists() && std::fs::metadata(out)?.len() > 0 {
+            if std::fs::read(out).with_context(|| format!("reading {}", out.display()))? == text {
+                return Ok(summary(true));
+            }
+            bail!(
+                "{} already holds other results: merge into a new folder",
+                out.display()
+            );
+        }
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        // A temporary file of this process's own: two merges of the same
+        // parts at once each rename a whole file into place.
+        let tmp = out.with_extension(format!("jsonl.tmp{}", std::process::id()));
+        std::fs::write(&tmp, &text).with_context(|| format!("writing {}", tmp.display()))?;
+        std::fs::rename(&tmp, out).with_context(|| format!("replacing {}", out.display()))?;
+        Ok(summary(false))
+    }
+}
+
+/// Merges the results files of the shards of one batch into `out`, in job
+/// order (`keys`, see [`keys`]): the file an unsharded batch writes
+/// ([`gather`], then [`Gathered::write`]). Runs in no part are listed in
+/// the summary: resuming the batch in the merged folder completes it.
+pub fn merge(parts: &[PathBuf], keys: &[String], out: &Path) -> Result<MergeSummary> {
+    gather(parts, keys)?.write(out)
 }
 
 #[cfg(test)]
@@ -826,11 +912,18 @@ mod tests {
         let merged = temp("merge-out");
         std::fs::remove_file(&merged).ok();
         let s = merge(&parts, &keys(&cs), &merged).unwrap();
-        assert_eq!((s.merged, s.duplicates, s.missing.len()), (12, 0, 0));
+        assert_eq!(
+            (s.merged, s.duplicates, s.missing.len(), s.unchanged),
+            (12, 0, 0, false)
+        );
         assert_eq!(std::fs::read(&whole).unwrap(), std::fs::read(&merged).unwrap());
-        // Merging into a folder that holds results, or a part twice with a
-        // changed record, is refused.
-        assert!(merge(&parts, &keys(&cs), &merged).is_err());
+        // The same merge again leaves the file as it is; merging other runs
+        // into a file that holds results, or a part twice with a changed
+        // record, is refused.
+        let s = merge(&parts, &keys(&cs), &merged).unwrap();
+        assert_eq!((s.merged, s.unchanged), (12, true));
+        assert!(merge(&parts[..2], &keys(&cs), &merged).is_err());
+        assert_eq!(std::fs::read(&whole).unwrap(), std::fs::read(&merged).unwrap());
         let changed = temp("merge-changed");
         let text = std::fs::read_to_string(&parts[0]).unwrap();
         std::fs::write(
