@@ -11,8 +11,8 @@
 //! suite's scenarios whole (`day/supervisor`); none, every galleries
 //! strategy. The records are those `lab run tourguide
 //! --runs CAMPAIGNS` writes for these scenarios (same jobs, same seeds);
-//! the report is in `OUT/tables.md`. A folder already holding some of the
-//! runs is resumed.
+//! the report is written into OUT beside them. A folder already holding
+//! some of the runs is resumed.
 
 use std::path::PathBuf;
 
