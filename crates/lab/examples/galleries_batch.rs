@@ -44,7 +44,7 @@ fn main() -> Result<()> {
         .filter(|c| c.jobs.first().is_some_and(|j| selected(&j.scenario, &strategies)))
         .collect();
     std::fs::create_dir_all(&out)?;
-    lab::batch::write_info(&out, suite.info())?;
+    lab::batch::write_info(&out, suite.info(), None)?;
     let params = BatchParams {
         results: out.join("results.jsonl"),
         resume: out.join("results.jsonl").exists(),
