@@ -223,12 +223,12 @@ pub fn mission_log(data: &[u8]) {
         }
     }
     if let Ok(log) = guide::supervisor::log::MissionLog::read(path, credit.net_id())
-        && let Ok(model) = CreditModel::learn_or_prior(log.entries())
+        && let Ok(model) = CreditModel::learn(log.entries())
     {
-        for context in 0..guide::supervisor::credit_learning::CONTEXTS {
-            let rates = model.rates(context, 10.0);
+        for context in 0..guide::supervisor::shrinkage::CONTEXTS {
+            let rates = model.rates("fuzz", context, 10.0, 10.0);
             for localized in [true, false] {
-                if let Ok(d) = credit.decide(&rates, localized) {
+                if let Ok(d) = credit.decide_with(&rates.automove, &rates.contour, localized) {
                     for x in [d.f_auto, d.f_cont, d.p_success, d.p_loc_warn] {
                         assert!(x.is_finite(), "the decision {d:?} holds {x}");
                     }

@@ -301,43 +301,71 @@ fn with_skipped(mut v: serde_json::Value, skipped: usize) -> serde_json::Value {
     v
 }
 
-/// The crediting supervisor's rates per crowd context, at the whole
-/// reference's length.
+/// The crediting supervisor's rates per route and crowd context: the
+/// localizer's and the failure rates, and the progress speeds.
 fn credit_text(entries: &[Entry]) -> Result<String> {
     use guide::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel};
     let m = CreditModel::learn(entries)?;
-    let length = m.reference.length_m();
-    let mut t = Table::new(["rate", "quiet", "busy", "crowded", "meaning"]);
+    let mut routes: Vec<String> = m.progress.routes.keys().cloned().collect();
+    if routes.is_empty() {
+        routes.push(String::new());
+    }
     let meaning = [
         (3, "localizer Success → Warning"),
         (4, "localizer Warning → Success"),
         (5, "planner Normal → Abnormal"),
         (6, "planner Abnormal → Normal"),
-        (7, "AutoMove completes (progress speed / remaining length)"),
-        (8, "contour tracking completes"),
         (9, "AutoMove fails, planner Abnormal"),
         (10, "contour tracking fails, lost"),
         (12, "AutoMove fails, lost"),
         (13, "AutoMove fails, localized"),
         (14, "contour tracking fails, localized"),
     ];
-    let rates: Vec<_> = (0..CONTEXT_NAMES.len()).map(|c| m.rates(c, length)).collect();
-    for (i, what) in meaning {
-        t.row([
-            format!("λ{i}"),
-            format!("{:.6}", rates[0].get(i)),
-            format!("{:.6}", rates[1].get(i)),
-            format!("{:.6}", rates[2].get(i)),
-            what.to_string(),
-        ]);
+    let mut out = format!(
+        "learnt from {} missions ({} reached the goal) and the calibration runs:\n",
+        m.missions, m.successes
+    );
+    for route in routes {
+        let mut t = Table::new(["rate", "quiet", "busy", "crowded", "meaning"]);
+        let rates: Vec<_> = (0..CONTEXT_NAMES.len())
+            .map(|c| m.rates(&route, c, 1.0, 1.0))
+            .collect();
+        for (i, what) in meaning {
+            let cell = |c: usize| {
+                let (a, k) = (rates[c].automove.get(i), rates[c].contour.get(i));
+                if i <= 4 {
+                    format!("{a:.6} / {k:.6}")
+                } else {
+                    format!("{a:.6}")
+                }
+            };
+            let what = if i <= 4 {
+                format!("{what} (AutoMove / contour tracking)")
+            } else {
+                what.to_string()
+            };
+            t.row([format!("λ{i}"), cell(0), cell(1), cell(2), what]);
+        }
+        for (b, name) in [(0, "AutoMove"), (1, "contour tracking")] {
+            t.row([
+                format!("speed {}", b + 1),
+                format!("{:.3}", rates[0].speeds[b].rate),
+                format!("{:.3}", rates[1].speeds[b].rate),
+                format!("{:.3}", rates[2].speeds[b].rate),
+                format!(
+                    "{name}'s progress along AutoMove's route, m/s (λ{} = speed / remaining length)",
+                    7 + b
+                ),
+            ]);
+        }
+        let title = if route.is_empty() {
+            "the log's route".to_string()
+        } else {
+            format!("route {route}")
+        };
+        out.push_str(&format!("{title}:\n{}\n", t.render()));
     }
-    Ok(format!(
-        "learnt from {} missions ({} reached the goal) and the calibration runs, at the start ({} m from the goal):\n{}",
-        m.missions,
-        m.successes,
-        num(length),
-        t.render()
-    ))
+    Ok(out)
 }
 
 fn sojourn_total(s: &[guide::supervisor::log::Sojourn], state: StateName) -> (usize, f64) {
@@ -446,6 +474,11 @@ fn show_credit(entries: &[Entry], skipped: usize) -> Result<()> {
             ),
         };
         outln!("{line}")?;
+        if let Entry::Mission(m) = e {
+            for d in &m.decisions {
+                outln!("       {}", decision_line(d))?;
+            }
+        }
     }
     print_skipped(skipped)?;
     outln!()?;
@@ -454,6 +487,54 @@ fn show_credit(entries: &[Entry], skipped: usize) -> Result<()> {
         Err(e) => outln!("no rates yet: {e}")?,
     }
     Ok(())
+}
+
+/// One decision of the crediting supervisor, as `guide log show` prints
+/// it: when and why, the context (route, crowd), the net's marking, the
+/// value of each choice (the expected time per completed mission, a
+/// failure costing the time limit: `1 / f`), the choice, and the rates
+/// used (λ3, λ4 each behaviour's; λ7, λ8 the completion rates from here).
+fn decision_line(d: &guide::supervisor::log::DecisionLog) -> String {
+    use guide::supervisor::credit_learning::CONTEXT_NAMES;
+    let per = |f: f64| {
+        if f > 0.0 {
+            format!("{} s", num(1.0 / f))
+        } else {
+            "never".into()
+        }
+    };
+    let rate = |r: &[f64], i: usize| r.get(i - 1).map_or("-".to_string(), |v| format!("{v:.4}"));
+    let context = d
+        .context
+        .and_then(|c| CONTEXT_NAMES.get(c))
+        .copied()
+        .unwrap_or("-");
+    format!(
+        "decision at {} s ({}){}, {context}, marking {}: automove {} (f {:.5}), contour {} (f {:.5}) → {}{}; λ3 {}/{} λ4 {}/{} λ7 {} λ8 {} λ12 {} λ13 {} λ14 {}",
+        num(d.time_s),
+        d.reason,
+        d.route.as_ref().map(|r| format!(" on {r}")).unwrap_or_default(),
+        if d.marking.is_empty() {
+            "-".into()
+        } else {
+            d.marking.join(" ")
+        },
+        per(d.f_auto),
+        d.f_auto,
+        per(d.f_cont),
+        d.f_cont,
+        format!("{:?}", d.choice).to_lowercase(),
+        if d.explore { " (exploring)" } else { "" },
+        rate(&d.rates, 3),
+        rate(&d.contour_rates, 3),
+        rate(&d.rates, 4),
+        rate(&d.contour_rates, 4),
+        rate(&d.rates, 7),
+        rate(&d.rates, 8),
+        rate(&d.rates, 12),
+        rate(&d.rates, 13),
+        rate(&d.rates, 14),
+    )
 }
 
 /// Prints a credit log as JSON lines: the entries, then the model learnt

@@ -241,7 +241,9 @@ fn go(a: &GoArgs) -> Result<()> {
             start: from.pose,
             believed: from.pose,
             goal: to.pose.position(),
-            policy: policy.clone(),
+            policy: policy
+                .clone()
+                .on_route(&mission::route_name(&from.name, &to.name)),
             seed: c.seed,
             trace: if a.html.is_some() {
                 sim::TraceParams::full()
@@ -271,7 +273,10 @@ fn go(a: &GoArgs) -> Result<()> {
     print_legs(std::slice::from_ref(&leg), c.json)?;
     if let Some(path) = &a.html {
         let record = lab::runs::mission::leg_record(&leg)?;
-        let replay = lab::runs::mission::leg_replay(record, &setup, &mut leg, to.pose.position())?;
+        let mut replay = lab::runs::mission::leg_replay(record, &setup, &mut leg, to.pose.position())?;
+        if matches!(policy, guide::Policy::Supervisor(_)) {
+            replay.net = Some(lab::runs::mission::supervisor_net_view()?);
+        }
         let key = format!("{} → {} (seed {})", from.name, to.name, c.seed);
         lab::viewer::write_page(&replay, &lab::runs::mission::MARKERS, "nav go", &key, path)?;
     }

@@ -406,3 +406,68 @@ fn another_run_chosen_by_its_hash_or_the_selector_starts_at_its_first_tick() {
     );
     assert_eq!(number(&state, "data-tick"), 200.0, "{state:?}");
 }
+
+/// The museum of the tour-guide suite.
+const MUSEUM: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../lab/src/suites/tourguide/museum.toml"
+);
+
+/// A short leg the crediting supervisor drives in the museum from an empty
+/// mission log (`nav go --behaviour supervisor --html`): its page.
+fn supervisor_page(dir: &Path) -> PathBuf {
+    let log = dir.join("missions.jsonl");
+    std::fs::write(&log, "").unwrap();
+    let html = dir.join("supervisor.html");
+    let out = petrinav(&[
+        "nav",
+        "go",
+        MUSEUM,
+        "--from",
+        "8.1,6.4,1.5708",
+        "--to",
+        "8.1,9.6,1.5708",
+        "--behaviour",
+        "supervisor",
+        "--log",
+        log.to_str().unwrap(),
+        "--html",
+        html.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    html
+}
+
+#[test]
+fn the_supervisor_net_is_drawn_with_its_marking_and_the_last_decision() {
+    let dir = fresh("net");
+    let html = supervisor_page(&dir);
+    let profile = dir.join("profile");
+    let dom = headless(&profile, &url(&html, "t=1"), 2000, &["--dump-dom".to_string()]);
+    let mut state = attributes(&dom, "html");
+    state.extend(attributes(&dom, "body"));
+    assert_eq!(state.get("data-errors").map(String::as_str), Some("0"), "{dom}");
+    // Running AutoMove (P1), localized (P5), the planner Normal (P7).
+    assert_eq!(
+        state.get("data-net-marking").map(String::as_str),
+        Some("P1 P5 P7"),
+        "{state:?}"
+    );
+    // The start decision, at tick 0, with the value of each choice and
+    // the marking it was taken in.
+    assert_eq!(state.get("data-net-event-tick").map(String::as_str), Some("0"));
+    let panel = &dom[dom.find("<div id=\"net-box\"").expect("the net's panel")..];
+    let panel = &panel[..panel.find("</div>").unwrap()];
+    assert!(!panel.contains(" hidden"), "{panel}");
+    for shown in [
+        "supervisor_credit",
+        "time_auto_s",
+        "time_cont_s",
+        "P0 P5 P7",
+        "route",
+        "context",
+    ] {
+        assert!(panel.contains(shown), "`{shown}` not in the panel: {panel}");
+    }
+    assert_eq!(panel.matches("class=\"place").count(), 10, "{panel}");
+}

@@ -32,9 +32,9 @@
 
 use robot::{Command, Controller, Event, GridMap, LaserScan, Notes, Perception, Pose, Request, Step, Vec2};
 
-use crate::supervisor::credit::CreditSupervisor;
-use crate::supervisor::credit_learning::{CONTEXT_NAMES, CreditModel, CrowdMeter, Segment, SegmentEnd};
-use crate::supervisor::log::{DecisionLog, Sojourn, StateName};
+use crate::supervisor::credit_learning::{CONTEXT_NAMES, ContextRates, CreditModel, CrowdMeter};
+use crate::supervisor::log::{DecisionLog, Segment, SegmentEnd, Sojourn, StateName};
+use crate::supervisor::plan::Planner;
 use crate::supervisor::reference::Reference;
 use crate::supervisor::{Rates, Supervisor};
 
@@ -152,6 +152,11 @@ pub enum Policy {
     /// Contour tracking while the localizer warns, AutoMove while it
     /// succeeds.
     Rule,
+    /// Start with this behaviour, then the rule: contour tracking from
+    /// every Warning on, AutoMove from every return to Success (what
+    /// calibrate-then-commit runs on a route once it knows which behaviour
+    /// was faster there).
+    StartThenRule(Behaviour),
     /// The crediting GSPN supervisor ([`crate::supervisor::credit`]): the
     /// net decides at the start, at every Warning and at every return to
     /// Success, with rates learnt per behaviour and crowd context.
@@ -162,28 +167,47 @@ pub enum Policy {
 }
 
 impl Policy {
+    /// The policy for a mission on `route` (`from → to`): the crediting
+    /// supervisor takes its rates for that route; others are unchanged.
+    pub fn on_route(self, route: &str) -> Policy {
+        match self {
+            Policy::Supervisor(mut plan) => {
+                plan.route = route.to_string();
+                Policy::Supervisor(plan)
+            }
+            other => other,
+        }
+    }
+
     /// A short name: `automove`, `contour`, `automove_then_contour`, `rule`,
-    /// `supervisor`, `supervisor_source`.
+    /// `automove_then_rule`, `contour_then_rule`, `supervisor`,
+    /// `supervisor_source`.
     pub fn name(&self) -> &'static str {
         match self {
             Policy::Fixed(Behaviour::AutoMove) => "automove",
             Policy::Fixed(Behaviour::Contour) => "contour",
             Policy::AutoMoveThenContour => "automove_then_contour",
             Policy::Rule => "rule",
+            Policy::StartThenRule(Behaviour::AutoMove) => "automove_then_rule",
+            Policy::StartThenRule(Behaviour::Contour) => "contour_then_rule",
             Policy::Supervisor(_) => "supervisor",
             Policy::SupervisorSource(_) => "supervisor_source",
         }
     }
 }
 
-/// What the crediting supervisor decides with: the net checked and
-/// compiled, and what it learnt from the log.
+/// What the crediting supervisor decides with: its planner (the net
+/// checked and compiled), what it learnt from the log, and the route the
+/// mission drives.
 #[derive(Debug, Clone)]
 pub struct CreditPlan {
-    /// The supervisor.
-    pub supervisor: CreditSupervisor,
-    /// The rates learnt per crowd context, and AutoMove's reference.
+    /// Turns a context's rates into a choice ([`crate::supervisor::plan`]).
+    pub planner: std::sync::Arc<dyn Planner>,
+    /// The rates learnt per route, behaviour and crowd context.
     pub model: CreditModel,
+    /// The mission's route (`from → to`; `""` for a log of one route):
+    /// the context the rates are taken for.
+    pub route: String,
 }
 
 /// What the source's supervisor decides with: the net compiled, the learnt
@@ -292,6 +316,10 @@ pub struct GuideController {
     /// Remaining length along the crediting supervisor's reference at the
     /// last step, metres.
     last_remaining_m: Option<f64>,
+    /// The crediting supervisor's reference: AutoMove's route planned on
+    /// the static map at the start (progress and remaining length are
+    /// measured along it).
+    reference: Option<Reference>,
 }
 
 /// The state a segment is in: behaviour, localized, planner Normal,
@@ -332,10 +360,15 @@ impl GuideController {
         let mut localizer = map.localizer.on_same_map(seed);
         localizer.init_pose(start, params.initial_std_xy_m, params.initial_std_theta_rad)?;
         let mut automove = map.automove.on_same_map();
-        automove.set_goal(start.position(), goal)?;
+        let route = automove.set_goal(start.position(), goal)?;
+        let reference = matches!(policy, Policy::Supervisor(_)).then(|| Reference {
+            mean_time_s: 0.0,
+            mean_speed_mps: 0.0,
+            trajectory: route.path.clone(),
+        });
         let contour = ContourTracker::new(params.contour).map_err(GuideError::Params)?;
         let active = match &policy {
-            Policy::Fixed(b) => *b,
+            Policy::Fixed(b) | Policy::StartThenRule(b) => *b,
             Policy::AutoMoveThenContour
             | Policy::Rule
             | Policy::Supervisor(_)
@@ -367,6 +400,7 @@ impl GuideController {
             segments: Vec::new(),
             open: None,
             last_remaining_m: None,
+            reference,
         })
     }
 
@@ -489,6 +523,10 @@ impl GuideController {
                     p_loc_warn: d.p_loc_warn,
                     choice: d.choice,
                     context: None,
+                    route: None,
+                    contour_rates: Vec::new(),
+                    marking: Vec::new(),
+                    explore: false,
                 });
                 d.choice
             }
@@ -501,8 +539,9 @@ impl GuideController {
 
     /// The crediting supervisor's decision at `t` (`reason`: `start`,
     /// `warning` or `recovered`), the localizer `localized` or not: the
-    /// behaviour it chooses, or the active one when it cannot decide (an
-    /// event says why).
+    /// behaviour it chooses — at the start, the one to explore if the model
+    /// says so ([`CreditModel::explore`]) — or the active one when it
+    /// cannot decide (an event says why).
     fn decide_credit(
         &mut self,
         reason: &str,
@@ -515,37 +554,47 @@ impl GuideController {
             return self.active;
         };
         let context = self.crowd.context();
-        let remaining = plan.model.reference.remaining_m(estimate.position());
-        let rates = plan.model.rates(context, remaining);
-        match plan.supervisor.decide(&rates, localized) {
+        let (remaining, length) = self
+            .reference
+            .as_ref()
+            .map_or((0.0, 0.0), |r| (r.remaining_m(estimate.position()), r.length_m()));
+        let rates = plan.model.rates(&plan.route, context, remaining, length);
+        let explore = if reason == "start" {
+            plan.model.explore(&plan.route, context)
+        } else {
+            None
+        };
+        match plan.planner.decide(&rates.automove, &rates.contour, localized) {
             Ok(d) => {
-                let mut e = Event::new("decision", t)
-                    .at(estimate.position())
-                    .with("reason", reason)
-                    .with("f_auto", d.f_auto)
-                    .with("f_cont", d.f_cont)
-                    .with("choice", behaviour_name(d.choice))
-                    .with("p_success", d.p_success)
-                    .with("p_loc_warn", d.p_loc_warn)
-                    .with("context", CONTEXT_NAMES[context])
-                    .with("crowd", self.crowd.mean())
-                    .with("remaining_m", remaining);
-                for i in 3..=15 {
-                    e = e.with(format!("lambda{i}"), rates.get(i));
-                }
-                notes.event(e);
+                let choice = explore.unwrap_or(d.choice);
+                let marking = decision_marking(localized, self.abnormal);
+                let route = plan.route.clone();
+                let planner = plan.planner.name();
+                notes.event(
+                    decision_event(t, estimate, reason, &d, choice, &rates, &marking)
+                        .with("context", CONTEXT_NAMES[context])
+                        .with("crowd", self.crowd.mean())
+                        .with("remaining_m", remaining)
+                        .with("route", route.clone())
+                        .with("planner", planner)
+                        .with("explore", f64::from(u8::from(explore.is_some()))),
+                );
                 self.decisions.push(DecisionLog {
                     time_s: t,
                     reason: reason.to_string(),
-                    rates: rates.as_array().to_vec(),
+                    rates: rates.automove.as_array().to_vec(),
                     f_auto: d.f_auto,
                     f_cont: d.f_cont,
                     p_loc_succ: 1.0 - d.p_loc_warn,
                     p_loc_warn: d.p_loc_warn,
-                    choice: d.choice,
+                    choice,
                     context: Some(context),
+                    route: (!route.is_empty()).then_some(route),
+                    contour_rates: rates.contour.as_array().to_vec(),
+                    marking: marking.iter().map(|p| p.to_string()).collect(),
+                    explore: explore.is_some(),
                 });
-                d.choice
+                choice
             }
             Err(err) => {
                 notes.event(Event::new("decision_error", t).with("error", err.to_string()));
@@ -558,10 +607,10 @@ impl GuideController {
     /// state the controller is in now) to the segments, with the progress
     /// made along the crediting supervisor's reference to `estimate`.
     fn account_segment(&mut self, dt: f64, estimate: Pose) {
-        let remaining = match &self.policy {
-            Policy::Supervisor(plan) => Some(plan.model.reference.remaining_m(estimate.position())),
-            _ => None,
-        };
+        let remaining = self
+            .reference
+            .as_ref()
+            .map(|r| r.remaining_m(estimate.position()));
         let progress = match (self.last_remaining_m, remaining) {
             (Some(a), Some(b)) => Some(a - b),
             _ => None,
@@ -628,6 +677,64 @@ fn behaviour_name(b: Behaviour) -> &'static str {
         Behaviour::AutoMove => "automove",
         Behaviour::Contour => "contour",
     }
+}
+
+/// The supervisor net's places marked at a decision: `P0` (choosing the
+/// behaviour), the localizer's (`P5` Success, `P6` Warning) and the
+/// planner's (`P7` Normal, `P8` Abnormal).
+fn decision_marking(localized: bool, abnormal: bool) -> [&'static str; 3] {
+    [
+        "P0",
+        if localized { "P5" } else { "P6" },
+        if abnormal { "P8" } else { "P7" },
+    ]
+}
+
+/// The values the controller notes every cycle under a supervisor: the
+/// supervisor net's marking (`net.P1` … `net.P8`, 0 or 1) as the robot's
+/// state puts it — the behaviour running (`P1` AutoMove, `P2` contour
+/// tracking), the localizer's state, the planner's.
+pub const NET_MARKING_VALUES: [&str; 6] = ["net.P1", "net.P2", "net.P5", "net.P6", "net.P7", "net.P8"];
+
+/// The `decision` event of the crediting supervisor: the choice, the value
+/// of each (`f_auto`, `f_cont`: completion throughputs; `time_auto_s`,
+/// `time_cont_s`: their inverses, the expected time per completed mission
+/// with a failure costing the time limit), the rates of each hypothesis
+/// (λ3…λ15 the AutoMove hypothesis's, `lambda3_cont`, `lambda4_cont`
+/// contour tracking's, `speed_auto_mps`, `speed_cont_mps`) and the net's
+/// marking.
+fn decision_event(
+    t: f64,
+    estimate: Pose,
+    reason: &str,
+    d: &crate::supervisor::credit::CreditDecision,
+    choice: Behaviour,
+    rates: &ContextRates,
+    marking: &[&str],
+) -> Event {
+    let mut e = Event::new("decision", t)
+        .at(estimate.position())
+        .with("reason", reason)
+        .with("f_auto", d.f_auto)
+        .with("f_cont", d.f_cont);
+    for (key, f) in [("time_auto_s", d.f_auto), ("time_cont_s", d.f_cont)] {
+        if f > 0.0 {
+            e = e.with(key, 1.0 / f);
+        }
+    }
+    e = e
+        .with("choice", behaviour_name(choice))
+        .with("p_success", d.p_success)
+        .with("p_loc_warn", d.p_loc_warn)
+        .with("marking", marking.join(" "))
+        .with("speed_auto_mps", rates.speeds[0].rate)
+        .with("speed_cont_mps", rates.speeds[1].rate)
+        .with("lambda3_cont", rates.contour.get(3))
+        .with("lambda4_cont", rates.contour.get(4));
+    for i in 3..=15 {
+        e = e.with(format!("lambda{i}"), rates.automove.get(i));
+    }
+    e
 }
 
 impl GuideController {
@@ -709,7 +816,7 @@ impl GuideController {
                 self.switch(Behaviour::Contour, "warning", t, at.position(), notes)
             }
             (Policy::AutoMoveThenContour, LocalizationStatus::Success) => {}
-            (Policy::Rule, LocalizationStatus::Success) => {
+            (Policy::Rule | Policy::StartThenRule(_), LocalizationStatus::Success) => {
                 self.switch(Behaviour::AutoMove, "success", t, at.position(), notes)
             }
             (Policy::SupervisorSource(_), LocalizationStatus::Success) => {
@@ -737,8 +844,25 @@ impl GuideController {
             }
             _ => {}
         }
-        if let Policy::Supervisor(plan) = &self.policy {
-            self.last_remaining_m = Some(plan.model.reference.remaining_m(estimate.position()));
+        if let Some(r) = &self.reference {
+            self.last_remaining_m = Some(r.remaining_m(estimate.position()));
+        }
+    }
+
+    /// The supervisor net's marking as the robot's state puts it
+    /// ([`NET_MARKING_VALUES`]), for traces and replays.
+    fn note_marking(&self, notes: &mut Notes) {
+        let warning = self.status == LocalizationStatus::Warning;
+        let marked = [
+            self.active == Behaviour::AutoMove,
+            self.active == Behaviour::Contour,
+            !warning,
+            warning,
+            !self.abnormal,
+            self.abnormal,
+        ];
+        for (name, on) in NET_MARKING_VALUES.iter().zip(marked) {
+            notes.value(name, f64::from(u8::from(on)));
         }
     }
 
@@ -902,6 +1026,9 @@ impl Controller for GuideController {
         }
         if notes.is_enabled() {
             self.note_localization(estimate, notes);
+            if matches!(self.policy, Policy::Supervisor(_)) {
+                self.note_marking(notes);
+            }
         }
         if estimate.position().dist(self.goal) <= self.p.arrive_m {
             notes.event(Event::new("arrived", t).at(estimate.position()));

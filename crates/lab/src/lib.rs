@@ -34,6 +34,7 @@ pub mod experiment;
 pub mod foxglove;
 pub mod gspn;
 pub mod map_file;
+pub mod net_view;
 pub mod optimize;
 pub mod page;
 pub mod pictures;

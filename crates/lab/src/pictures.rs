@@ -28,6 +28,9 @@ pub struct Replay {
     pub robot_radius_m: f64,
     /// The control period, seconds.
     pub control_period_s: f64,
+    /// A net to draw beside the run, its marking from the run's values
+    /// (the tour-guide supervisor's), if any.
+    pub net: Option<crate::net_view::NetView>,
 }
 
 /// Where an event's marker goes.

@@ -133,6 +133,7 @@ impl ScenarioSuite {
             goal: Some(robot::Vec2::new(s.goal.x, s.goal.y)),
             robot_radius_m: s.robot.robot_params().drive.radius_m,
             control_period_s: s.control_period_s,
+            net: None,
         })
     }
 

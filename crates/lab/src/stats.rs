@@ -5,6 +5,15 @@
 //!   does not (Wilson 1927; Brown, Cai & DasGupta 2001).
 //! * Means (the time index `I_T`, path lengths): Student-t interval
 //!   `x̄ ± t_{1−α/2, n−1} · s/√n`.
+//! * Means of observations that come in clusters sharing something (the
+//!   missions of one campaign share one learner, so they are not
+//!   independent): [`Clustered`], the mean of the clusters' means with a
+//!   Student-t interval over the clusters, `x̄ ± t_{1−α/2, k−1} · s_k/√k`
+//!   for `k` clusters — the cluster-level analysis of Donner and Klar
+//!   (*Design and Analysis of Cluster Randomization Trials*, 2000, ch. 6),
+//!   valid whatever the correlation within a cluster, at the price of
+//!   `k − 1` degrees of freedom. Paired differences (a strategy minus
+//!   another on the same missions) go in as the observations.
 
 use petri::simulation::student_t_quantile;
 
@@ -154,6 +163,62 @@ impl Mean {
     }
 }
 
+/// A mean over clusters of observations, with a Student-t interval over
+/// the clusters' means (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Clustered {
+    /// Clusters with at least one observation.
+    pub clusters: usize,
+    /// Observations in all.
+    pub n: usize,
+    /// Mean of the clusters' means (NaN without a cluster).
+    pub mean: f64,
+    /// Half-width of the interval (NaN with fewer than 2 clusters).
+    pub half_width: f64,
+}
+
+impl Clustered {
+    /// The mean of the clusters' means of `clusters` (empty clusters left
+    /// out; non-finite values are a bug of the caller and propagate) and
+    /// its interval at `confidence`.
+    pub fn new(clusters: &[Vec<f64>], confidence: f64) -> Clustered {
+        let means: Vec<f64> = clusters
+            .iter()
+            .filter(|c| !c.is_empty())
+            .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+            .collect();
+        let m = Mean::new(&means, confidence);
+        Clustered {
+            clusters: means.len(),
+            n: clusters.iter().map(Vec::len).sum(),
+            mean: m.mean,
+            half_width: m.half_width,
+        }
+    }
+
+    /// Lower end of the interval.
+    pub fn low(&self) -> f64 {
+        self.mean - self.half_width
+    }
+
+    /// Upper end of the interval.
+    pub fn high(&self) -> f64 {
+        self.mean + self.half_width
+    }
+
+    /// As a report writes it: `+0.012 ± 0.034` with `decimals` decimals
+    /// and a sign; `-` without clusters.
+    pub fn signed(&self, decimals: usize) -> String {
+        if self.clusters == 0 {
+            "-".into()
+        } else if self.half_width.is_finite() {
+            format!("{:+.*} ± {:.*}", decimals, self.mean, decimals, self.half_width)
+        } else {
+            format!("{:+.*}", decimals, self.mean)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -181,5 +246,31 @@ mod tests {
         // s = sqrt(2.5), t(0.975, 4) = 2.776
         assert!((m.half_width - 2.776 * 2.5f64.sqrt() / 5f64.sqrt()).abs() < 1e-3);
         assert!(Mean::new(&[1.0], 0.95).half_width.is_nan());
+    }
+
+    #[test]
+    fn clustered_interval_is_the_t_interval_of_the_cluster_means() {
+        // Cluster means 1, 2, 6 (sizes 2, 1, 3): mean 3, s = sqrt(7),
+        // t(0.975, 2) = 4.303.
+        let c = Clustered::new(&[vec![0.0, 2.0], vec![2.0], vec![5.0, 6.0, 7.0], vec![]], 0.95);
+        assert_eq!((c.clusters, c.n), (3, 6));
+        assert!((c.mean - 3.0).abs() < 1e-12);
+        assert!(
+            (c.half_width - 4.303 * 7f64.sqrt() / 3f64.sqrt()).abs() < 1e-2,
+            "{c:?}"
+        );
+        assert!((c.low() + c.high() - 6.0).abs() < 1e-12);
+        assert_eq!(c.signed(1), format!("+3.0 ± {:.1}", c.half_width));
+        // Perfectly correlated within clusters: repeating an observation
+        // inside its cluster does not narrow the interval, as it would if
+        // the observations were taken as independent.
+        let once = Clustered::new(&[vec![1.0], vec![2.0], vec![4.0]], 0.95);
+        let thrice = Clustered::new(&[vec![1.0; 3], vec![2.0; 3], vec![4.0; 3]], 0.95);
+        assert!((once.half_width - thrice.half_width).abs() < 1e-12);
+        let naive = Mean::new(&[1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 4.0, 4.0, 4.0], 0.95);
+        assert!(naive.half_width < 0.5 * thrice.half_width, "{naive:?} {thrice:?}");
+        let one = Clustered::new(&[vec![1.0, 3.0]], 0.95);
+        assert!(one.mean == 2.0 && one.half_width.is_nan());
+        assert_eq!(Clustered::new(&[], 0.95).signed(2), "-");
     }
 }

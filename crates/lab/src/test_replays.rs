@@ -80,5 +80,6 @@ pub fn laser_replay() -> Replay {
         goal: Some(Vec2::new(3.5, 1.0)),
         robot_radius_m: 0.2,
         control_period_s: 0.1,
+        net: None,
     }
 }

@@ -361,9 +361,12 @@ pub fn policy(options: &GuideOptions) -> Result<Policy> {
                 NetChoice::Credit => {
                     let model = CreditModel::learn(&entries)
                         .with_context(|| format!("learning from {}", path.display()))?;
+                    // The route is the leg's: set for each leg it runs
+                    // ([`Policy::on_route`]).
                     Policy::Supervisor(Box::new(CreditPlan {
-                        supervisor: CreditSupervisor::new()?,
+                        planner: Arc::new(CreditSupervisor::new()?),
                         model,
+                        route: String::new(),
                     }))
                 }
             }
@@ -390,7 +393,7 @@ pub fn log_legs(options: &GuideOptions, legs: &[LegRun], policy: &Policy) -> Res
         .iter()
         .filter(|l| l.result.outcome != LegOutcome::Unreachable)
     {
-        let entry = match (options.calibration, policy) {
+        let mut entry = match (options.calibration, policy) {
             (true, Policy::Fixed(b)) if options.net == NetChoice::Source => {
                 mission::calibration_entry(leg, *b)
             }
@@ -398,6 +401,14 @@ pub fn log_legs(options: &GuideOptions, legs: &[LegRun], policy: &Policy) -> Res
             (true, _) => bail!("--calibration runs one behaviour alone: --behaviour automove or contour"),
             (false, _) => mission::mission_entry(leg, log.next_mission()),
         };
+        // The crediting supervisor learns per route: the leg's places.
+        if options.net == NetChoice::Credit {
+            let route = Some(mission::route_name(&leg.result.from, &leg.result.to));
+            match &mut entry {
+                Entry::Mission(m) => m.route = route,
+                Entry::Calibration(c) => c.route = route,
+            }
+        }
         log.append(entry)?;
     }
     Ok(())

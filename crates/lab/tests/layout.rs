@@ -1,8 +1,9 @@
 //! The lab's layout holds: the modules of `src/` form no cycle, the generic
 //! core uses nothing of `suites` nor of the middle layer `runs`, `runs` uses
 //! no suite and no command module, and no suite is named outside the
-//! registry's folder. And across the workspace: the top-level modules of
-//! every crate form no cycle either.
+//! registry's folder. And across the workspace: in every crate, the
+//! children of every module (the crate root's included) form no cycle,
+//! counting `crate::`, `super::` and `self::` paths.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -247,14 +248,16 @@ fn the_scanner_sees_grouped_and_nested_paths() {
     );
 }
 
-/// Names a crate root re-exports (`pub use m::{A, B}`, `pub use m::A`),
-/// with the module each comes from: `crate::A` elsewhere depends on `m`.
-fn reexports(lib: &str) -> BTreeMap<String, String> {
+/// Names a module root re-exports (`pub use m::{A, B}`, `pub use m::A`),
+/// with the child module each comes from: `parent::A` elsewhere depends
+/// on `m`.
+fn reexports(root: &str) -> BTreeMap<String, String> {
     let mut out = BTreeMap::new();
-    for stmt in lib.split(';') {
+    for stmt in root.split(';') {
         let Some(rest) = stmt.trim().strip_prefix("pub use ") else {
             continue;
         };
+        let rest = rest.strip_prefix("self::").unwrap_or(rest);
         let Some((module, items)) = rest.split_once("::") else {
             continue;
         };
@@ -274,41 +277,163 @@ fn reexports(lib: &str) -> BTreeMap<String, String> {
     out
 }
 
-/// The top-level module graph of the crate in `src`: a node per file or
-/// folder under `src/` (lib.rs and main.rs excluded), an edge for every
-/// `crate::` path, a name the root re-exports counted as its module.
-fn top_level_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
-    let root = ["lib.rs", "main.rs"]
+/// A file's module path under `src` (`lib.rs`/`main.rs`: the crate,
+/// `a/mod.rs` and `a.rs`: `a`, `a/b.rs`: `a::b`).
+fn module_path(rel: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .with_extension("")
         .iter()
-        .filter_map(|f| std::fs::read_to_string(src.join(f)).ok())
-        .collect::<String>();
-    let names = reexports(&root);
-    let mut files = Vec::new();
-    sources(src, &mut files);
-    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    for f in files {
-        let rel = f.strip_prefix(src).unwrap();
-        let node = rel
-            .iter()
-            .next()
-            .unwrap()
-            .to_string_lossy()
-            .trim_end_matches(".rs")
-            .to_string();
-        if node == "lib" || node == "main" {
+        .map(|c| c.to_string_lossy().into_owned())
+        .collect();
+    if matches!(parts.last().map(String::as_str), Some("mod" | "lib" | "main")) {
+        parts.pop();
+    }
+    parts
+}
+
+/// The code of a file without its unit tests (`#[cfg(test)]` onwards:
+/// tests sit at the end) and without comments.
+fn code_of(text: &str) -> String {
+    let text = match text.find("#[cfg(test)]") {
+        Some(k) => &text[..k],
+        None => text,
+    };
+    code_only(text)
+}
+
+/// Paths a file names through `crate::`, `super::` or `self::`, made
+/// absolute from the file's module `here` (grouped imports expanded one
+/// level: `use super::{a, b::c}`).
+fn module_paths(code: &str, here: &[String]) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    for (prefix, base) in [
+        ("crate::", Vec::new()),
+        ("super::", here[..here.len().saturating_sub(1)].to_vec()),
+        ("self::", here.to_vec()),
+    ] {
+        for path in prefixed_paths(code, prefix) {
+            let mut base = base.clone();
+            let mut rest = path.as_slice();
+            // `super::super::x`
+            while let Some((head, tail)) = rest.split_first()
+                && head == "super"
+            {
+                base.pop();
+                rest = tail;
+            }
+            base.extend(rest.iter().cloned());
+            out.push(base);
+        }
+    }
+    out
+}
+
+/// Paths after `prefix` in `code` (a group `prefix a::{b, c::d}` expanded
+/// one level), each split at `::`; a `prefix` inside a longer path or
+/// identifier does not count.
+fn prefixed_paths(code: &str, prefix: &str) -> Vec<Vec<String>> {
+    let split = |p: &str| -> Vec<String> {
+        p.split("::")
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect()
+    };
+    let mut out = Vec::new();
+    let mut from = 0;
+    while let Some(k) = code[from..].find(prefix) {
+        let at = from + k;
+        from = at + prefix.len();
+        let before = code[..at].chars().next_back();
+        if before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_' || c == ':') {
             continue;
         }
-        let text = std::fs::read_to_string(&f).unwrap();
-        let code = code_only(&text);
-        let targets = edges.entry(node.clone()).or_default();
-        for path in crate_paths(&code) {
-            if let Some(first) = path.first() {
-                targets.insert(names.get(first).cloned().unwrap_or_else(|| first.clone()));
+        let rest = &code[from..];
+        let end = rest
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == ':'))
+            .unwrap_or(rest.len());
+        let head = split(&rest[..end]);
+        match rest[end..].strip_prefix('{') {
+            Some(inner) if end == 0 || rest[..end].ends_with("::") => {
+                let close = inner.find('}').unwrap_or(inner.len());
+                for item in inner[..close].split(',') {
+                    let tail = split(item);
+                    if !tail.is_empty() {
+                        out.push([head.clone(), tail].concat());
+                    }
+                }
+            }
+            _ if !head.is_empty() => out.push(head),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Module graphs by parent module: children as nodes, edges between them.
+type ModuleGraphs = BTreeMap<Vec<String>, BTreeMap<String, BTreeSet<String>>>;
+
+/// The module graphs of the crate in `src`, one per module that has
+/// children (the crate root's included): nodes are its children (a file
+/// or a folder, all that lies inside counted as the child), and an edge
+/// `a → b` for every path from inside `a` to `b` or to a name the parent
+/// re-exports from `b`. Unit tests are left out.
+fn module_graphs(src: &Path) -> ModuleGraphs {
+    let mut files = Vec::new();
+    sources(src, &mut files);
+    let mut modules: BTreeSet<Vec<String>> = BTreeSet::new();
+    let mut texts = Vec::new();
+    for f in &files {
+        let m = module_path(f.strip_prefix(src).unwrap());
+        modules.insert(m.clone());
+        texts.push((m, code_of(&std::fs::read_to_string(f).unwrap())));
+    }
+    // Every module's ancestors are modules too (a folder beside `a.rs`).
+    for m in modules.clone() {
+        for k in 0..m.len() {
+            modules.insert(m[..k].to_vec());
+        }
+    }
+    let mut roots: BTreeMap<Vec<String>, BTreeMap<String, String>> = BTreeMap::new();
+    for (m, code) in &texts {
+        roots.entry(m.clone()).or_default().extend(reexports(code));
+    }
+    let mut graphs = ModuleGraphs::new();
+    for m in &modules {
+        if let Some((last, parent)) = m.split_last() {
+            graphs
+                .entry(parent.to_vec())
+                .or_default()
+                .entry(last.clone())
+                .or_default();
+        }
+    }
+    for (here, code) in &texts {
+        for path in module_paths(code, here) {
+            // The level at which `here` and `path` part ways.
+            let common = here.iter().zip(&path).take_while(|(a, b)| a == b).count();
+            if common >= here.len() || common >= path.len() {
+                continue; // into the file's own module, or an item above it
+            }
+            let parent = &path[..common];
+            let from = &here[common];
+            let mut to = path[common].clone();
+            if !modules.contains(&[parent, std::slice::from_ref(&to)].concat()) {
+                match roots.get(parent).and_then(|r| r.get(&to)) {
+                    Some(child) => to = child.clone(),
+                    None => continue, // an item of the parent itself
+                }
+            }
+            if &to != from {
+                graphs
+                    .entry(parent.to_vec())
+                    .or_default()
+                    .entry(from.clone())
+                    .or_default()
+                    .insert(to);
             }
         }
-        targets.remove(&node);
     }
-    edges
+    graphs
 }
 
 /// A cycle in `edges`, as the path round it, if there is one.
@@ -358,7 +483,7 @@ fn find_cycle(edges: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>>
 }
 
 #[test]
-fn no_crate_of_the_workspace_has_a_module_cycle() {
+fn no_module_of_any_crate_has_a_cycle_among_its_children() {
     let crates = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut checked = Vec::new();
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(&crates)
@@ -366,19 +491,34 @@ fn no_crate_of_the_workspace_has_a_module_cycle() {
         .map(|e| e.unwrap().path())
         .collect();
     dirs.sort();
+    let mut cycles = Vec::new();
     for dir in dirs {
         let src = dir.join("src");
         if !src.is_dir() {
             continue;
         }
         let name = dir.file_name().unwrap().to_string_lossy().into_owned();
-        let edges = top_level_graph(&src);
-        if let Some(cycle) = find_cycle(&edges) {
-            panic!("module cycle in crates/{name}: {}", cycle.join(" → "));
+        for (parent, edges) in module_graphs(&src) {
+            let at = [name.as_str()]
+                .into_iter()
+                .chain(parent.iter().map(String::as_str))
+                .collect::<Vec<_>>()
+                .join("::");
+            if let Some(cycle) = find_cycle(&edges) {
+                cycles.push(format!("{at}: {}", cycle.join(" → ")));
+            }
+            checked.push(at);
         }
-        checked.push(name);
     }
-    for expected in ["lab", "sim", "petri", "cli", "guide", "topo"] {
+    assert!(cycles.is_empty(), "module cycles:\n{}", cycles.join("\n"));
+    for expected in [
+        "lab",
+        "lab::suites",
+        "sim",
+        "petri::io",
+        "guide::supervisor",
+        "topo",
+    ] {
         assert!(checked.iter().any(|c| c == expected), "{checked:?}");
     }
 }
@@ -397,4 +537,46 @@ fn the_cycle_finder_finds_one() {
     assert_eq!(names["Crowd"], "people");
     assert_eq!(names["World"], "world");
     assert_eq!(names["D"], "a");
+}
+
+/// Regression test: the supervisor's learners and their log imported each
+/// other through `super::` (`credit_learning → learning → log →
+/// credit_learning`), which a check of the crates' top-level modules
+/// alone did not see.
+#[test]
+fn the_module_graphs_see_siblings_through_super_and_nested_crate_paths() {
+    let here = |s: &str| s.split("::").map(str::to_string).collect::<Vec<_>>();
+    let code = "use super::credit_learning::Segment;\nuse crate::supervisor::{learning::X, Behaviour};\nlet y = super::super::z::W;";
+    let paths = module_paths(code, &here("supervisor::log"));
+    assert!(
+        paths.contains(&here("supervisor::credit_learning::Segment")),
+        "{paths:?}"
+    );
+    assert!(paths.contains(&here("supervisor::learning::X")), "{paths:?}");
+    assert!(paths.contains(&here("z::W")), "{paths:?}");
+    assert_eq!(module_path(Path::new("supervisor/mod.rs")), here("supervisor"));
+    assert!(module_path(Path::new("lib.rs")).is_empty());
+    // A crate with that cycle (through a re-export), in a temporary folder;
+    // a unit test's import does not count.
+    let dir = std::env::temp_dir().join(format!("layout-cycle-{}", std::process::id()));
+    let sup = dir.join("supervisor");
+    std::fs::create_dir_all(&sup).unwrap();
+    std::fs::write(dir.join("lib.rs"), "pub mod supervisor;\n").unwrap();
+    std::fs::write(
+        sup.join("mod.rs"),
+        "pub mod a;\npub mod b;\npub mod c;\npub use c::Seg;\n",
+    )
+    .unwrap();
+    std::fs::write(sup.join("a.rs"), "use super::b::learn;\n").unwrap();
+    std::fs::write(sup.join("b.rs"), "use super::Seg;\n").unwrap();
+    std::fs::write(
+        sup.join("c.rs"),
+        "use crate::supervisor::a::Segment;\n#[cfg(test)]\nmod tests { use super::super::b::X; }\n",
+    )
+    .unwrap();
+    let graphs = module_graphs(&dir);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let edges = &graphs[&here("supervisor")];
+    assert_eq!(find_cycle(edges).unwrap(), ["a", "b", "c", "a"]);
+    assert!(!edges["c"].contains("b"), "{edges:?}");
 }

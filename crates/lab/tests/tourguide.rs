@@ -213,6 +213,7 @@ fn calibration(b: Behaviour, t: f64, len: f64) -> Entry {
         trajectory: vec![[START.x_m, START.y_m], [START.x_m, START.y_m + len]],
         outcome: "goal".into(),
         segments: Vec::new(),
+        route: None,
     })
 }
 
@@ -236,8 +237,9 @@ fn the_crediting_supervisor_decides_at_the_start_at_every_warning_and_every_retu
         calibration(Behaviour::Contour, 130.0, 40.0),
     ];
     let plan = CreditPlan {
-        supervisor: CreditSupervisor::new().unwrap(),
+        planner: std::sync::Arc::new(CreditSupervisor::new().unwrap()),
         model: CreditModel::learn(&log).unwrap(),
+        route: String::new(),
     };
     // The first seed whose mission has a Warning.
     let (events, segments) = (1..=40)
@@ -259,6 +261,11 @@ fn the_crediting_supervisor_decides_at_the_start_at_every_warning_and_every_retu
             assert_eq!(d.text("reason"), Some(reason));
             assert!(d.text("context").is_some());
             assert!(d.number("lambda12").is_some_and(|x| x > 0.0));
+            assert!(d.number("lambda4_cont").is_some_and(|x| x > 0.0));
+            let marking = d.text("marking").unwrap_or_default();
+            assert!(
+                marking.starts_with("P0 ") && marking.contains(if kind == "warning" { "P6" } else { "P5" })
+            );
         }
     }
     assert_eq!(

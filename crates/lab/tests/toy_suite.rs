@@ -170,6 +170,7 @@ impl Suite for ToySuite {
             goal: Some(Vec2::new(7.0, 1.0)),
             robot_radius_m: 0.15,
             control_period_s: 0.1,
+            net: None,
         })
     }
 

@@ -42,6 +42,7 @@
 
 mod bucket_queue;
 pub mod cost_map;
+pub mod cost_model;
 pub mod distance_transform;
 pub mod global_route;
 pub mod gradient;
@@ -50,7 +51,8 @@ pub mod navigation_function;
 pub mod static_layer;
 pub mod window;
 
-pub use cost_map::{Blocked, CostMap, CostMapInfo, CostParams, laser_endpoints};
+pub use cost_map::{Blocked, CostMap, CostMapInfo, laser_endpoints};
+pub use cost_model::CostParams;
 pub use global_route::{GlobalPlanner, Route, RouteParams, intermediate_goals};
 pub use gradient::{DescentInfo, GradientParams, descend, descend_settling, descent_direction_at, direction};
 pub use local_planner::{LocalPlan, LocalPlanner, LocalPlannerParams};

@@ -50,7 +50,7 @@
 
 use robot::{Cell, CellIndex, GridMap, Pose};
 
-use super::cost_map::cost_table;
+use super::cost_model::cost_table;
 use super::distance_transform::{BEYOND, DistanceTransform};
 use super::{CostParams, PlanningError, Window};
 
@@ -115,7 +115,7 @@ impl StaticCostLayer {
     pub fn new(params: CostParams, map: &GridMap) -> Result<StaticCostLayer, PlanningError> {
         params.validate()?;
         let res = map.resolution_m();
-        let cap = super::cost_map::margin_cells(&params, res)?;
+        let cap = super::cost_model::margin_cells(&params, res)?;
         let (w, h) = (map.width(), map.height());
         // The map and a ring of outside cells around it: everything but the
         // map's free cells blocks.

@@ -355,22 +355,40 @@ impl CreditSupervisor {
     /// Decides between AutoMove and contour tracking for these rates, the
     /// localizer being localized (Success) or not (Warning).
     pub fn decide(&self, rates: &CreditRates, localized: bool) -> Result<CreditDecision, SupervisorError> {
-        for (i, &v) in rates.lambda.iter().enumerate() {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(SupervisorError::BadRate {
-                    index: i + 1,
-                    value: v,
-                });
+        self.decide_with(rates, rates, localized)
+    }
+
+    /// [`CreditSupervisor::decide`] with `automove`'s rates under the
+    /// AutoMove hypothesis and `contour`'s under the contour one; at a
+    /// Warning the contour hypothesis (contour tracking until localized,
+    /// then AutoMove) takes its recovery λ4 from `contour` and the rest
+    /// from `automove`.
+    pub fn decide_with(
+        &self,
+        automove: &CreditRates,
+        contour: &CreditRates,
+        localized: bool,
+    ) -> Result<CreditDecision, SupervisorError> {
+        for rates in [automove, contour] {
+            for (i, &v) in rates.lambda.iter().enumerate() {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(SupervisorError::BadRate {
+                        index: i + 1,
+                        value: v,
+                    });
+                }
             }
         }
         let auto = self.variant(Behaviour::AutoMove, localized);
-        let cont = if localized {
-            self.variant(Behaviour::Contour, true)
+        let (cont, cont_rates) = if localized {
+            (self.variant(Behaviour::Contour, true), *contour)
         } else {
-            &self.until_localized
+            let mut mixed = *automove;
+            mixed.lambda[3] = contour.lambda[3];
+            (&self.until_localized, mixed)
         };
-        let a = auto.solve(rates)?;
-        let c = cont.solve(rates)?;
+        let a = auto.solve(automove)?;
+        let c = cont.solve(&cont_rates)?;
         let f_auto: f64 = auto.done.iter().map(|&t| a.throughput(t)).sum();
         let f_cont: f64 = cont.done.iter().map(|&t| c.throughput(t)).sum();
         let choice = if f_auto > f_cont {

@@ -234,6 +234,7 @@ mod tests {
             trajectory: vec![[0.0, 0.0], [len, 0.0]],
             outcome: String::new(),
             segments: Vec::new(),
+            route: None,
         })
     }
 
@@ -257,6 +258,7 @@ mod tests {
             time_contour_s: 0.0,
             decisions: Vec::new(),
             segments: Vec::new(),
+            route: None,
         })
     }
 

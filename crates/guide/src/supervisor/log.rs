@@ -13,7 +13,7 @@
 //! line cut mid-write (a crash) is reported and cut off the file, so that
 //! the next mission appends after the last complete one — nothing already
 //! written is lost. Any other unreadable line is an error naming its line.
-//! Every entry is checked as data too ([`super::log_check`]: durations,
+//! Every entry is checked as data too ([`check`]: durations,
 //! outcomes, times within the run, mission numbers unique and in order):
 //! an inconsistent one is an error naming its line and field, and the one
 //! kind of entry that is skipped instead is reported
@@ -24,7 +24,8 @@ use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use super::Behaviour;
-use super::credit_learning::Segment;
+
+pub mod check;
 
 /// One stretch of time in one state.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -52,6 +53,43 @@ pub enum StateName {
     Abnormal,
 }
 
+/// How a segment ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SegmentEnd {
+    /// The localizer changed state.
+    Localizer,
+    /// The planner changed state.
+    Planner,
+    /// The behaviour changed.
+    Behaviour,
+    /// The crowd context changed.
+    Context,
+    /// The mission ended.
+    Mission,
+}
+
+/// A stretch of a mission in one state: the crediting supervisor learns
+/// from these ([`super::credit_learning`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Segment {
+    /// The behaviour in control.
+    pub behaviour: Behaviour,
+    /// The localizer in Success.
+    pub localized: bool,
+    /// AutoMove's planner Normal (always true for contour tracking).
+    pub normal: bool,
+    /// The crowd context (0 quiet, 1 busy, 2 crowded).
+    pub context: usize,
+    /// Duration, seconds.
+    pub duration_s: f64,
+    /// Progress towards the goal along AutoMove's reference, metres
+    /// (`None` where there was no reference to measure it on).
+    pub progress_m: Option<f64>,
+    /// How it ended.
+    pub end: SegmentEnd,
+}
+
 /// A decision of the supervisor during a mission.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DecisionLog {
@@ -75,6 +113,22 @@ pub struct DecisionLog {
     /// The crowd context the rates were taken for (crediting supervisor).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub context: Option<usize>,
+    /// The route the rates were taken for (crediting supervisor, where
+    /// missions go between several places).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub route: Option<String>,
+    /// λ1 first, the rates of the contour hypothesis where they differ from
+    /// `rates` (crediting supervisor: λ3, λ4 are each behaviour's own).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub contour_rates: Vec<f64>,
+    /// The supervisor net's places marked at the decision (crediting
+    /// supervisor): `P0` (deciding), the localizer's and the planner's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub marking: Vec<String>,
+    /// The choice explores: a behaviour never driven on the route, tried
+    /// (crediting supervisor).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub explore: bool,
 }
 
 /// A calibration run: one behaviour alone from the start to the goal.
@@ -96,6 +150,10 @@ pub struct CalibrationRun {
     /// Its segments, for the crediting supervisor ([`super::credit_learning`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub segments: Vec<Segment>,
+    /// The route it drove (`from → to`), where the log's missions go
+    /// between several places; `None`: the log's one route.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub route: Option<String>,
 }
 
 /// A mission: what the supervisor learns from.
@@ -122,6 +180,10 @@ pub struct MissionRecord {
     /// Its segments, for the crediting supervisor ([`super::credit_learning`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub segments: Vec<Segment>,
+    /// The route it drove (`from → to`, a leg of a tour), where missions go
+    /// between several places; `None`: the log's one route.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub route: Option<String>,
 }
 
 /// One line of the log.
@@ -179,7 +241,7 @@ pub enum LogError {
         /// What is wrong.
         message: String,
     },
-    /// A complete entry that does not hold together ([`super::log_check`]).
+    /// A complete entry that does not hold together ([`check`]).
     #[error("{path}:{line}: `{field}`: {message}")]
     Inconsistent {
         /// The file.
@@ -232,7 +294,7 @@ pub struct TornLine {
     pub bytes: usize,
 }
 
-/// An entry read but left out of the learning ([`super::log_check`]).
+/// An entry read but left out of the learning ([`check`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SkippedLine {
     /// Its line number.
@@ -344,11 +406,11 @@ impl MissionLog {
         Ok((log, good))
     }
 
-    /// Checks an entry that would be line `line` ([`super::log_check`],
+    /// Checks an entry that would be line `line` ([`check`],
     /// mission numbers in order): `Ok` with the reason it is skipped, if
     /// it is.
     fn admit(&self, entry: &Entry, line: usize) -> Result<Option<SkippedLine>, LogError> {
-        let verdict = super::log_check::check(entry).map_err(|e| LogError::Inconsistent {
+        let verdict = check::check(entry).map_err(|e| LogError::Inconsistent {
             path: self.path.clone(),
             line,
             field: e.field,
@@ -367,8 +429,8 @@ impl MissionLog {
             });
         }
         Ok(match verdict {
-            super::log_check::Verdict::Kept => None,
-            super::log_check::Verdict::Skipped(why) => Some(SkippedLine { line, why }),
+            check::Verdict::Kept => None,
+            check::Verdict::Skipped(why) => Some(SkippedLine { line, why }),
         })
     }
 
@@ -487,6 +549,7 @@ mod tests {
             time_contour_s: 0.0,
             decisions: Vec::new(),
             segments: Vec::new(),
+            route: None,
         })
     }
 
@@ -571,6 +634,7 @@ mod tests {
             trajectory: Vec::new(),
             outcome: String::new(),
             segments: Vec::new(),
+            route: None,
         });
         let mut log = MissionLog::open(&path, "net-a").unwrap();
         log.append(run).unwrap();

@@ -28,8 +28,9 @@ pub mod credit;
 pub mod credit_learning;
 pub mod learning;
 pub mod log;
-pub mod log_check;
+pub mod plan;
 pub mod reference;
+pub mod shrinkage;
 
 use petri::{CompiledGspn, ExploreParams, Net, Params, PlaceId, Solution, SolveParams, TransitionId};
 

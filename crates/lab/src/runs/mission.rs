@@ -718,7 +718,7 @@ pub fn run_tour_interruptible(
                 start: here.pose,
                 believed: here.estimate,
                 goal: next.pose.position(),
-                policy: policy.clone(),
+                policy: policy.clone().on_route(&route_name(&here.name, &next.name)),
                 seed: crate::runner::derive_seed(seed, "tour leg", k as u32),
                 trace: TraceParams::default(),
             },
@@ -727,6 +727,11 @@ pub fn run_tour_interruptible(
         legs.push(leg);
     }
     Ok(legs)
+}
+
+/// A leg's route as mission logs name it: `from → to`.
+pub fn route_name(from: &str, to: &str) -> String {
+    format!("{from} → {to}")
 }
 
 /// Where the robot of a tour is between legs.
@@ -928,6 +933,7 @@ pub fn calibration_entry(leg: &LegRun, behaviour: Behaviour) -> Entry {
         trajectory: thin(&leg.trace.estimates, 0.5),
         outcome: String::new(),
         segments: Vec::new(),
+        route: None,
     })
 }
 
@@ -960,6 +966,7 @@ pub fn mission_entry(leg: &LegRun, number: u32) -> Entry {
         time_contour_s: s.time_contour_s,
         decisions: s.decisions.clone(),
         segments: s.segments.clone(),
+        route: None,
     })
 }
 
@@ -1084,7 +1091,20 @@ pub fn leg_replay(record: RunRecord, setup: &MissionSetup, leg: &mut LegRun, goa
         robot_radius_m: setup.robot.drive.radius_m,
         // `mission::run_leg` runs at the simulator's default period.
         control_period_s: sim::RunParams::default().control_period_s,
+        net: None,
     })
+}
+
+/// The crediting supervisor's net (`models/supervisor_credit.toml`) as a
+/// viewer page draws it beside a leg the supervisor drove: its marking from
+/// the controller's `net.P…` values, the last `decision` beside it.
+pub fn supervisor_net_view() -> Result<crate::net_view::NetView> {
+    let net = petri::io::read_str(
+        guide::supervisor::credit::CREDIT_MODEL,
+        petri::io::Format::Toml,
+        "models/supervisor_credit.toml",
+    )?;
+    Ok(crate::net_view::NetView::of(&net, "net.", "decision"))
 }
 
 /// The events drawn on pictures and viewer pages of legs beyond the

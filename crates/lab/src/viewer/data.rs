@@ -318,6 +318,10 @@ pub struct RunData {
     /// noted them; the page shows each name's latest at or before the
     /// current tick.
     pub clouds: Vec<CloudData>,
+    /// A net drawn beside the map, its marking from the values
+    /// ([`crate::net_view`]), if the run has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub net: Option<crate::net_view::NetView>,
 }
 
 /// Most points of a cloud a page keeps (every k-th of a larger cloud):
@@ -660,6 +664,7 @@ pub fn run_data(
         ticks,
         events,
         clouds,
+        net: replay.net.clone(),
     }
 }
 

@@ -19,6 +19,12 @@
 //! for priority arbitration, localizer state for the guide), the tick's
 //! events with their payloads (CP events, dead-locks, supervisor decisions
 //! with `f_auto`/`f_cont`…), every event of the run, and the run's record.
+//! A run that carries a net ([`crate::net_view::NetView`]: the tour-guide
+//! supervisor's) has it drawn in a small panel as the run plays: the
+//! places marked at the tick (their tokens are the run's values named
+//! after them), and the payload of the last decision played — the
+//! context, the rates used, the net's marking and the value of each
+//! choice (`<body data-net-marking data-net-event-tick>`).
 //!
 //! Nothing here knows a controller: what a controller wants shown it puts
 //! in its trace notes ([`robot::Notes`]: behaviour, values, events, and
@@ -131,6 +137,8 @@ data-encoding=\"zlib+base64\">{}</script>",
 <tr><td>request</td><td id=\"request\"></td></tr>\
 <tr id=\"cloud-row\"><td>cloud</td><td id=\"cloud\"></td></tr></table>\n\
 <h2>Sensors</h2><pre id=\"sensors\"></pre>\n\
+<div id=\"net-box\" hidden><h2 id=\"net-title\">Net</h2><svg id=\"net\" xmlns=\"http://www.w3.org/2000/svg\"></svg>\
+<table id=\"net-event\"></table></div>\n\
 <div id=\"values-box\"><h2>Controller's values</h2><table id=\"values\"></table></div>\n\
 <h2>Events this tick</h2><ul id=\"now\"></ul>\n\
 <div id=\"events-box\"><h2>All events (click to go)</h2><ol id=\"events\"></ol></div>\n\

@@ -320,7 +320,88 @@ function petrinavViewer(P) {
       tr.children[1].textContent = num(v);
       rt.appendChild(tr);
     }
+    buildNet();
     slider.max = String(Math.max(0, N - 1));
+  }
+  // ---- the net beside the map ------------------------------------------
+  // The run's net (D.net): places with their tokens from the values named
+  // in place.value, transitions, arcs; the last event of kind D.net.event
+  // played so far, with its payload.
+  const SVG = "http://www.w3.org/2000/svg";
+  let netPlaces = [];
+  function svgEl(tag, attrs, parent) {
+    const el = document.createElementNS(SVG, tag);
+    for (const [k, v] of Object.entries(attrs)) el.setAttribute(k, String(v));
+    parent.appendChild(el);
+    return el;
+  }
+  function buildNet() {
+    const box = $("net-box"), svg = $("net");
+    svg.textContent = "";
+    netPlaces = [];
+    box.hidden = !D.net;
+    if (!D.net) return;
+    const net = D.net;
+    $("net-title").textContent = "Net: " + net.name;
+    const nodes = net.places.concat(net.transitions);
+    let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+    for (const n of nodes) {
+      x0 = Math.min(x0, n.x); y0 = Math.min(y0, n.y); x1 = Math.max(x1, n.x); y1 = Math.max(y1, n.y);
+    }
+    const pad = 24;
+    svg.setAttribute("viewBox", (x0 - pad) + " " + (y0 - pad) + " " + (x1 - x0 + 2 * pad) + " " + (y1 - y0 + 2 * pad));
+    for (const a of net.arcs) {
+      const p = net.places[a.place], t = net.transitions[a.transition];
+      svgEl("line", { x1: p.x, y1: p.y, x2: t.x, y2: t.y, class: "arc " + a.kind }, svg);
+    }
+    for (const t of net.transitions) {
+      const r = svgEl("rect", t.immediate
+        ? { x: t.x - 2, y: t.y - 9, width: 4, height: 18, class: "transition immediate" }
+        : { x: t.x - 5, y: t.y - 9, width: 10, height: 18, class: "transition" }, svg);
+      svgEl("title", {}, r).textContent = t.name + (t.doc ? ": " + t.doc : "");
+    }
+    for (const p of net.places) {
+      const c = svgEl("circle", { cx: p.x, cy: p.y, r: 12, class: "place" }, svg);
+      svgEl("title", {}, c).textContent = p.name + (p.doc ? ": " + p.doc : "");
+      const label = svgEl("text", { x: p.x, y: p.y - 16 }, svg);
+      label.textContent = p.name;
+      const token = svgEl("circle", { cx: p.x, cy: p.y, r: 4, class: "token" }, svg);
+      netPlaces.push({ name: p.name, key: D.keys.indexOf(p.value), circle: c, token });
+    }
+  }
+  function updateNet() {
+    if (!D.net) return;
+    const row = T.values[cur] || [];
+    const marked = [];
+    for (const p of netPlaces) {
+      const v = p.key < 0 ? null : row[p.key];
+      const on = v !== null && v !== undefined && v > 0;
+      p.circle.setAttribute("class", on ? "place marked" : "place");
+      p.token.style.display = on ? "" : "none";
+      if (on) marked.push(p.name);
+    }
+    let last = null;
+    for (const e of D.events) {
+      if (e.tick > cur) break;
+      if (e.kind === D.net.event) last = e;
+    }
+    const table = $("net-event");
+    table.textContent = "";
+    const row2 = (k, v) => {
+      const tr = document.createElement("tr");
+      tr.innerHTML = "<td></td><td></td>";
+      tr.children[0].textContent = k;
+      tr.children[1].textContent = v;
+      table.appendChild(tr);
+    };
+    if (last) {
+      row2("last " + D.net.event, fmt(last.t, 1) + " s");
+      for (const [k, v] of Object.entries(last.payload || {})) row2(k, num(v));
+    } else {
+      row2("last " + D.net.event, "none yet");
+    }
+    document.body.dataset.netMarking = marked.join(" ");
+    document.body.dataset.netEventTick = last ? String(last.tick) : "-1";
   }
   function payloadText(e) {
     if (!e.payload) return "";
@@ -371,6 +452,7 @@ function petrinavViewer(P) {
     for (let i = 0; i < items.length; i++) {
       items[i].className = D.events[i].tick === cur ? "now" : D.events[i].tick < cur ? "past" : "";
     }
+    updateNet();
     slider.value = String(cur);
     $("play").textContent = playing ? "❚❚ pause" : "▶ play";
   }

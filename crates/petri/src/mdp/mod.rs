@@ -27,11 +27,10 @@
 //! | probability 0/1 sets, end components | [`graph`] |
 //! | sound value iteration (interval, optimistic), topological | [`value_iteration`] |
 //! | reachability and expected totals; policies | [`solve`] |
-//! | long-run averages | `lra` |
+//! | long-run averages | `solve::lra` |
 //! | Storm's DRN format | [`crate::io::drn`] |
 
 pub mod graph;
-mod lra;
 pub mod model;
 pub mod property;
 pub mod solve;

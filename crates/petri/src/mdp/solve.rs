@@ -15,7 +15,7 @@
 //!    remain for `Pmin` and `Rmax` once the graph analysis is done.
 //! 3. **Sound iteration** ([`super::value_iteration`]): interval iteration
 //!    for probabilities, optimistic value iteration for totals; long-run
-//!    averages in [`super::lra`].
+//!    averages in [`lra`].
 //! 4. **The policy**: in an undecided state the row best for the values
 //!    found (ties to the first row); in a collapsed end component, the
 //!    best row leaving it, and in its other states rows that lead there;
@@ -24,6 +24,8 @@
 //!    optimal up to the bound.
 
 use std::time::Instant;
+
+mod lra;
 
 use super::graph::{self, Backward, Structure};
 use super::model::Model;
@@ -486,7 +488,7 @@ pub fn optimize(
             state,
             action,
         } => total(&view, target, state, action, dir, params, stop)?,
-        Goal::LongRun { state, action } => super::lra::long_run(&view, state, action, dir, params, stop)?,
+        Goal::LongRun { state, action } => lra::long_run(&view, state, action, dir, params, stop)?,
     };
     out.seconds = start.elapsed().as_secs_f64();
     Ok(out)

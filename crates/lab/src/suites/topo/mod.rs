@@ -532,6 +532,7 @@ impl Suite for TopoSuite {
             goal,
             robot_radius_m: topo::robot().drive.radius_m,
             control_period_s: 0.1,
+            net: None,
         })
     }
 

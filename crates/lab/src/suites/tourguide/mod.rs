@@ -48,10 +48,12 @@
 //! passage). Visitors walk between the exhibits, gather around them and
 //! linger, and step aside when the robot asks.
 
+pub mod galleries;
+mod galleries_report;
 mod report;
 
 use std::collections::BTreeMap;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use anyhow::{Context, Result, bail};
 use guide::supervisor::credit::CreditSupervisor;
@@ -235,9 +237,9 @@ pub mod metric {
 /// What a job is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
-    /// Calibration run `k` (AutoMove for `k < 5`, contour tracking after),
-    /// for the source's supervisor or the crediting one.
-    Calibration { k: u32, source: bool },
+    /// Calibration run `k` of the source's supervisor (AutoMove for
+    /// `k < 5`, contour tracking after).
+    Calibration { k: u32 },
     /// Mission `m` (from 0) of a strategy.
     Mission(usize, u32),
 }
@@ -259,7 +261,19 @@ pub struct TourGuideSuite {
     setup: OnceLock<Result<MissionSetup, String>>,
     setup_source: OnceLock<Result<MissionSetup, String>>,
     supervisor: OnceLock<Result<Supervisor, String>>,
-    credit: OnceLock<Result<CreditSupervisor, String>>,
+    credit: OnceLock<Result<Arc<CreditSupervisor>, String>>,
+    /// The galleries and a leg's setup there (the map prepared once).
+    galleries: OnceLock<Result<(galleries::Galleries, MissionSetup), String>>,
+}
+
+/// A leg run for a record: the leg, the state the record keeps, the
+/// visitors it met, where it started and where it went.
+struct Done {
+    leg: LegRun,
+    state: serde_json::Value,
+    visitors: usize,
+    start: Pose,
+    goal: Vec2,
 }
 
 fn build(args: &SuiteArgs) -> Result<Box<dyn Suite>> {
@@ -329,11 +343,13 @@ impl TourGuideSuite {
             format!("{SOURCE}/supervisor_source"),
         ];
         for c in CONDITIONS {
-            scenarios.push(format!("{}/calibration", c.name));
             scenarios.push(format!("{}/calibration_source", c.name));
             for s in STRATEGIES {
                 scenarios.push(format!("{}/{s}", c.name));
             }
+        }
+        for s in galleries::STRATEGIES {
+            scenarios.push(format!("{}/{s}", galleries::CONDITION));
         }
         Ok(TourGuideSuite {
             info: SuiteInfo {
@@ -349,6 +365,90 @@ impl TourGuideSuite {
             setup_source: OnceLock::new(),
             supervisor: OnceLock::new(),
             credit: OnceLock::new(),
+            galleries: OnceLock::new(),
+        })
+    }
+
+    /// The galleries, with a leg's setup there (no visitors yet; the map
+    /// prepared once for the guide controller).
+    fn galleries(&self) -> Result<&(galleries::Galleries, MissionSetup)> {
+        self.galleries
+            .get_or_init(|| {
+                let g = galleries::galleries().map_err(|e| format!("{e:#}"))?;
+                let mut setup = MissionSetup::new(g.world.clone(), galleries::LEG_TIME_LIMIT_S);
+                setup.lost_after_s = LOST_AFTER_S;
+                setup.prepare().map_err(|e| format!("{e:#}"))?;
+                Ok((g, setup))
+            })
+            .as_ref()
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    }
+
+    /// Runs leg `k` of a galleries campaign with strategy `strategy`.
+    fn galleries_leg(
+        &self,
+        strategy: &str,
+        job: &Job,
+        earlier: &[RunRecord],
+        trace: TraceParams,
+    ) -> Result<Done> {
+        let (g, setup) = self.galleries()?;
+        let k = job.run % galleries::CAMPAIGN_LEGS;
+        let (t, j) = galleries::tour_leg(k);
+        let from = galleries::start_of(g, k, earlier)?;
+        let to = &g.stops[j as usize + 1];
+        let route = galleries::route_name(&g.stops[j as usize].name, &to.name);
+        let policy = if strategy == "supervisor" {
+            let log = earlier
+                .iter()
+                .map(|r| Ok(galleries::LegState::of(r)?.entry))
+                .collect::<Result<Vec<Entry>>>()?;
+            Policy::Supervisor(Box::new(CreditPlan {
+                planner: self.credit()?.clone(),
+                model: CreditModel::learn(&log)?,
+                route: route.clone(),
+            }))
+        } else {
+            galleries::fixed_policy(strategy, k, earlier)?
+        };
+        let visitors = galleries::visitors_at(t);
+        let mut setup = setup.clone();
+        setup.disturbances = mission::visitor_disturbances(visitors, &[], 0.0);
+        if visitors > 0 {
+            setup.people = Some(PeoplePlan {
+                count: visitors,
+                anchors: g.exhibits.clone(),
+                spread_m: 2.5,
+                keep_clear_m: 1.0,
+            });
+        }
+        let leg = mission::run_leg(
+            &setup,
+            &LegSpec {
+                from: &from.name,
+                to: &to.name,
+                start: from.pose,
+                believed: from.estimate,
+                goal: to.pose.position(),
+                policy,
+                seed: job.seed,
+                trace,
+            },
+        )?;
+        let mut entry = mission::mission_entry(&leg, k + 1);
+        if let Entry::Mission(m) = &mut entry {
+            m.route = Some(route);
+        }
+        let state = galleries::LegState {
+            at: from.after(&leg, to),
+            entry,
+        };
+        Ok(Done {
+            state: serde_json::to_value(&state)?,
+            visitors,
+            start: from.pose,
+            goal: to.pose.position(),
+            leg,
         })
     }
 
@@ -385,9 +485,9 @@ impl TourGuideSuite {
             .map_err(|e| anyhow::anyhow!("{e}"))
     }
 
-    pub(crate) fn credit(&self) -> Result<&CreditSupervisor> {
+    pub(crate) fn credit(&self) -> Result<&Arc<CreditSupervisor>> {
         self.credit
-            .get_or_init(|| CreditSupervisor::new().map_err(|e| e.to_string()))
+            .get_or_init(|| CreditSupervisor::new().map(Arc::new).map_err(|e| e.to_string()))
             .as_ref()
             .map_err(|e| anyhow::anyhow!("{e}"))
     }
@@ -409,9 +509,8 @@ impl TourGuideSuite {
             )
         };
         let kind = match what {
-            "calibration" | "calibration_source" => Kind::Calibration {
+            "calibration_source" => Kind::Calibration {
                 k: job.run % (2 * CALIBRATION_RUNS),
-                source: what == "calibration_source",
             },
             _ => {
                 let s = STRATEGIES
@@ -421,10 +520,7 @@ impl TourGuideSuite {
                 Kind::Mission(s, job.run % MISSIONS)
             }
         };
-        if condition.is_none()
-            && !matches!(kind, Kind::Calibration { source: true, .. })
-            && what != "supervisor_source"
-        {
+        if condition.is_none() && !matches!(kind, Kind::Calibration { .. }) && what != "supervisor_source" {
             bail!("the source's experiment runs only `supervisor_source` and its calibration");
         }
         Ok(Parsed { condition, kind })
@@ -460,8 +556,9 @@ impl TourGuideSuite {
             "automove_then_contour" => Policy::AutoMoveThenContour,
             "rule" => Policy::Rule,
             "supervisor" => Policy::Supervisor(Box::new(CreditPlan {
-                supervisor: self.credit()?.clone(),
-                model: CreditModel::learn_or_prior(log)?,
+                planner: self.credit()?.clone(),
+                model: CreditModel::learn(log)?,
+                route: String::new(),
             })),
             _ => {
                 let learned = learning::learn_or_prior(log)?;
@@ -490,17 +587,24 @@ impl TourGuideSuite {
     }
 
     /// Runs a job.
-    fn leg(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<(LegRun, Entry, usize)> {
+    fn leg(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<Done> {
+        if let Some(strategy) = job
+            .scenario
+            .strip_prefix(galleries::CONDITION)
+            .and_then(|s| s.strip_prefix('/'))
+        {
+            return self.galleries_leg(strategy, job, earlier, trace);
+        }
         let parsed = self.parse(job)?;
         let log = Self::log(earlier)?;
         let (policy, name, source) = match parsed.kind {
-            Kind::Calibration { k, source } => {
+            Kind::Calibration { k } => {
                 let b = if k < CALIBRATION_RUNS {
                     Behaviour::AutoMove
                 } else {
                     Behaviour::Contour
                 };
-                (Policy::Fixed(b), format!("calibration {}", k + 1), source)
+                (Policy::Fixed(b), format!("calibration {}", k + 1), true)
             }
             Kind::Mission(s, m) => (
                 self.policy(s, &log)?,
@@ -533,12 +637,7 @@ impl TourGuideSuite {
             },
         )?;
         let entry = match (parsed.kind, &policy) {
-            (Kind::Calibration { source: true, .. }, Policy::Fixed(b)) => {
-                mission::calibration_entry(&leg, *b)
-            }
-            (Kind::Calibration { source: false, .. }, Policy::Fixed(b)) => {
-                mission::credit_calibration_entry(&leg, *b)
-            }
+            (Kind::Calibration { .. }, Policy::Fixed(b)) => mission::calibration_entry(&leg, *b),
             // The source's log as the source keeps it: no segments.
             (Kind::Mission(_, m), _) if source => match mission::mission_entry(&leg, m + 1) {
                 Entry::Mission(r) => Entry::Mission(guide::supervisor::log::MissionRecord {
@@ -550,10 +649,24 @@ impl TourGuideSuite {
             (Kind::Mission(_, m), _) => mission::mission_entry(&leg, m + 1),
             (Kind::Calibration { .. }, _) => bail!("a calibration run drives one behaviour"),
         };
-        Ok((leg, entry, visitors))
+        Ok(Done {
+            leg,
+            state: serde_json::to_value(&entry)?,
+            visitors,
+            start: START,
+            goal: GOAL,
+        })
     }
 
-    fn record(&self, leg: &LegRun, entry: &Entry, visitors: usize) -> Result<RunRecord> {
+    fn record(&self, done: &Done) -> Result<RunRecord> {
+        let Done {
+            leg,
+            state,
+            visitors,
+            start,
+            ..
+        } = done;
+        let visitors = *visitors;
         let r = &leg.result;
         let kept = ["decision", "switch", "warning", "success"];
         let mut events: Vec<Event> = leg
@@ -567,8 +680,8 @@ impl TourGuideSuite {
         events.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
         let mut record = RunRecord {
             events,
-            start: [START.x_m, START.y_m, START.theta_rad],
-            state: Some(serde_json::to_value(entry)?),
+            start: [start.x_m, start.y_m, start.theta_rad],
+            state: Some(state.clone()),
             ..mission::leg_base_record(leg)
         };
         let s = &leg.summary;
@@ -648,7 +761,6 @@ impl Suite for TourGuideSuite {
                 for c in 0..self.info.runs {
                     let mut jobs = Vec::new();
                     let calibration = match strategy {
-                        "supervisor" => Some("calibration"),
                         "supervisor_source" => Some("calibration_source"),
                         _ => None,
                     };
@@ -668,12 +780,25 @@ impl Suite for TourGuideSuite {
                 }
             }
         }
+        for strategy in galleries::STRATEGIES {
+            for c in 0..self.info.runs {
+                let stream = format!("{} campaign {c}", galleries::CONDITION);
+                let jobs = (0..galleries::CAMPAIGN_LEGS)
+                    .map(|k| Job {
+                        scenario: format!("{}/{strategy}", galleries::CONDITION),
+                        run: c * galleries::CAMPAIGN_LEGS + k,
+                        seed: derive_seed(self.info.seed, &stream, k),
+                    })
+                    .collect();
+                out.push(Campaign { jobs });
+            }
+        }
         out
     }
 
     fn run(&self, job: &Job, earlier: &[RunRecord]) -> Result<RunRecord> {
-        let (leg, entry, visitors) = self.leg(job, earlier, TraceParams::default())?;
-        self.record(&leg, &entry, visitors)
+        let done = self.leg(job, earlier, TraceParams::default())?;
+        self.record(&done)
     }
 
     fn replay(&self, job: &Job, earlier: &[RunRecord], trace: TraceParams) -> Result<Replay> {
@@ -681,18 +806,29 @@ impl Suite for TourGuideSuite {
             enabled: true,
             ..trace
         };
-        let (leg, entry, visitors) = self.leg(job, earlier, trace)?;
-        let record = self.record(&leg, &entry, visitors)?;
+        let done = self.leg(job, earlier, trace)?;
+        let record = self.record(&done)?;
+        let grid = if job.scenario.starts_with(galleries::CONDITION) {
+            self.galleries()?.0.world.grid().clone()
+        } else {
+            self.world()?.0.grid().clone()
+        };
         Ok(Replay {
             record,
-            trace: leg
+            trace: done
+                .leg
                 .sim
                 .and_then(|s| s.trace)
                 .context("the mission could not run")?,
-            grid: self.world()?.0.grid().clone(),
-            goal: Some(GOAL),
+            grid,
+            goal: Some(done.goal),
             robot_radius_m: sim::RobotParams::jinny().drive.radius_m,
             control_period_s: 0.1,
+            net: job
+                .scenario
+                .ends_with("/supervisor")
+                .then(mission::supervisor_net_view)
+                .transpose()?,
         })
     }
 

@@ -22,8 +22,9 @@
 //! ([`super::log::MissionLog::skipped`]), counted in what `petrinav guide
 //! log show` prints. Everything else that fails a check above is an error.
 
-use super::credit_learning::{CONTEXTS, Segment};
-use super::log::{CalibrationRun, DecisionLog, Entry, MissionRecord, Sojourn, StateName};
+use super::super::shrinkage::CONTEXTS;
+use super::Segment;
+use super::{CalibrationRun, DecisionLog, Entry, MissionRecord, Sojourn, StateName};
 
 /// The longest a run or any part of one may last, seconds: 10⁹ s, about
 /// 32 years. Nothing a robot logs lasts longer; and sums of many such
@@ -292,7 +293,7 @@ pub fn check(entry: &Entry) -> Result<Verdict, Inconsistent> {
 mod tests {
     use super::*;
     use crate::supervisor::Behaviour;
-    use crate::supervisor::credit_learning::SegmentEnd;
+    use crate::supervisor::log::SegmentEnd;
 
     fn calibration(success: bool, duration_s: f64) -> CalibrationRun {
         CalibrationRun {
@@ -303,6 +304,7 @@ mod tests {
             trajectory: vec![[0.0, 0.0], [20.0, 0.0]],
             outcome: String::new(),
             segments: Vec::new(),
+            route: None,
         }
     }
 
@@ -334,6 +336,7 @@ mod tests {
                 progress_m: None,
                 end: SegmentEnd::Mission,
             }],
+            route: None,
         }
     }
 
@@ -406,6 +409,10 @@ mod tests {
             p_loc_warn: 0.1,
             choice: Behaviour::AutoMove,
             context: Some(1),
+            route: None,
+            contour_rates: Vec::new(),
+            marking: Vec::new(),
+            explore: false,
         };
         let d = |f: fn(&mut DecisionLog)| {
             let mut r = mission();

@@ -42,10 +42,10 @@
 
 use rayon::prelude::*;
 
-use super::graph;
-use super::property::Direction;
-use super::solve::{Collapse, OptimizeParams, Optimum, View, attractor};
-use super::value_iteration::{self, Equations};
+use super::super::graph;
+use super::super::property::Direction;
+use super::super::value_iteration::{self, Equations};
+use super::{Collapse, OptimizeParams, Optimum, View, attractor};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::scc::{Successors, tarjan};
