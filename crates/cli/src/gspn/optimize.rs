@@ -18,10 +18,10 @@ use crate::{out, outln};
 pub struct OptimizeArgs {
     #[command(flatten)]
     net: NetArgs,
-    /// The property, as in PRISM and Storm: 'Pmax=? [F "goal"]',
-    /// 'Tmin=? [F #P3 = 1]', 'R{"cost"}min=? [F "done"]',
-    /// 'R{"done"}max=? [LRA]', 'LRAmax=? ["up"]'. Quoted names are labels
-    /// (the net's [labels], a DRN file's labels), #P token counts.
+    /// The property, as in PRISM and Storm: `'Pmax=? [F "goal"]'`,
+    /// `'Tmin=? [F #P3 = 1]'`, `'R{"cost"}min=? [F "done"]'`,
+    /// `'R{"done"}max=? [LRA]'`, `'LRAmax=? ["up"]'`. Quoted names are
+    /// labels (the net's `[labels]`, a DRN file's labels), `#P` token counts.
     #[arg(long, short = 'o', value_name = "PROPERTY")]
     objective: String,
     /// Half the width of the value's guaranteed interval, relative to the
