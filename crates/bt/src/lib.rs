@@ -32,7 +32,7 @@
 //! |---|---|
 //! | read XML (subtrees, includes, models) | [`read`], [`model`], [`tree`] |
 //! | per-leaf parameters (TOML sidecar) | [`params`] |
-//! | structural checks | [`check`] |
+//! | structural checks | [`mod@check`] |
 //! | translation to a GSPN | [`translate`], [`formula`] |
 //! | analysis (probabilities, times, shares, sensitivities) | [`analyze`](mod@analyze) |
 //! | Monte Carlo interpreter | [`montecarlo`] |

@@ -22,7 +22,7 @@
 //!
 //! Both linear systems, and every implicit time step, are solved block by
 //! block over the chain's strongly connected components in topological
-//! order ([`crate::blocks`]): a finishing chain is mostly small components
+//! order (`crate::blocks`): a finishing chain is mostly small components
 //! in sequence, which a sparse LU of the whole matrix would fill in.
 
 use crate::blocks::BlockSystem;

@@ -13,7 +13,7 @@
 //!    up to [`MAX_EXHAUSTIVE_GROUPS`] groups, in the net's order beyond),
 //!    places within a group in the net's order. Or the order of a partition
 //!    given by the user (`--partition`).
-//! 2. **Symbolic reachability** ([`crate::mdd`]): the reachable markings as
+//! 2. **Symbolic reachability** (`crate::mdd`): the reachable markings as
 //!    a decision diagram over that order, by saturation, each place capped
 //!    by its structural bound.
 //! 3. **Cuts.** A depth reached by a single node splits the set into a

@@ -17,16 +17,16 @@
 //!
 //! **Pipeline.** [`StructuredGspn::build`] finds the components and their
 //! local spaces (a symbolic search), builds the Kronecker descriptor (local
-//! maps per transition and component, [`crate::descriptor`]), and checks
+//! maps per transition and component, `crate::descriptor`), and checks
 //! that the chain is irreducible: for a net without immediate transitions
 //! the symbolic search also shows `M0` is reached back from every marking;
 //! with immediate transitions, explicit searches over the product
-//! ([`crate::product_search`]) find the markings the GSPN reaches and
+//! (`crate::product_search`) find the markings the GSPN reaches and
 //! classify them (the solver keeps vanishing markings as states, see
-//! [`crate::sweep`]). Anything else — no product structure, a component too
+//! `crate::sweep`). Anything else — no product structure, a component too
 //! large, a chain that is not irreducible — is [`Error::Unstructured`] with
 //! the reason, and the explicit engine ([`crate::CompiledGspn`]) is the one
-//! to use. [`StructuredGspn::solve_rates`] iterates ([`crate::sweep`]) on
+//! to use. [`StructuredGspn::solve_rates`] iterates (`crate::sweep`) on
 //! one vector of `f64` per product state — the only allocation that grows
 //! with the chain besides, for nets with immediate transitions, two bytes
 //! of class per state.

@@ -382,7 +382,7 @@ impl<'de> Deserialize<'de> for ArcList {
 /// messages (a file name) and gives the net its default name (the stem).
 ///
 /// A file is parsed one item at a time where that cannot change its
-/// meaning ([`super::toml_split`]), so that the parser's document tree
+/// meaning (`super::toml_split`), so that the parser's document tree
 /// never holds more than one place or transition; other files are parsed
 /// whole.
 pub fn read_toml(text: &str, source: &str) -> Result<Net> {

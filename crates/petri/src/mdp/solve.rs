@@ -15,7 +15,7 @@
 //!    remain for `Pmin` and `Rmax` once the graph analysis is done.
 //! 3. **Sound iteration** ([`super::value_iteration`]): interval iteration
 //!    for probabilities, optimistic value iteration for totals; long-run
-//!    averages in [`lra`].
+//!    averages in `lra`.
 //! 4. **The policy**: in an undecided state the row best for the values
 //!    found (ties to the first row); in a collapsed end component, the
 //!    best row leaving it, and in its other states rows that lead there;

@@ -1,5 +1,5 @@
 //! What a mission log's entry must hold to be learnt from: each entry
-//! consistent in itself, checked as the log is read ([`super::log`]), so
+//! consistent in itself, checked as the log is read ([`super`]), so
 //! that a hand-edited or corrupted log is an error naming its line and
 //! field instead of rates silently learnt from nonsense.
 //!
@@ -19,7 +19,7 @@
 //! true record, but it says nothing of how long the way to the goal takes:
 //! the learners leave it out of the reference (as they always did), and
 //! the reader reports it as a warning naming its line
-//! ([`super::log::MissionLog::skipped`]), counted in what `petrinav guide
+//! ([`super::MissionLog::skipped`]), counted in what `petrinav guide
 //! log show` prints. Everything else that fails a check above is an error.
 
 use super::super::shrinkage::CONTEXTS;
