@@ -33,7 +33,6 @@
 //!   not fit in memory: the explicit engine eliminates them, and is faster
 //!   on such nets (`crates/petri/BENCHMARKS.md`).
 
-use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
@@ -43,7 +42,7 @@ use petri::{
 };
 use serde_json::{Value, json};
 
-use crate::gspn::{MeasureError, MemoryReport, SolveOptions, SteadyState, peak_rss_bytes};
+use crate::gspn::{MeasureError, MemoryReport, SolveOptions, SteadyState, nodes_json, peak_rss_bytes};
 
 /// Smallest chain (states of the product space) that `auto` gives to the
 /// structured engine.
@@ -344,29 +343,13 @@ fn structured_json(s: &StructuredSteady, measures: &[(String, f64)]) -> Value {
     let gspn = s.model.gspn();
     let sol = &s.solution;
     let st = s.model.stats();
-    let places: BTreeMap<&str, Value> = gspn
-        .place_names()
-        .iter()
-        .enumerate()
-        .map(|(p, n)| {
-            (
-                n.as_str(),
-                json!({"prob_nonempty": sol.prob_nonempty[p], "mean_tokens": sol.mean_tokens[p]}),
-            )
-        })
-        .collect();
-    let transitions: BTreeMap<&str, Value> = gspn
-        .transition_names()
-        .iter()
-        .enumerate()
-        .map(|(t, n)| {
-            (
-                n.as_str(),
-                json!({"throughput": sol.throughput[t], "immediate": gspn.is_immediate(petri::TransitionId(t as u32))}),
-            )
-        })
-        .collect();
-    let ms: BTreeMap<&str, f64> = measures.iter().map(|(m, v)| (m.as_str(), *v)).collect();
+    let (places, transitions, ms) = nodes_json(
+        gspn,
+        &sol.prob_nonempty,
+        &sol.mean_tokens,
+        &sol.throughput,
+        measures,
+    );
     json!({
         "name": gspn.name(),
         "reachable_markings": st.tangible + st.vanishing,

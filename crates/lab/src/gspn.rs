@@ -229,29 +229,13 @@ impl SteadyState {
         let space = &self.space;
         let gspn = space.compiled.gspn();
         let sol = &self.solution;
-        let places: BTreeMap<&str, Value> = gspn
-            .place_names()
-            .iter()
-            .enumerate()
-            .map(|(p, n)| {
-                (
-                    n.as_str(),
-                    json!({"prob_nonempty": sol.prob_nonempty[p], "mean_tokens": sol.mean_tokens[p]}),
-                )
-            })
-            .collect();
-        let transitions: BTreeMap<&str, Value> = gspn
-            .transition_names()
-            .iter()
-            .enumerate()
-            .map(|(t, n)| {
-                (
-                    n.as_str(),
-                    json!({"throughput": sol.throughput[t], "immediate": gspn.is_immediate(petri::TransitionId(t as u32))}),
-                )
-            })
-            .collect();
-        let ms: BTreeMap<&str, f64> = measures.iter().map(|(m, v)| (m.as_str(), *v)).collect();
+        let (places, transitions, ms) = nodes_json(
+            gspn,
+            &sol.prob_nonempty,
+            &sol.mean_tokens,
+            &sol.throughput,
+            measures,
+        );
         json!({
             "name": gspn.name(),
             "reachable_markings": space.reachable_markings,
@@ -268,6 +252,41 @@ impl SteadyState {
             "measures": ms,
         })
     }
+}
+
+/// The `places`, `transitions` and `measures` objects of `gspn solve
+/// --json`, from a solution's vectors (either engine's).
+pub(crate) fn nodes_json(
+    gspn: &Gspn,
+    prob_nonempty: &[f64],
+    mean_tokens: &[f64],
+    throughput: &[f64],
+    measures: &[(String, f64)],
+) -> (Value, Value, Value) {
+    let places: BTreeMap<&str, Value> = gspn
+        .place_names()
+        .iter()
+        .enumerate()
+        .map(|(p, n)| {
+            (
+                n.as_str(),
+                json!({"prob_nonempty": prob_nonempty[p], "mean_tokens": mean_tokens[p]}),
+            )
+        })
+        .collect();
+    let transitions: BTreeMap<&str, Value> = gspn
+        .transition_names()
+        .iter()
+        .enumerate()
+        .map(|(t, n)| {
+            (
+                n.as_str(),
+                json!({"throughput": throughput[t], "immediate": gspn.is_immediate(petri::TransitionId(t as u32))}),
+            )
+        })
+        .collect();
+    let ms: BTreeMap<&str, f64> = measures.iter().map(|(m, v)| (m.as_str(), *v)).collect();
+    (json!(places), json!(transitions), json!(ms))
 }
 
 /// The byte account of a solve and the process's peak resident memory.
