@@ -935,7 +935,7 @@ impl CompiledGspn {
     ) -> Result<Solution> {
         let start = Instant::now();
         params.validate()?;
-        self.check_rates(rates)?;
+        self.gspn.check_rates(rates)?;
         // Solve in the time unit of the fastest rate (docs/gspn.md, *Steady-state methods*: rates far
         // apart must not break the solver): every value is then at most its
         // coefficient, so no exit rate or elimination entry overflows, and
@@ -1001,29 +1001,6 @@ impl CompiledGspn {
             absorption_residual,
             bottom_probabilities,
         })
-    }
-
-    /// Input checks of [`solve_rates`](Self::solve_rates): one rate per
-    /// transition, a finite number > 0 for every timed one.
-    fn check_rates(&self, rates: &[f64]) -> Result<()> {
-        if rates.len() != self.gspn.num_transitions() {
-            return Err(Error::Invalid(format!(
-                "{} rates given for {} transitions",
-                rates.len(),
-                self.gspn.num_transitions()
-            )));
-        }
-        for (t, &r) in rates.iter().enumerate() {
-            if !(self.gspn.is_immediate(TransitionId(t as u32)) || (r.is_finite() && r > 0.0)) {
-                return Err(Error::InvalidValue {
-                    element: format!("timed transition `{}`", self.gspn.transition_names()[t]),
-                    what: "the rate",
-                    requirement: "a finite number > 0",
-                    value: r,
-                });
-            }
-        }
-        Ok(())
     }
 
     /// The steady state of a chain that is not irreducible: the probability

@@ -435,6 +435,31 @@ impl Gspn {
         self.timing[t.index()]
     }
 
+    /// Input checks of a solve with `rates` (one per transition, as
+    /// [`Gspn::rates`] gives them): as many as the transitions, a finite
+    /// number > 0 for every timed one (immediate transitions' entries are
+    /// not checked here).
+    pub fn check_rates(&self, rates: &[f64]) -> Result<()> {
+        if rates.len() != self.num_transitions() {
+            return Err(Error::Invalid(format!(
+                "{} rates given for {} transitions",
+                rates.len(),
+                self.num_transitions()
+            )));
+        }
+        for (t, &r) in rates.iter().enumerate() {
+            if !(self.is_immediate(TransitionId(t as u32)) || (r.is_finite() && r > 0.0)) {
+                return Err(Error::InvalidValue {
+                    element: format!("timed transition `{}`", self.transition_names()[t]),
+                    what: "the rate",
+                    requirement: "a finite number > 0",
+                    value: r,
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Whether `t` is immediate.
     pub fn is_immediate(&self, t: TransitionId) -> bool {
         matches!(self.timing[t.index()], Timing::Immediate { .. })

@@ -338,7 +338,7 @@ impl StructuredGspn {
         stop: Interrupt<'_>,
     ) -> Result<StructuredSolution> {
         params.validate()?;
-        self.check_rates(rates)?;
+        self.gspn.check_rates(rates)?;
         let omega_fixed = match params.method {
             Method::Auto => None,
             Method::GaussSeidel => Some(params.omega),
@@ -413,28 +413,6 @@ impl StructuredGspn {
         };
         self.fill_measures(&mut solution, rates);
         Ok(solution)
-    }
-
-    /// One rate per transition, finite and > 0 for the timed ones.
-    fn check_rates(&self, rates: &[f64]) -> Result<()> {
-        if rates.len() != self.gspn.num_transitions() {
-            return Err(Error::Invalid(format!(
-                "{} rates given for {} transitions",
-                rates.len(),
-                self.gspn.num_transitions()
-            )));
-        }
-        for (t, &r) in rates.iter().enumerate() {
-            if !(self.gspn.is_immediate(TransitionId(t as u32)) || (r.is_finite() && r > 0.0)) {
-                return Err(Error::InvalidValue {
-                    element: format!("timed transition `{}`", self.gspn.transition_names()[t]),
-                    what: "the rate",
-                    requirement: "a finite number > 0",
-                    value: r,
-                });
-            }
-        }
-        Ok(())
     }
 
     /// The fastest rate of a timed transition that moves the chain, as a
