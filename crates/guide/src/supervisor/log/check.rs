@@ -7,7 +7,7 @@
 //! |---|---|
 //! | every duration (a run, a sojourn, a segment, time per behaviour) | a finite number of seconds in `[0, MAX_DURATION_S]` |
 //! | calibration run | `path_m` in `[0, MAX_LENGTH_M]`; `outcome` empty (the source's logs) or one of [`OUTCOMES`] and `goal` exactly when `success`; its segments within its duration |
-//! | mission | numbered from 1; `outcome` one of [`OUTCOMES`], `goal` exactly when `success`; the localizer's sojourns in `success`/`warning`, the planner's in `normal`/`abnormal`, each sequence, the segments and the time per behaviour within the duration; decisions in time order within it, with 11 or 15 rates (finite, > 0), throughputs finite and ≥ 0, probabilities in `[0, 1]`, a crowd context below [`CONTEXTS`] |
+//! | mission | numbered from 1; `outcome` one of [`OUTCOMES`], `goal` exactly when `success`; the localizer's sojourns in `success`/`warning`, the planner's in `normal`/`abnormal`, each sequence, the segments and the time per behaviour within the duration; decisions in time order within it, with 11 or 15 rates (finite, > 0), throughputs finite and ≥ 0, probabilities in `[0, 1]`, a crowd context below [`CONTEXTS`]; the crediting supervisor's contour rates (none or as many as `rates`, finite, > 0), a route not empty, the marking `P0`, one of `P5`/`P6`, one of `P7`/`P8` |
 //! | segment | crowd context below [`CONTEXTS`] |
 //! | the log | mission numbers strictly increasing (unique, in order) — checked by the reader |
 //!
@@ -228,6 +228,64 @@ fn decisions(list: &[DecisionLog], whole_s: f64) -> Checked {
                 format!("{c}: crowd contexts are 0 (quiet), 1 (busy) and 2 (crowded)"),
             ));
         }
+        crediting_fields(d, &field)?;
+    }
+    Ok(())
+}
+
+/// What the crediting supervisor adds to a decision: the contour
+/// hypothesis's rates (none, or as many as `rates`, each finite and > 0),
+/// the route (not empty when given) and the marking at the decision (`P0`,
+/// one localizer place — `P5` or `P6` — and one planner place — `P7` or
+/// `P8`).
+fn crediting_fields(d: &DecisionLog, field: &dyn Fn(&str) -> String) -> Checked {
+    if !d.contour_rates.is_empty() && d.contour_rates.len() != d.rates.len() {
+        return Err(fail(
+            field("contour_rates"),
+            format!(
+                "{} rates beside {} in `rates`: the contour hypothesis logs as many",
+                d.contour_rates.len(),
+                d.rates.len()
+            ),
+        ));
+    }
+    if let Some((i, v)) = d
+        .contour_rates
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !(v.is_finite() && **v > 0.0))
+    {
+        return Err(fail(
+            field("contour_rates"),
+            format!("λ{} = {}: rates are finite numbers > 0", i + 1, shown(*v)),
+        ));
+    }
+    if d.route.as_deref().is_some_and(|r| r.trim().is_empty()) {
+        return Err(fail(
+            field("route"),
+            "an empty route: leave the field out instead",
+        ));
+    }
+    if d.marking.is_empty() {
+        return Ok(());
+    }
+    let has = |p: &str| d.marking.iter().any(|m| m == p);
+    let count = |ps: [&str; 2]| ps.iter().filter(|p| has(p)).count();
+    let known = ["P0", "P5", "P6", "P7", "P8"];
+    if let Some(p) = d.marking.iter().find(|m| !known.contains(&m.as_str())) {
+        return Err(fail(
+            field("marking"),
+            format!("{p:?}: a decision's marking names P0 and the localizer's and planner's places (P5–P8)"),
+        ));
+    }
+    if d.marking.len() != 3 || !has("P0") || count(["P5", "P6"]) != 1 || count(["P7", "P8"]) != 1 {
+        return Err(fail(
+            field("marking"),
+            format!(
+                "[{}]: a decision's marking is P0, one of P5/P6 (localizer) and one of P7/P8 (planner)",
+                d.marking.join(", ")
+            ),
+        ));
     }
     Ok(())
 }
@@ -427,6 +485,38 @@ mod tests {
         assert_eq!(d(|d| d.rates[6] = 0.0), Err("decisions[0].rates".into()));
         assert_eq!(d(|d| d.p_loc_warn = 1.5), Err("decisions[0].p_loc_warn".into()));
         assert_eq!(d(|d| d.context = Some(5)), Err("decisions[0].context".into()));
+        let crediting = |d: &mut DecisionLog| {
+            d.contour_rates = vec![2.0; 15];
+            d.route = Some("hall → gallery".into());
+            d.marking = vec!["P0".into(), "P6".into(), "P7".into()];
+            d.explore = true;
+        };
+        assert_eq!(d(crediting), Ok(Verdict::Kept));
+        let e = |f: fn(&mut DecisionLog)| {
+            let mut r = mission();
+            let mut x = decision.clone();
+            crediting(&mut x);
+            f(&mut x);
+            r.decisions = vec![x];
+            check(&Entry::Mission(r)).map_err(|e| e.field)
+        };
+        let rates = Err("decisions[0].contour_rates".into());
+        assert_eq!(e(|d| d.contour_rates.truncate(11)), rates.clone());
+        assert_eq!(e(|d| d.contour_rates[3] = f64::NAN), rates);
+        assert_eq!(
+            e(|d| d.route = Some(" ".into())),
+            Err("decisions[0].route".into())
+        );
+        let marking = Err("decisions[0].marking".into());
+        assert_eq!(e(|d| d.marking[1] = "P5".into()), Ok(Verdict::Kept));
+        assert_eq!(e(|d| d.marking[1] = "P9".into()), marking.clone());
+        assert_eq!(e(|d| d.marking.push("P5".into())), marking.clone());
+        assert_eq!(
+            e(|d| {
+                d.marking.remove(0);
+            }),
+            marking
+        );
         // Rounding is not time.
         let mut r = mission();
         r.localizer[0].duration_s = 100.0 + 1e-9;
