@@ -177,7 +177,13 @@ pub fn generic_table(summaries: &[Summary], metrics: &[MetricColumn]) -> (String
     }
     txt.push('\n');
     for s in summaries {
-        let ci = format!("{:.2}–{:.2}", s.reliability.low, s.reliability.high);
+        // A scenario not run yet (a shard's part, a partial batch) has no
+        // interval: a dash, not `NaN–NaN`.
+        let ci = if s.runs > 0 {
+            format!("{:.2}–{:.2}", s.reliability.low, s.reliability.high)
+        } else {
+            "-".into()
+        };
         let hw = if s.time.half_width.is_finite() {
             format!("{:.1}", s.time.half_width)
         } else {
@@ -291,6 +297,17 @@ mod tests {
             state: None,
         };
         Summary::of(name, &[&r])
+    }
+
+    #[test]
+    fn a_scenario_not_run_yet_shows_dashes_not_nan() {
+        let none = Summary::of("later", &[]);
+        let (txt, md) = generic_table(&[summary("a", None), none], &[]);
+        assert!(!md.contains("NaN") && !txt.contains("NaN"), "{md}\n{txt}");
+        assert!(
+            md.lines().nth(3).unwrap().starts_with("| later | 0 | - | - |"),
+            "{md}"
+        );
     }
 
     #[test]

@@ -250,27 +250,12 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
     // The table of all scenarios.
     let (table_text, all) = tables::generic_table(ctx.summaries, &scenario_columns());
 
-    // 1. The source's experiment.
-    blocks.extend(source_blocks(suite, ctx, &mut files)?);
-
-    // 2. The disturbances.
-    blocks.extend(loss_blocks(runs));
-
-    // 3. The comparison.
-    let (comparison, cells) = comparison_blocks(suite, ctx, &mut files)?;
-    blocks.extend(comparison);
-
-    // 4. The supervisor's targets.
-    blocks.extend(target_blocks(&cells, runs));
-
-    // 5. The museum day, mission by mission.
-    blocks.extend(day_blocks(runs));
-
-    // 6. The Warning against true losses.
-    blocks.extend(warning_blocks(runs));
-
-    // 7. Why.
-    blocks.extend(why_blocks(runs, &cells));
+    // 1–7 only where the batch holds the museum's runs (a batch of the
+    // galleries alone, `examples/galleries_batch.rs`, has none of them:
+    // empty sections would print "0 of 0" and empty intervals).
+    if has_museum_runs(runs) {
+        blocks.extend(museum_blocks(suite, ctx, &mut files)?);
+    }
 
     // 8. The galleries.
     blocks.extend(super::galleries_report::blocks(runs, suite.info().runs));
@@ -292,6 +277,32 @@ pub fn report(suite: &TourGuideSuite, ctx: &ReportContext<'_>) -> Result<SuiteRe
         blocks,
         files,
     })
+}
+
+/// Whether any scenario but the galleries' has runs.
+fn has_museum_runs(runs: &Runs) -> bool {
+    runs.iter()
+        .any(|(scenario, rs)| !scenario.starts_with("galleries/") && !rs.is_empty())
+}
+
+/// The sections of the museum: the source's experiment, the disturbances,
+/// the comparison, the supervisor's targets, the museum day, what a
+/// Warning means and why the supervisor decided as it did.
+fn museum_blocks(
+    suite: &TourGuideSuite,
+    ctx: &ReportContext<'_>,
+    files: &mut Vec<std::path::PathBuf>,
+) -> Result<Vec<Block>> {
+    let runs = ctx.runs;
+    let mut blocks = source_blocks(suite, ctx, files)?;
+    blocks.extend(loss_blocks(runs));
+    let (comparison, cells) = comparison_blocks(suite, ctx, files)?;
+    blocks.extend(comparison);
+    blocks.extend(target_blocks(&cells, runs));
+    blocks.extend(day_blocks(runs));
+    blocks.extend(warning_blocks(runs));
+    blocks.extend(why_blocks(runs, &cells));
+    Ok(blocks)
 }
 
 /// The columns of the table of all scenarios.
