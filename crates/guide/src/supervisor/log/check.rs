@@ -198,17 +198,7 @@ fn decisions(list: &[DecisionLog], whole_s: f64) -> Checked {
                 format!("{} rates: a decision logs λ1…λ11 or λ1…λ15", d.rates.len()),
             ));
         }
-        if let Some((i, v)) = d
-            .rates
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !(v.is_finite() && **v > 0.0))
-        {
-            return Err(fail(
-                field("rates"),
-                format!("λ{} = {}: rates are finite numbers > 0", i + 1, shown(*v)),
-            ));
-        }
+        positive_rates(&field("rates"), &d.rates)?;
         for (name, v) in [("f_auto", d.f_auto), ("f_cont", d.f_cont)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(fail(
@@ -233,6 +223,21 @@ fn decisions(list: &[DecisionLog], whole_s: f64) -> Checked {
     Ok(())
 }
 
+/// Every rate of a decision's list finite and > 0 (named λ1, λ2, …).
+fn positive_rates(field: &str, rates: &[f64]) -> Checked {
+    match rates
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !(v.is_finite() && **v > 0.0))
+    {
+        Some((i, v)) => Err(fail(
+            field,
+            format!("λ{} = {}: rates are finite numbers > 0", i + 1, shown(*v)),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// What the crediting supervisor adds to a decision: the contour
 /// hypothesis's rates (none, or as many as `rates`, each finite and > 0),
 /// the route (not empty when given) and the marking at the decision (`P0`,
@@ -249,17 +254,7 @@ fn crediting_fields(d: &DecisionLog, field: &dyn Fn(&str) -> String) -> Checked 
             ),
         ));
     }
-    if let Some((i, v)) = d
-        .contour_rates
-        .iter()
-        .enumerate()
-        .find(|(_, v)| !(v.is_finite() && **v > 0.0))
-    {
-        return Err(fail(
-            field("contour_rates"),
-            format!("λ{} = {}: rates are finite numbers > 0", i + 1, shown(*v)),
-        ));
-    }
+    positive_rates(&field("contour_rates"), &d.contour_rates)?;
     if d.route.as_deref().is_some_and(|r| r.trim().is_empty()) {
         return Err(fail(
             field("route"),
