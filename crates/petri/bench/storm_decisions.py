@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """petrinav's optimiser against Storm (stormpy) on DRN files.
 
-Three parts, each optional:
+Four parts, each optional:
 
 * ``agree``: random DRN files of each model type (DTMC, CTMC, MDP, Markov
   automaton; seeded, a few hundred states, a label ``goal``, a reward model
@@ -16,8 +16,12 @@ Three parts, each optional:
 * ``ours``: the DRN files petrinav writes (``gspn convert NET file.drn``)
   of the shipped supervisor net with decisions and of the ``corridors``
   family are read by Storm and solved alike (Storm reads our files).
-* ``time``: end to end on a large file (``corridors N``, N = 100: 216,751
-  states, a Markov automaton written by ``gspn convert``): the wall time of
+* ``stiff``: the random MDP (``random_mdp_2``) on which neither tool's
+  value iteration converges, its ``Tmax`` and ``R{"cost"}max`` solved
+  exactly by policy iteration (numpy), with the spectral radius that
+  makes value iteration slow.
+* ``time``: end to end on a large file (``corridors N``; N = 175:
+  1,046,501 states, a Markov automaton written by ``gspn convert``): the wall time of
   the whole ``petrinav gspn optimize`` process (reading, graph analysis,
   iteration, output) against Storm's ``build_model_from_drn`` plus
   ``model_checking`` in a child process (the interpreter's start and
@@ -28,8 +32,9 @@ Three parts, each optional:
 Usage (from the repository root, after ``cargo build --release -p
 petrinav``; stormpy 2.0 in a virtual environment):
 
-    /tmp/storm/bin/python crates/petri/bench/storm_decisions.py agree ours
-    /tmp/storm/bin/python crates/petri/bench/storm_decisions.py time --size 100 --repeat 3
+    /tmp/storm/bin/python -u crates/petri/bench/storm_decisions.py agree ours
+    /tmp/storm/bin/python -u crates/petri/bench/storm_decisions.py stiff
+    /tmp/storm/bin/python -u crates/petri/bench/storm_decisions.py time --size 175 --repeat 1
 
 Options: --petrinav PATH (default target/release/petrinav), --workdir DIR
 (default a temporary directory), --storm-timeout SECONDS (default 1800),
@@ -314,6 +319,84 @@ def timing(petrinav, workdir, size, repeat, timeout, modes, markdown):
     print(f"load average after the runs: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)
 
 
+def read_discrete_drn(path):
+    """The states of a DTMC / MDP DRN file as this script writes them:
+    (state reward, is goal, [(action reward, {target: probability})])."""
+    lines = open(path).read().splitlines()
+    i = lines.index("@model") + 1
+    states = []
+    while i < len(lines):
+        head = lines[i].split()
+        i += 1
+        rows = []
+        while i < len(lines) and lines[i].startswith("\taction"):
+            reward = float(lines[i].split()[2].strip("[]"))
+            i += 1
+            entries = {}
+            while i < len(lines) and lines[i].startswith("\t\t"):
+                t, _, p = lines[i].split()
+                entries[int(t)] = float(p)
+                i += 1
+            rows.append((reward, entries))
+        states.append((float(head[2].strip("[]")), "goal" in head, rows))
+    return states
+
+
+def policy_iteration(path, what, maximise):
+    """An independent exact answer for `T [F "goal"]` (what = "time") or
+    `R{"cost"} [F "goal"]` (what = "cost") on a DTMC / MDP file where the
+    goal is reached almost surely under every policy: policy iteration, a
+    dense linear solve (numpy) per policy. Returns the initial state's
+    value, the improvements and the spectral radius of the optimal
+    policy's transient part (how slowly value iteration converges)."""
+    import numpy as np
+
+    states = read_discrete_drn(path)
+    n = len(states)
+
+    def cost(s, r):
+        return 1.0 if what == "time" else states[s][0] + states[s][2][r][0]
+
+    def q(s, r, x):
+        return cost(s, r) + sum(p * x[t] for t, p in states[s][2][r][1].items())
+
+    def transient(policy):
+        m = np.zeros((n, n))
+        for s, (_, goal, rows) in enumerate(states):
+            if not goal:
+                for t, p in rows[policy[s]][1].items():
+                    if not states[t][1]:
+                        m[s, t] = p
+        return m
+
+    policy = [0] * n
+    for improvements in range(1000):
+        b = np.array([0.0 if states[s][1] else cost(s, policy[s]) for s in range(n)])
+        x = np.linalg.solve(np.eye(n) - transient(policy), b)
+        better = list(policy)
+        for s, (_, goal, rows) in enumerate(states):
+            if goal:
+                continue
+            pick = (max if maximise else min)(range(len(rows)), key=lambda r: q(s, r, x))
+            if abs(q(s, pick, x) - q(s, policy[s], x)) > 1e-12 * max(1.0, abs(x[s])):
+                better[s] = pick
+        if better == policy:
+            break
+        policy = better
+    rho = max(abs(np.linalg.eigvals(transient(policy))))
+    return float(x[0]), improvements, float(rho)
+
+
+def stiff(workdir):
+    """The random MDP on which both tools' value iterations run out of
+    time (BENCHMARKS.md): its exact maxima by policy iteration."""
+    path = os.path.join(workdir, "random_mdp_2.drn")
+    random_drn(path, "mdp", 400, seed=46 * 10 + 2)
+    for what, prop in (("time", 'Tmax=? [F "goal"]'), ("cost", 'R{"cost"}max=? [F "goal"]')):
+        v, k, rho = policy_iteration(path, what, True)
+        print(f"{os.path.basename(path)}  {prop}  policy iteration: {v!r} ({k} improvements); spectral radius under the policy 1 - {1 - rho:.3g}: value iteration needs about {math.log(1e-9) / math.log(rho):.2g} sweeps for 1e-9", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("parts", nargs="*", default=["agree", "ours", "time"])
@@ -348,6 +431,8 @@ def main():
         convert(a.petrinav, net, drn)
         files.append((drn, ['Pmax=? [F "all_working"]', 'Pmin=? [F "lost"]', 'Tmin=? [F "all_working" | "lost"]', 'R{"trips"}max=? [LRA]']))
         failures += compare(a.petrinav, files, a.agree_timeout, a.markdown, "file (written by petrinav)")
+    if "stiff" in a.parts:
+        stiff(workdir)
     if "time" in a.parts:
         timing(a.petrinav, workdir, a.size, a.repeat, a.storm_timeout, a.modes.split(","), a.markdown)
     sys.exit(1 if failures else 0)
