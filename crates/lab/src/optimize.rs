@@ -81,14 +81,7 @@ pub fn load<S: AsRef<str>>(path: &Path, assignments: &[S], options: &OptimizeOpt
         });
     }
     let (net, gspn) = crate::gspn::load(path, assignments)?;
-    let rates = gspn.rates(&petri::Params::new(), options.default_rate)?;
-    let automaton = DecisionNet::build(&gspn, &options.explore)?;
-    Ok(Problem::Net {
-        path: path.to_path_buf(),
-        net: Box::new(net),
-        automaton: Box::new(automaton),
-        rates,
-    })
+    Problem::from_net(path, net, &gspn, options)
 }
 
 /// One choice state of an optimum: what the policy does and what each
@@ -127,6 +120,20 @@ pub struct Optimization {
 }
 
 impl Problem {
+    /// A net already read and instantiated (`gspn`, its parameters bound):
+    /// its rates checked and its Markov automaton compiled; `path` names
+    /// it in what is printed.
+    pub fn from_net(path: &Path, net: Net, gspn: &Gspn, options: &OptimizeOptions) -> Result<Problem> {
+        let rates = gspn.rates(&petri::Params::new(), options.default_rate)?;
+        let automaton = DecisionNet::build(gspn, &options.explore)?;
+        Ok(Problem::Net {
+            path: path.to_path_buf(),
+            net: Box::new(net),
+            automaton: Box::new(automaton),
+            rates,
+        })
+    }
+
     /// The file it came from.
     pub fn path(&self) -> &Path {
         match self {

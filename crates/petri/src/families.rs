@@ -6,7 +6,7 @@
 //! | [`fms`] | Ciardo & Trivedi's flexible manufacturing system (structure of the MCC `FMS-PT` nets) | grows ~ N⁶ |
 //! | [`philosophers`] | dining philosophers as in the MCC `Philosophers-PT` nets (either fork first; can deadlock) | 3^N markings |
 //! | [`robots_corridors`] | N robots sharing K one-way corridors (immediate choice of a free corridor) | C(N+K, K)-ish |
-//! | [`corridors_decide`] | N robots choosing among 3 corridors, fast and risky to slow and safe (decisions) | N = 40: 18,701 states, N = 100: 216,751 |
+//! | [`corridors_decide`] | N robots choosing among 3 corridors, fast and risky to slow and safe (decisions) | N = 40: 18,701 states, N = 100: 216,751, N = 175: 1,046,501 |
 //! | [`mm1k`] | M/M/1/K queue | K + 1 |
 //! | [`polling`] | a server cycling over N stations of 3 customers each, exhaustive service | 4N · 4^N |
 //! | [`tandem`] | 5 stations in series with buffers of N places and 2 servers each, blocking | (N + 1)^5 |

@@ -75,7 +75,8 @@ fn of_petri(e: &petri::Error) -> Option<Kind> {
         | E::InvalidValue { .. }
         | E::MissingRate { .. }
         | E::StructuralParameter { .. } => Kind::Parameter,
-        E::UnknownName { .. } => Kind::Measure,
+        E::UnknownName { .. } | E::Property { .. } => Kind::Measure,
+        E::Policy { .. } => Kind::Format,
         E::StateLimit { .. }
         | E::MemoryLimit { .. }
         | E::TokenOverflow { .. }
@@ -87,7 +88,9 @@ fn of_petri(e: &petri::Error) -> Option<Kind> {
         | E::RateSpread { .. }
         | E::NotFinite { .. }
         | E::InvariantRowLimit { .. }
-        | E::InvariantOverflow { .. } => Kind::Solve,
+        | E::InvariantOverflow { .. }
+        | E::Zeno { .. }
+        | E::Undecided { .. } => Kind::Solve,
         E::WallTimeLimit { .. } | E::EventLimit { .. } | E::Interrupted { .. } => Kind::Simulation,
         _ => return None,
     })

@@ -8,6 +8,7 @@
 //! line's. What this crate adds is the Python side of things:
 //!
 //! - numpy arrays for markings and probabilities (`net.rs`);
+//! - decisions: optimal policies as dicts, DRN models (`optimize.rs`);
 //! - errors as `petrinav.errors` exceptions chosen by the error's type,
 //!   with the command line's message (`errors.rs`);
 //! - long calls off the GIL, stopped by Ctrl-C, panics caught (`run.rs`);
@@ -18,6 +19,7 @@ mod commands;
 mod convert;
 mod errors;
 mod net;
+mod optimize;
 mod run;
 
 use pyo3::prelude::*;
@@ -32,6 +34,7 @@ fn petrinav_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<net::Arc_>()?;
     m.add_class::<net::StateSpace>()?;
     m.add_class::<net::Solution>()?;
+    m.add_class::<optimize::Model>()?;
     m.add_function(wrap_pyfunction!(net::load, m)?)?;
     m.add_function(wrap_pyfunction!(net::loads, m)?)?;
     m.add_function(wrap_pyfunction!(net::family, m)?)?;

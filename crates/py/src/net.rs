@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use lab::gspn::{self as work, SimOptions, SteadyState};
+use lab::optimize::{OptimizeOptions, Problem};
 use numpy::prelude::*;
 use numpy::{PyArray1, PyArray2};
 use petri::io::Format;
@@ -13,6 +14,7 @@ use pyo3::types::{PyDict, PyList};
 
 use crate::convert::{assignments, json_to_py};
 use crate::errors::Kind;
+use crate::optimize;
 use crate::run::{detached, guarded};
 
 /// A place of a net: its name, initial token count and capacity.
@@ -128,7 +130,14 @@ pub(crate) struct Net {
     assignments: Vec<String>,
     /// The state space of the last limits asked for.
     space: Mutex<Option<CachedSpace>>,
+    /// The Markov automaton of the last limits and default rate
+    /// [`Net::optimize`] was called with.
+    decisions: Mutex<Option<CachedDecisions>>,
 }
+
+/// A net's Markov automaton and what it was compiled under
+/// (`max_states`, `max_memory`, the default rate's bits).
+type CachedDecisions = ((usize, u64, Option<u64>), Arc<Problem>);
 
 /// A state space and the limits (`max_states`, `max_memory`) it was
 /// generated under.
@@ -150,6 +159,7 @@ impl Net {
             gspn,
             assignments,
             space: Mutex::new(None),
+            decisions: Mutex::new(None),
         })
     }
 
@@ -171,6 +181,28 @@ impl Net {
             .lock()
             .map_err(|_| anyhow::anyhow!("state space lock poisoned"))? = Some((key, space.clone()));
         Ok(space)
+    }
+
+    /// The net's Markov automaton for these options, compiled on first use.
+    fn decisions(&self, options: &OptimizeOptions) -> anyhow::Result<Arc<Problem>> {
+        let key = (
+            options.explore.max_states,
+            options.explore.max_memory,
+            options.default_rate.map(f64::to_bits),
+        );
+        let mut cache = self
+            .decisions
+            .lock()
+            .map_err(|_| anyhow::anyhow!("automaton lock poisoned"))?;
+        if let Some((k, p)) = cache.as_ref()
+            && *k == key
+        {
+            return Ok(p.clone());
+        }
+        let path = PathBuf::from(self.gspn.name());
+        let problem = Arc::new(Problem::from_net(&path, self.net.clone(), &self.gspn, options)?);
+        *cache = Some((key, problem.clone()));
+        Ok(problem)
     }
 
     fn solve_impl(
@@ -341,6 +373,44 @@ impl Net {
             ..SolveParams::default()
         };
         self.solve_impl(py, params, default_rate, explore_params(max_states, max_memory))
+    }
+
+    /// The best policy of a net with decisions for ``objective`` (PRISM /
+    /// Storm syntax: ``'Pmax=? [F "goal"]'``, ``'Tmin=? [F #Done = 1]'``,
+    /// ``'R{"cost"}min=? [F "done"]'``, ``'LRAmax=? ["up"]'``,
+    /// ``'R{"done"}max=? [LRA]'``; quoted names are the net's labels), as
+    /// ``petrinav gspn optimize NET --json``: a dict with ``value``, its
+    /// guaranteed ``bound`` and the interval ``lower``, ``upper`` from the
+    /// initial marking, ``method``, ``iterations``, ``seconds``, ``model``,
+    /// ``choices`` (every choice marking with the value of each
+    /// alternative) and ``policy`` (``{marking: transition chosen}``).
+    /// Infinite values are ``math.inf``. ``precision`` is half the
+    /// interval's width, relative to the value (absolute with
+    /// ``absolute=True``). The Markov automaton is compiled once for the
+    /// limits and ``default_rate`` and kept. Releases the GIL; Ctrl-C stops
+    /// the iterations.
+    #[pyo3(signature = (objective, *, precision=1e-6, absolute=false, default_rate=None, max_states=None, max_memory=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn optimize<'py>(
+        &self,
+        py: Python<'py>,
+        objective: &str,
+        precision: f64,
+        absolute: bool,
+        default_rate: Option<f64>,
+        max_states: Option<usize>,
+        max_memory: Option<u64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let options = guarded(py, Kind::Parameter, || {
+            optimize::options(
+                precision,
+                absolute,
+                default_rate,
+                explore_params(max_states, max_memory),
+            )
+        })?;
+        let problem = detached(py, Kind::StateLimit, |_| self.decisions(&options))?;
+        optimize::optimize(py, &problem, objective, &options)
     }
 
     /// Size, reachability graph, bounds, liveness, dead markings and
@@ -711,15 +781,28 @@ impl Solution {
 /// Loads a net file — ``.pnpro`` (GreatSPN), ``.pnml`` (ISO PNML, e.g.
 /// written by pm4py), ``.toml`` (petrinav) — and binds ``params`` (numbers
 /// or expression strings such as ``"1/3"``), as ``petrinav gspn …
-/// FILE --param NAME=VALUE``.
+/// FILE --param NAME=VALUE``: a :class:`Net`. A ``.drn`` file (Storm's
+/// explicit format: a DTMC, CTMC, MDP or Markov automaton) gives a
+/// :class:`Model` (``params`` refused: a DRN file holds numbers;
+/// ``max_memory`` in bytes bounds what reading it may take).
 #[pyfunction]
-#[pyo3(signature = (path, params=None))]
-pub(crate) fn load(py: Python<'_>, path: PathBuf, params: Option<&Bound<'_, PyDict>>) -> PyResult<Net> {
+#[pyo3(signature = (path, params=None, *, max_memory=None))]
+pub(crate) fn load(
+    py: Python<'_>,
+    path: PathBuf,
+    params: Option<&Bound<'_, PyDict>>,
+    max_memory: Option<u64>,
+) -> PyResult<Py<PyAny>> {
     let assignments = assignments(params)?;
-    detached(py, Kind::Format, |_| {
+    if lab::optimize::is_drn(&path) {
+        let model = optimize::load_drn(py, &path, &assignments, max_memory)?;
+        return Ok(Bound::new(py, model)?.into_any().unbind());
+    }
+    let net = detached(py, Kind::Format, |_| {
         let net = work::read_net(&path)?;
         Net::new(net, assignments)
-    })
+    })?;
+    Ok(Bound::new(py, net)?.into_any().unbind())
 }
 
 /// Reads a net from text in ``format`` (``"toml"``, ``"pnml"`` or

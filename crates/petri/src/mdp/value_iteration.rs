@@ -244,49 +244,83 @@ pub(crate) fn interval_iteration(
         upper,
         ..Bounds::default()
     };
-    let (mut nl, mut nu) = (Vec::new(), Vec::new());
+    let mut scratch = (Vec::new(), Vec::new());
     let mut start = 0;
     for &end in &bounds {
         let states = &order[start..end];
         start = end;
-        if states.len() == 1 && !eq.has_self_loop(states[0] as usize) {
-            let s = states[0] as usize;
-            out.lower[s] = eq.step(s, &out.lower, eq.constants(false), dir);
-            out.upper[s] = eq.step(s, &out.upper, eq.constants(true), dir);
-            out.iterations += 1;
+        if acyclic_step(eq, states, dir, &mut out) {
             continue;
         }
-        let mut sweeps = 0usize;
-        loop {
-            if sweeps % 64 == 0 {
-                stop.check("iterating values")?;
-            }
-            sweep(eq, states, &out.lower, false, dir, &mut nl);
-            sweep(eq, states, &out.upper, true, dir, &mut nu);
-            for (i, &s) in states.iter().enumerate() {
-                let s = s as usize;
-                // Monotone: rounding never widens the interval.
-                out.lower[s] = out.lower[s].max(nl[i]);
-                out.upper[s] = out.upper[s].min(nu[i]).max(out.lower[s]);
-            }
-            sweeps += 1;
-            out.iterations += 1;
-            if states
-                .iter()
-                .all(|&s| p.converged(out.lower[s as usize], out.upper[s as usize]))
-            {
-                break;
-            }
-            if sweeps >= p.max_iterations {
-                return Err(no_convergence(
-                    sweeps,
-                    widest(states, &out.lower, &out.upper, p),
-                    p,
-                ));
-            }
-        }
+        stop.check("iterating values")?;
+        tighten(eq, states, dir, &mut out, &mut scratch);
+        let mut sweeps = 1usize;
+        narrow(eq, states, dir, &mut out, p, stop, &mut sweeps, &mut scratch)?;
     }
     Ok(out)
+}
+
+/// A component of one state without a self loop: its bounds in one step
+/// from its successors' (final) bounds. Whether `states` was one.
+fn acyclic_step(eq: &Equations, states: &[u32], dir: Direction, out: &mut Bounds) -> bool {
+    if states.len() != 1 || eq.has_self_loop(states[0] as usize) {
+        return false;
+    }
+    let s = states[0] as usize;
+    out.lower[s] = eq.step(s, &out.lower, eq.constants(false), dir);
+    out.upper[s] = eq.step(s, &out.upper, eq.constants(true), dir);
+    out.iterations += 1;
+    true
+}
+
+/// Sweep buffers of the lower and the upper bound.
+type Scratch = (Vec<f64>, Vec<f64>);
+
+/// One sweep of both bounds of `states`, kept monotone: rounding never
+/// widens the interval, and the upper bound never goes below the lower.
+fn tighten(eq: &Equations, states: &[u32], dir: Direction, out: &mut Bounds, (nl, nu): &mut Scratch) {
+    sweep(eq, states, &out.lower, false, dir, nl);
+    sweep(eq, states, &out.upper, true, dir, nu);
+    for (i, &s) in states.iter().enumerate() {
+        let s = s as usize;
+        out.lower[s] = out.lower[s].max(nl[i]);
+        out.upper[s] = out.upper[s].min(nu[i]).max(out.lower[s]);
+    }
+    out.iterations += 1;
+}
+
+/// Both bounds of `states` (valid bounds) swept together until every
+/// state meets the precision; `sweeps` counts the component's sweeps so
+/// far, against `p.max_iterations`.
+#[allow(clippy::too_many_arguments)]
+fn narrow(
+    eq: &Equations,
+    states: &[u32],
+    dir: Direction,
+    out: &mut Bounds,
+    p: &Precision,
+    stop: Interrupt<'_>,
+    sweeps: &mut usize,
+    scratch: &mut Scratch,
+) -> Result<()> {
+    while !states
+        .iter()
+        .all(|&s| p.converged(out.lower[s as usize], out.upper[s as usize]))
+    {
+        if *sweeps >= p.max_iterations {
+            return Err(no_convergence(
+                *sweeps,
+                widest(states, &out.lower, &out.upper, p),
+                p,
+            ));
+        }
+        if *sweeps % 64 == 0 {
+            stop.check("iterating values")?;
+        }
+        tighten(eq, states, dir, out, scratch);
+        *sweeps += 1;
+    }
+    Ok(())
 }
 
 /// Optimistic value iteration (see the module docs) for equations whose
@@ -309,11 +343,7 @@ pub(crate) fn optimistic(
     for &end in &bounds {
         let states = &order[start..end];
         start = end;
-        if states.len() == 1 && !eq.has_self_loop(states[0] as usize) {
-            let s = states[0] as usize;
-            out.lower[s] = eq.step(s, &out.lower, eq.constants(false), dir);
-            out.upper[s] = eq.step(s, &out.upper, eq.constants(true), dir);
-            out.iterations += 1;
+        if acyclic_step(eq, states, dir, &mut out) {
             continue;
         }
         optimistic_component(eq, states, dir, &mut out, p, stop)?;
@@ -409,31 +439,8 @@ fn optimistic_component(
         }
     }
     // 3. Both bounds are valid: iterate them together to the precision.
-    while !states
-        .iter()
-        .all(|&s| p.converged(out.lower[s as usize], out.upper[s as usize]))
-    {
-        if sweeps % 64 == 0 {
-            stop.check("iterating values")?;
-        }
-        sweep(eq, states, &out.lower, false, dir, &mut nl);
-        sweep(eq, states, &out.upper, true, dir, &mut nu);
-        for (i, &s) in states.iter().enumerate() {
-            let s = s as usize;
-            out.lower[s] = out.lower[s].max(nl[i]);
-            out.upper[s] = out.upper[s].min(nu[i]).max(out.lower[s]);
-        }
-        sweeps += 1;
-        out.iterations += 1;
-        if sweeps >= p.max_iterations {
-            return Err(no_convergence(
-                sweeps,
-                widest(states, &out.lower, &out.upper, p),
-                p,
-            ));
-        }
-    }
-    Ok(())
+    let mut scratch = (nl, nu);
+    narrow(eq, states, dir, out, p, stop, &mut sweeps, &mut scratch)
 }
 
 #[cfg(test)]

@@ -11,6 +11,11 @@ arrays::
     sol.probability("#Pm1 >= 1"), sol.mean_tokens("Pm1"), sol.throughput("tout4")
     net.save("kanban.pnml")                          # opens in pm4py
 
+Nets with decisions and DRN models (Storm's explicit format) are
+optimised: ``net.optimize('Tmin=? [F #Done = 1]')`` and
+``pn.load("model.drn").optimize('Pmax=? [F "goal"]')`` return the value,
+its guaranteed bounds and the policy as a dict.
+
 The same engine as the ``petrinav`` command line, called in-process: the
 numbers are the command line's to the last bit, and errors are
 :class:`petrinav.Error` exceptions carrying its messages. Long calls
@@ -25,6 +30,7 @@ trees checked and quantified), :mod:`petrinav.errors`.
 from . import errors
 from ._petrinav import (
     Arc,
+    Model,
     Net,
     Place,
     Solution,
@@ -61,6 +67,7 @@ __all__ = [
     "LabError",
     "MapError",
     "MeasureError",
+    "Model",
     "NavError",
     "Net",
     "PanicError",

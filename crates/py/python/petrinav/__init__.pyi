@@ -180,11 +180,55 @@ class Net:
         max_wall: Optional[float] = 600.0,
     ) -> Dict[str, Any]:
         """The dict ``petrinav gspn simulate --json`` prints."""
+    def optimize(
+        self,
+        objective: str,
+        *,
+        precision: float = 1e-6,
+        absolute: bool = False,
+        default_rate: Optional[float] = None,
+        max_states: Optional[int] = None,
+        max_memory: Optional[int] = None,
+    ) -> Dict[str, Any]:
+        """The best policy for ``objective`` (``'Pmax=? [F "goal"]'``,
+        ``'Tmin=? [F #Done = 1]'``, ``'R{"cost"}min=? [F "done"]'``,
+        ``'LRAmax=? ["up"]'``) as ``petrinav gspn optimize --json``:
+        ``value``, ``bound``, ``lower``, ``upper``, ``choices``, ``policy``
+        (``{marking: transition}``), …; infinite values are ``math.inf``."""
     def save(self, path: _Path) -> None: ...
     def dumps(self, format: str = "toml") -> str: ...
 
-def load(path: _Path, params: Optional[Mapping[str, _Value]] = None) -> Net:
-    """Loads a ``.pnpro``, ``.pnml`` or ``.toml`` net and binds ``params``."""
+@final
+class Model:
+    """A DTMC, CTMC, MDP or Markov automaton read from a DRN file."""
+
+    def __len__(self) -> int: ...
+    @property
+    def type(self) -> str:
+        """``"DTMC"``, ``"CTMC"``, ``"MDP"`` or ``"MA"``."""
+    @property
+    def path(self) -> str: ...
+    @property
+    def states(self) -> int: ...
+    @property
+    def actions(self) -> int: ...
+    @property
+    def transitions(self) -> int: ...
+    @property
+    def initial_states(self) -> List[int]: ...
+    @property
+    def labels(self) -> Dict[str, List[int]]:
+        """Each label's states."""
+    @property
+    def reward_models(self) -> List[str]: ...
+    def optimize(self, objective: str, *, precision: float = 1e-6, absolute: bool = False) -> Dict[str, Any]:
+        """As :meth:`Net.optimize`; ``policy`` is ``{"state N": action}``."""
+
+def load(
+    path: _Path, params: Optional[Mapping[str, _Value]] = None, *, max_memory: Optional[int] = None
+) -> Union[Net, Model]:
+    """Loads a ``.pnpro``, ``.pnml`` or ``.toml`` net and binds ``params``
+    (a :class:`Net`), or a ``.drn`` file (a :class:`Model`)."""
 
 def loads(
     text: str,
