@@ -33,7 +33,11 @@
 //! the GSPN's (the jump chain is the same; only the time spent in the
 //! vanishing markings, removed by the restriction, differs). Each state's
 //! class (unreachable, tangible, or vanishing with its priority and weight
-//! sum) is looked up in [`Kinds`].
+//! sum) is looked up in [`Kinds`]. With classes no event is folded into the
+//! row matrix, so each inner state lists the in-row events that lead to
+//! it, and each event the inner states where it is enabled: a state costs
+//! its in- and out-degree, not the number of events. Unreachable states
+//! are skipped before anything is summed for them.
 
 use rayon::prelude::*;
 
