@@ -11,7 +11,7 @@ start to exit) and their peak resident memory read from /usr/bin/time.
 
 Usage (from the repository root, after `cargo build --release -p petrinav`):
 
-    python3 crates/petri/bench/engines_compare.py kanban:1-6 fms:1-4 polling:2-5 tandem:2-6
+    python3 crates/petri/bench/engines_compare.py kanban:1-5 fms:1-6 polling:2-5 tandem:2-6
     python3 crates/petri/bench/engines_compare.py kanban:7 --explicit-max 0   # structured only
 
 Exit status 1 if any compared pair differs by more than --tol.
@@ -66,15 +66,17 @@ def main():
             path = os.path.join(workdir, f"{family}-{n}.PNPRO")
             subprocess.run([a.petrinav, "gspn", "family", family, str(n), "-o", path], check=True)
             nets.append((f"{family} {n}", path))
-    print("| net | states | structured s | structured MiB | sweeps | explicit s | explicit MiB | max diff |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    print("| net | states (tangible + vanishing) | components | structured s | structured MiB | sweeps | explicit s | explicit MiB | max diff |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|")
     bad = False
     for name, path in nets:
         s = run(a.petrinav, path, "structured")
         if "error" in s:
-            print(f"| {name} | structured: {s['error']} | | | | | | |", flush=True)
+            print(f"| {name} | structured: {s['error']} | | | | | | | |", flush=True)
             continue
-        cells = [name, str(s["tangible_markings"]), f"{s['wall']:.2f}", f"{s['peak_mib']:.0f}", str(s["iterations"])]
+        states = f"{s['tangible_markings']} + {s.get('vanishing_markings', 0)}"
+        comps = " × ".join(str(c) for c in s.get("components", []))
+        cells = [name, states, comps, f"{s['wall']:.2f}", f"{s['peak_mib']:.0f}", str(s["iterations"])]
         if s["tangible_markings"] <= a.explicit_max:
             e = run(a.petrinav, path, "explicit")
             if "error" in e:

@@ -33,7 +33,11 @@
 //! the GSPN's (the jump chain is the same; only the time spent in the
 //! vanishing markings, removed by the restriction, differs). Each state's
 //! class (unreachable, tangible, or vanishing with its priority and weight
-//! sum) is looked up in [`Kinds`].
+//! sum) is looked up in [`Kinds`]. With classes no event is folded into the
+//! row matrix, so each inner state lists the in-row events that lead to
+//! it, and each event the inner states where it is enabled: a state costs
+//! its in- and out-degree, not the number of events. Unreachable states
+//! are skipped before anything is summed for them.
 
 use rayon::prelude::*;
 
@@ -88,6 +92,10 @@ struct Bound {
     g_in: Vec<f64>,
     /// `rate ·` inner factor at the state, 0 where disabled.
     g_out: Vec<f64>,
+    /// The inner states where `g_in` is not 0.
+    in_at: Vec<u32>,
+    /// The inner states where `g_out` is not 0.
+    out_at: Vec<u32>,
     /// Inner degree at each inner state (functional factors only).
     inner_degree: Vec<u32>,
     /// Cap of a functional factor (`None` otherwise).
@@ -110,6 +118,12 @@ pub(crate) struct Plan<'a> {
     gathered: Vec<usize>,
     /// Events that move only the inner level and are not aggregated.
     inrow: Vec<usize>,
+    /// Their incoming entries per inner state (`inrow_off[c]` to
+    /// `inrow_off[c + 1]` in `inrow_in`): position in `inrow`, inner
+    /// predecessor and `g_in`, in `inrow` order — so that a state reads
+    /// only the events that reach it.
+    inrow_off: Vec<u32>,
+    inrow_in: Vec<(u32, u32, f64)>,
     /// The aggregated events' incoming entries per inner state.
     in_off: Vec<u32>,
     in_ip: Vec<u32>,
@@ -165,7 +179,11 @@ struct Scratch {
     acc: Vec<f64>,
     exit: Vec<f64>,
     inv: Vec<f64>,
-    inrow: Vec<(usize, f64, u32)>,
+    /// Per in-row event (position in `Plan::inrow`), its outer factor and
+    /// degree at the row, `None` where disabled.
+    inrow: Vec<Option<(f64, u32)>>,
+    /// How many of them are enabled at the row.
+    inrow_enabled: usize,
 }
 
 impl Scratch {
@@ -176,7 +194,8 @@ impl Scratch {
             acc: vec![0.0; n],
             exit: vec![0.0; n],
             inv: vec![0.0; n],
-            inrow: Vec::with_capacity(inrow),
+            inrow: vec![None; inrow],
+            inrow_enabled: 0,
         }
     }
 }
@@ -214,6 +233,8 @@ impl<'a> Plan<'a> {
             events,
             gathered,
             inrow,
+            inrow_off: Vec::new(),
+            inrow_in: Vec::new(),
             in_off: Vec::new(),
             in_ip: Vec::new(),
             in_g: Vec::new(),
@@ -222,6 +243,7 @@ impl<'a> Plan<'a> {
             num_colors: 1,
         };
         plan.aggregate_inner();
+        plan.index_inrow();
         plan.color_level0();
         plan
     }
@@ -250,6 +272,23 @@ impl<'a> Plan<'a> {
             self.in_off.push(self.in_ip.len() as u32);
         }
         self.inner_exit = exit;
+    }
+
+    /// The in-row events' incoming entries by inner state.
+    fn index_inrow(&mut self) {
+        let n = self.n;
+        self.inrow_off = Vec::with_capacity(n + 1);
+        self.inrow_off.push(0);
+        for c in 0..n {
+            for (k, &b) in self.inrow.iter().enumerate() {
+                let ev = &self.events[b];
+                let g = ev.g_in[c];
+                if g != 0.0 {
+                    self.inrow_in.push((k as u32, ev.ip[c], g));
+                }
+            }
+            self.inrow_off.push(self.inrow_in.len() as u32);
+        }
     }
 
     /// Greedy colouring of level 0's local states: two states joined by an
@@ -363,9 +402,9 @@ impl<'a> Plan<'a> {
             self.row_locals(l0, r, &mut sc.locals);
             let start = r * n;
             self.gather(base + start, &*own, base, readers, &mut sc);
-            self.inrow_factors(&sc.locals, &mut sc.inrow);
+            sc.inrow_enabled = self.inrow_factors(&sc.locals, &mut sc.inrow);
             let row = &mut own[start..start + n];
-            let s = if self.kinds.is_none() && sc.inrow.is_empty() {
+            let s = if self.kinds.is_none() && sc.inrow_enabled == 0 {
                 self.update_plain(row, &mut sc, omega)
             } else {
                 self.update_general(row, base + start, &sc, omega)
@@ -425,10 +464,10 @@ impl<'a> Plan<'a> {
     fn update_general(&self, row: &mut [f64], row_start: usize, sc: &Scratch, omega: f64) -> Sums {
         let mut sums = Sums::default();
         for c in 0..row.len() {
-            let v = sc.acc[c] + self.inrow_inflow(c, &*row, row_start, &sc.inrow);
             let Some(d) = self.exit_of(sc.exit[c], row_start + c) else {
                 continue;
             };
+            let v = sc.acc[c] + self.inrow_inflow(c, &*row, row_start, &sc.inrow);
             let old = row[c];
             sums.imbalance += (v - d * old).abs();
             let new = v / d;
@@ -455,13 +494,13 @@ impl<'a> Plan<'a> {
             self.row_locals(l0, r, &mut sc.locals);
             let start = r * n;
             self.gather(base + start, own, base, readers, &mut sc);
-            self.inrow_factors(&sc.locals, &mut sc.inrow);
+            sc.inrow_enabled = self.inrow_factors(&sc.locals, &mut sc.inrow);
             let row = &own[start..start + n];
             for c in 0..n {
-                let v = sc.acc[c] + self.inrow_inflow(c, row, base + start, &sc.inrow);
                 let Some(d) = self.exit_of(sc.exit[c], base + start + c) else {
                     continue;
                 };
+                let v = sc.acc[c] + self.inrow_inflow(c, row, base + start, &sc.inrow);
                 sums.imbalance += (v - d * row[c]).abs();
                 sums.flow += d * row[c];
                 sums.total += row[c];
@@ -484,31 +523,32 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// The outer factors at this row of the in-row events enabled there.
-    fn inrow_factors(&self, locals: &[u32], out: &mut Vec<(usize, f64, u32)>) {
-        out.clear();
-        for &b in &self.inrow {
-            if let Some((f, d)) = self.outer_factor(&self.events[b], locals) {
-                out.push((b, f, d));
-            }
+    /// The outer factors at this row of the in-row events (`None` where
+    /// disabled), and how many are enabled.
+    fn inrow_factors(&self, locals: &[u32], out: &mut [Option<(f64, u32)>]) -> usize {
+        let mut enabled = 0;
+        for (o, &b) in out.iter_mut().zip(&self.inrow) {
+            *o = self.outer_factor(&self.events[b], locals);
+            enabled += usize::from(o.is_some());
         }
+        enabled
     }
 
     /// Inflow into inner state `c` of the row from the row itself.
     #[inline]
-    fn inrow_inflow(&self, c: usize, row: &[f64], row_start: usize, inrow: &[(usize, f64, u32)]) -> f64 {
+    fn inrow_inflow(&self, c: usize, row: &[f64], row_start: usize, inrow: &[Option<(f64, u32)>]) -> f64 {
         let mut v = 0.0;
         let (a, b) = (self.in_off[c] as usize, self.in_off[c + 1] as usize);
         for k in a..b {
             v += self.in_g[k] * row[self.in_ip[k] as usize];
         }
-        for &(bi, f, deg) in inrow {
-            let ev = &self.events[bi];
-            let g = ev.g_in[c];
-            if g == 0.0 {
+        let (a, b) = (self.inrow_off[c] as usize, self.inrow_off[c + 1] as usize);
+        for &(k, ip, g) in &self.inrow_in[a..b] {
+            let Some((f, deg)) = inrow[k as usize] else {
                 continue;
-            }
-            let ip = ev.ip[c] as usize;
+            };
+            let ev = &self.events[self.inrow[k as usize]];
+            let ip = ip as usize;
             let rate = match ev.min_cap {
                 Some(cap) => ev.rate * f64::from(deg.min(ev.inner_degree[ip]).min(cap)),
                 None => f * g,
@@ -653,11 +693,10 @@ impl<'a> Plan<'a> {
                 }
             }
             (true, Some(cap), _) => {
-                for (c, x) in exit.iter_mut().enumerate() {
-                    if ev.g_out[c] != 0.0 {
-                        let d = deg.min(ev.inner_degree[c]).min(cap);
-                        *x += ev.rate * f64::from(d) * self.class_at(ev, row_start + c);
-                    }
+                for &c in &ev.out_at {
+                    let c = c as usize;
+                    let d = deg.min(ev.inner_degree[c]).min(cap);
+                    exit[c] += ev.rate * f64::from(d) * self.class_at(ev, row_start + c);
                 }
             }
             (true, None, None) => {
@@ -666,9 +705,12 @@ impl<'a> Plan<'a> {
                 }
             }
             (true, None, Some(k)) => {
+                // Only where the event is enabled: adding `f · 0 · …` would
+                // change no bit.
                 let cls = &k.class[row_start..row_start + n];
-                for ((x, &g), &cl) in exit.iter_mut().zip(&ev.g_out).zip(cls) {
-                    *x += f * g * ev.class_factor[cl as usize];
+                for &c in &ev.out_at {
+                    let c = c as usize;
+                    exit[c] += f * ev.g_out[c] * ev.class_factor[cls[c] as usize];
                 }
             }
         }
@@ -694,12 +736,11 @@ impl<'a> Plan<'a> {
                 }
             }
             (true, Some(cap), _) => {
-                for (c, a) in acc.iter_mut().enumerate() {
-                    if ev.g_in[c] != 0.0 {
-                        let ip = ev.ip[c] as usize;
-                        let d = src.degree.min(ev.inner_degree[ip]).min(cap);
-                        *a += ev.rate * f64::from(d) * x[ip] * self.class_at(ev, src.start + ip);
-                    }
+                for &c in &ev.in_at {
+                    let c = c as usize;
+                    let ip = ev.ip[c] as usize;
+                    let d = src.degree.min(ev.inner_degree[ip]).min(cap);
+                    acc[c] += ev.rate * f64::from(d) * x[ip] * self.class_at(ev, src.start + ip);
                 }
             }
             (true, None, None) => {
@@ -708,9 +749,10 @@ impl<'a> Plan<'a> {
                 }
             }
             (true, None, Some(k)) => {
-                for ((a, &g), &ip) in acc.iter_mut().zip(&ev.g_in).zip(&ev.ip) {
-                    let ip = ip as usize;
-                    *a += f * g * x[ip] * ev.class_factor[k.class[src.start + ip] as usize];
+                // Only where the event leads: `f · 0 · x` adds a zero.
+                for &c in &ev.in_at {
+                    let (c, ip) = (c as usize, ev.ip[c as usize] as usize);
+                    acc[c] += f * ev.g_in[c] * x[ip] * ev.class_factor[k.class[src.start + ip] as usize];
                 }
             }
         }
@@ -769,6 +811,8 @@ fn bind(desc: &Descriptor, kinds: Option<&Kinds>, ei: usize, rates: &[f64]) -> B
             })
             .collect()
     });
+    let nonzero = |g: &[f64]| -> Vec<u32> { (0..g.len() as u32).filter(|&c| g[c as usize] != 0.0).collect() };
+    let (in_at, out_at) = (nonzero(&g_in), nonzero(&g_out));
     let aggregated = kinds.is_none() && outer.is_empty() && min_cap.is_none() && inner_map.is_some();
     Bound {
         event: ei,
@@ -781,6 +825,8 @@ fn bind(desc: &Descriptor, kinds: Option<&Kinds>, ei: usize, rates: &[f64]) -> B
         ip,
         g_in,
         g_out,
+        in_at,
+        out_at,
         inner_degree,
         min_cap,
         outer_local_cap,
