@@ -18,7 +18,12 @@
 //! coefficient differs from 1). The memory guard
 //! ([`ExploreParams::max_memory`]) stops generation before the whole pipeline
 //! (generation, compilation, solve) would need more than the limit.
+//!
+//! On request ([`ExploreParams::skip_forced`]) a vanishing marking with a
+//! single firable transition is passed through instead of stored: chains
+//! of zero-time hops (a behaviour tree's control flow) then cost one edge.
 
+use std::collections::HashMap;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -46,13 +51,35 @@ pub struct ExploreParams {
     /// many bytes (see [`estimated_bytes`]). Default:
     /// [`default_max_memory`], 85 % of the memory available at the time.
     pub max_memory: u64,
+    /// Pass through *forced* vanishing markings — those where exactly one
+    /// immediate transition can fire — instead of storing them: an edge into
+    /// one goes on, in the same firing, to the first marking that is
+    /// tangible or offers a choice (at most [`FORCED_HOPS`] hops; a longer
+    /// run of forced hops, a timeless loop, is stored as it is). The
+    /// tangible markings, their rates and every choice are unchanged, so is
+    /// the CTMC; what is lost is what only the skipped markings carried: the
+    /// throughputs of the immediate transitions fired in them, and the
+    /// markings themselves (their count, their firings in a graph export;
+    /// [`ReachabilityGraph::place_bounds`] still counts their tokens).
+    /// Default: off (docs/gspn.md, *The pipeline*).
+    pub skip_forced: bool,
 }
+
+/// Where forced hops lead: a packed key of a forced vanishing marking → the
+/// key of the first marking after it that is not forced (see
+/// [`ExploreParams::skip_forced`]).
+type Forced = HashMap<Box<[u64]>, Box<[u64]>>;
+
+/// The longest run of forced vanishing hops followed in one firing when
+/// [`ExploreParams::skip_forced`] is set.
+pub const FORCED_HOPS: usize = 4096;
 
 impl Default for ExploreParams {
     fn default() -> Self {
         ExploreParams {
             max_states: usize::MAX,
             max_memory: default_max_memory(),
+            skip_forced: false,
         }
     }
 }
@@ -250,6 +277,8 @@ impl ReachabilityGraph {
         // numbering is exactly that of expanding one marking after the other
         // (breadth-first discovery order), whatever the number of threads.
         let mut batches: Vec<Batch> = Vec::new();
+        // Forced hops already followed (learnt by the batches of earlier rounds).
+        let mut forced = Forced::new();
         let threads = rayon::current_num_threads();
         let mut i = 0usize;
         while i < store.len() {
@@ -262,7 +291,8 @@ impl ReachabilityGraph {
             batches.resize_with(chunks.max(batches.len()), Batch::default);
             let run = |(c, b): (usize, &mut Batch)| {
                 let lo = i + c * BATCH;
-                b.expand(gspn, &store, lo..(lo + BATCH).min(end))
+                let skip = params.skip_forced.then_some(&forced);
+                b.expand(gspn, &store, lo..(lo + BATCH).min(end), skip)
             };
             let events: Vec<Result<Option<Vec<u8>>>> = if parallel {
                 batches[..chunks].par_iter_mut().enumerate().map(run).collect()
@@ -276,6 +306,10 @@ impl ReachabilityGraph {
                 let layout = store.fitted_layout(&needed, || largest_successor_counts(gspn, &store, i..end));
                 store.relayout(layout);
                 relayouts += 1;
+                forced.clear();
+                for b in &mut batches {
+                    b.learnt.clear();
+                }
                 continue;
             }
             let w = store.layout().words();
@@ -283,6 +317,9 @@ impl ReachabilityGraph {
                 for (mx, &c) in max_tokens.iter_mut().zip(&b.max_tokens) {
                     *mx = (*mx).max(c);
                 }
+            }
+            for b in &mut batches[..chunks] {
+                forced.extend(b.learnt.drain());
             }
             let mut m = i;
             for b in &batches[..chunks] {
@@ -478,6 +515,36 @@ struct Batch {
     max_tokens: Vec<u32>,
     cur: Vec<u32>,
     firable: Vec<TransitionId>,
+    /// A successor followed through forced hops, and its firable transitions.
+    next: Vec<u32>,
+    next_firable: Vec<TransitionId>,
+    /// Forced hops followed in this round (merged into the explorer's after it).
+    learnt: Forced,
+    /// The keys of the forced markings of the hops being followed.
+    path: Vec<u64>,
+}
+
+/// The fields a firing of `t` in `m` would overflow in `layout` (`None` if it
+/// fits), or the error of a count beyond `u32`.
+fn widening(gspn: &Gspn, layout: &Layout, m: &[u32], t: TransitionId) -> Result<Option<Vec<u8>>> {
+    let mut widen: Option<Vec<u8>> = None;
+    for &(p, d) in gspn.delta(t) {
+        if d > 0 {
+            let p = p as usize;
+            let new = u64::from(m[p]) + d as u64;
+            if new > u64::from(u32::MAX) {
+                return Err(Error::TokenOverflow {
+                    place: gspn.place_names()[p].clone(),
+                    limit: u64::from(u32::MAX),
+                });
+            }
+            if new > u64::from(layout.max_value(p)) {
+                let w = widen.get_or_insert_with(|| layout.widths().to_vec());
+                w[p] = w[p].max(bits_for(new as u32));
+            }
+        }
+    }
+    Ok(widen)
 }
 
 impl Batch {
@@ -490,6 +557,7 @@ impl Batch {
         gspn: &Gspn,
         store: &MarkingStore,
         markings: std::ops::Range<usize>,
+        skip_forced: Option<&Forced>,
     ) -> Result<Option<Vec<u8>>> {
         self.keys.clear();
         self.edges.clear();
@@ -514,32 +582,21 @@ impl Batch {
             } else {
                 1.0
             };
-            for &t in &self.firable {
+            for k in 0..self.firable.len() {
+                let t = self.firable[k];
                 // Fields that the firing would overflow are widened first.
-                let mut widen: Option<Vec<u8>> = None;
-                for &(p, d) in gspn.delta(t) {
-                    if d > 0 {
-                        let p = p as usize;
-                        let new = u64::from(self.cur[p]) + d as u64;
-                        if new > u64::from(u32::MAX) {
-                            return Err(Error::TokenOverflow {
-                                place: gspn.place_names()[p].clone(),
-                                limit: u64::from(u32::MAX),
-                            });
-                        }
-                        if new > u64::from(layout.max_value(p)) {
-                            let w = widen.get_or_insert_with(|| layout.widths().to_vec());
-                            w[p] = w[p].max(bits_for(new as u32));
-                        }
-                    }
-                }
-                if widen.is_some() {
-                    return Ok(widen);
+                if let Some(widen) = widening(gspn, layout, &self.cur, t)? {
+                    return Ok(Some(widen));
                 }
                 let at = self.keys.len();
                 self.keys.extend_from_slice(store.key(m));
                 for &(p, d) in gspn.delta(t) {
                     layout.add(&mut self.keys[at..at + w], p as usize, d);
+                }
+                if let Some(known) = skip_forced {
+                    if let Some(widen) = self.follow_forced(gspn, store, known, at, t)? {
+                        return Ok(Some(widen));
+                    }
                 }
                 let c = if kind == MarkingKind::Vanishing {
                     gspn.weight(t).unwrap_or(1.0) / total_weight
@@ -556,6 +613,73 @@ impl Batch {
                 .chunks_exact(w)
                 .map(|k| store.find(k).unwrap_or(NOT_FOUND)),
         );
+        Ok(None)
+    }
+
+    /// Follows the successor key at `at` (reached from `self.cur` by `t`)
+    /// through forced vanishing markings (see [`ExploreParams::skip_forced`]),
+    /// rewriting the key in place; hops followed before (`known`, or this
+    /// round's) are not followed again. Returns the widths a hop needs if it
+    /// would overflow a field.
+    fn follow_forced(
+        &mut self,
+        gspn: &Gspn,
+        store: &MarkingStore,
+        known: &Forced,
+        at: usize,
+        t: TransitionId,
+    ) -> Result<Option<Vec<u8>>> {
+        let layout = store.layout();
+        let w = layout.words();
+        self.next.clone_from(&self.cur);
+        for &(p, d) in gspn.delta(t) {
+            let c = &mut self.next[p as usize];
+            *c = (i64::from(*c) + d) as u32;
+        }
+        self.path.clear();
+        let mut ended = false;
+        for _ in 0..FORCED_HOPS {
+            let key = &self.keys[at..at + w];
+            // A stored marking is not followed through (it is one that is not
+            // forced, the initial marking, or one where the hop limit cut a run).
+            if store.find(key).is_some() {
+                ended = true;
+                break;
+            }
+            if let Some(end) = known.get(key).or_else(|| self.learnt.get(key)) {
+                self.keys[at..at + w].copy_from_slice(end);
+                ended = true;
+                break;
+            }
+            let kind = gspn.firable_resolved(&self.next, &mut self.next_firable)?;
+            if kind != MarkingKind::Vanishing || self.next_firable.len() != 1 {
+                // Remembered as its own end (its firing rule is not evaluated again).
+                let end: Box<[u64]> = self.keys[at..at + w].into();
+                self.learnt.insert(end.clone(), end);
+                ended = true;
+                break;
+            }
+            let u = self.next_firable[0];
+            if let Some(widen) = widening(gspn, layout, &self.next, u)? {
+                return Ok(Some(widen));
+            }
+            self.path.extend_from_slice(&self.keys[at..at + w]);
+            for &(p, d) in gspn.delta(u) {
+                layout.add(&mut self.keys[at..at + w], p as usize, d);
+                let c = &mut self.next[p as usize];
+                *c = (i64::from(*c) + d) as u32;
+            }
+            for (mx, &c) in self.max_tokens.iter_mut().zip(&self.next) {
+                *mx = (*mx).max(c);
+            }
+        }
+        // A run cut by the hop limit (a timeless loop) is not remembered.
+        if ended {
+            let end: Box<[u64]> = self.keys[at..at + w].into();
+            for k in self.path.chunks_exact(w) {
+                self.learnt.insert(k.into(), end.clone());
+            }
+        }
         Ok(None)
     }
 }
