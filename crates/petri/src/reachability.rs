@@ -23,7 +23,8 @@
 //! single firable transition is passed through instead of stored: chains
 //! of zero-time hops (a behaviour tree's control flow) then cost one edge.
 
-use std::collections::HashMap;
+use hashbrown::{DefaultHashBuilder, HashTable};
+use std::hash::BuildHasher;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -65,10 +66,68 @@ pub struct ExploreParams {
     pub skip_forced: bool,
 }
 
-/// Where forced hops lead: a packed key of a forced vanishing marking → the
-/// key of the first marking after it that is not forced (see
-/// [`ExploreParams::skip_forced`]).
-type Forced = HashMap<Box<[u64]>, Box<[u64]>>;
+/// Where forced hops lead: the packed key of a forced vanishing marking →
+/// the key of the first marking after it that is not forced (see
+/// [`ExploreParams::skip_forced`]); pairs stored flat, `2·words` each.
+#[derive(Default)]
+struct Forced {
+    words: usize,
+    pairs: Vec<u64>,
+    index: HashTable<u32>,
+    hasher: DefaultHashBuilder,
+}
+
+impl Forced {
+    fn key(&self, i: u32) -> &[u64] {
+        let at = i as usize * 2 * self.words;
+        &self.pairs[at..at + self.words]
+    }
+
+    fn get(&self, key: &[u64]) -> Option<&[u64]> {
+        if key.len() != self.words {
+            return None;
+        }
+        let h = self.hasher.hash_one(key);
+        let i = *self.index.find(h, |&i| self.key(i) == key)?;
+        let at = (2 * i as usize + 1) * self.words;
+        Some(&self.pairs[at..at + self.words])
+    }
+
+    fn insert(&mut self, key: &[u64], end: &[u64]) {
+        if self.words != key.len() {
+            self.clear();
+            self.words = key.len();
+        }
+        let h = self.hasher.hash_one(key);
+        if self.index.find(h, |&i| self.key(i) == key).is_some() {
+            return;
+        }
+        let i = (self.pairs.len() / (2 * self.words)) as u32;
+        self.pairs.extend_from_slice(key);
+        self.pairs.extend_from_slice(end);
+        let (pairs, words, hasher) = (&self.pairs, self.words, &self.hasher);
+        self.index.insert_unique(h, i, |&j| {
+            let at = j as usize * 2 * words;
+            hasher.hash_one(&pairs[at..at + words])
+        });
+    }
+
+    /// Moves `other`'s pairs into `self`.
+    fn absorb(&mut self, other: &mut Forced) {
+        let w = other.words;
+        if w > 0 {
+            for pair in other.pairs.chunks_exact(2 * w) {
+                self.insert(&pair[..w], &pair[w..]);
+            }
+        }
+        other.clear();
+    }
+
+    fn clear(&mut self) {
+        self.pairs.clear();
+        self.index.clear();
+    }
+}
 
 /// The longest run of forced vanishing hops followed in one firing when
 /// [`ExploreParams::skip_forced`] is set.
@@ -278,7 +337,7 @@ impl ReachabilityGraph {
         // (breadth-first discovery order), whatever the number of threads.
         let mut batches: Vec<Batch> = Vec::new();
         // Forced hops already followed (learnt by the batches of earlier rounds).
-        let mut forced = Forced::new();
+        let mut forced = Forced::default();
         let threads = rayon::current_num_threads();
         let mut i = 0usize;
         while i < store.len() {
@@ -319,7 +378,7 @@ impl ReachabilityGraph {
                 }
             }
             for b in &mut batches[..chunks] {
-                forced.extend(b.learnt.drain());
+                forced.absorb(&mut b.learnt);
             }
             let mut m = i;
             for b in &batches[..chunks] {
@@ -647,15 +706,16 @@ impl Batch {
                 break;
             }
             if let Some(end) = known.get(key).or_else(|| self.learnt.get(key)) {
-                self.keys[at..at + w].copy_from_slice(end);
+                let end = end.to_vec();
+                self.keys[at..at + w].copy_from_slice(&end);
                 ended = true;
                 break;
             }
             let kind = gspn.firable_resolved(&self.next, &mut self.next_firable)?;
             if kind != MarkingKind::Vanishing || self.next_firable.len() != 1 {
                 // Remembered as its own end (its firing rule is not evaluated again).
-                let end: Box<[u64]> = self.keys[at..at + w].into();
-                self.learnt.insert(end.clone(), end);
+                let key = &self.keys[at..at + w];
+                self.learnt.insert(key, key);
                 ended = true;
                 break;
             }
@@ -675,9 +735,9 @@ impl Batch {
         }
         // A run cut by the hop limit (a timeless loop) is not remembered.
         if ended {
-            let end: Box<[u64]> = self.keys[at..at + w].into();
+            let end = &self.keys[at..at + w];
             for k in self.path.chunks_exact(w) {
-                self.learnt.insert(k.into(), end.clone());
+                self.learnt.insert(k, end);
             }
         }
         Ok(None)
