@@ -1,6 +1,9 @@
-//! Analysis of Nav2's largest shipped tree (`navigate_on_route_graph_w_recovery.xml`)
-//! and of the most used one, with the nominal parameters: with and without
-//! sensitivities. Figures in `crates/bt/BENCHMARKS.md`.
+//! Analysis of Nav2's four largest shipped trees — the one with the most
+//! nodes (`navigate_on_route_graph_w_recovery.xml`), the two 11,492-state
+//! ones and the largest chain (the goal-patience tree, 29,384 states) —
+//! with both parameter sets, without sensitivities (the target of issue
+//! 49: ≤ 100 ms each); and with sensitivities on the first two. Figures in
+//! `crates/bt/BENCHMARKS.md`.
 
 use bt::{AnalyzeOptions, ReadOptions, Tree, TreeParams};
 
@@ -10,15 +13,21 @@ fn main() {
 
 const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/bt/nav2");
 
-fn load(file: &str) -> (Tree, TreeParams) {
+const LARGEST: [&str; 4] = [
+    "navigate_on_route_graph_w_recovery.xml",
+    "navigate_to_pose_w_replanning_and_recovery.xml",
+    "navigate_through_poses_w_replanning_and_recovery.xml",
+    "navigate_to_pose_w_replanning_goal_patience_and_recovery.xml",
+];
+
+fn load(file: &str, set: &str) -> (Tree, TreeParams) {
     let tree = bt::read_file(format!("{DIR}/{file}"), &ReadOptions::default()).expect("a shipped tree");
-    let params = TreeParams::read_file(format!("{DIR}/nominal.toml")).expect("the shipped parameters");
+    let params = TreeParams::read_file(format!("{DIR}/{set}.toml")).expect("the shipped parameters");
     (tree, params)
 }
 
-#[divan::bench(args = ["navigate_on_route_graph_w_recovery.xml", "navigate_to_pose_w_replanning_and_recovery.xml"])]
-fn analyze_without_sensitivities(bencher: divan::Bencher, file: &str) {
-    let (tree, params) = load(file);
+fn without_sensitivities(bencher: divan::Bencher, file: &str, set: &str) {
+    let (tree, params) = load(file, set);
     let options = AnalyzeOptions {
         sensitivities: false,
         ..AnalyzeOptions::default()
@@ -26,9 +35,19 @@ fn analyze_without_sensitivities(bencher: divan::Bencher, file: &str) {
     bencher.bench(|| bt::analyze(&tree, &params, &options).expect("analysis"));
 }
 
-#[divan::bench(args = ["navigate_on_route_graph_w_recovery.xml", "navigate_to_pose_w_replanning_and_recovery.xml"], sample_count = 10)]
+#[divan::bench(args = LARGEST, sample_count = 20)]
+fn analyze_nominal(bencher: divan::Bencher, file: &str) {
+    without_sensitivities(bencher, file, "nominal");
+}
+
+#[divan::bench(args = LARGEST, sample_count = 20)]
+fn analyze_degraded(bencher: divan::Bencher, file: &str) {
+    without_sensitivities(bencher, file, "degraded");
+}
+
+#[divan::bench(args = ["navigate_on_route_graph_w_recovery.xml", "navigate_to_pose_w_replanning_and_recovery.xml"], sample_count = 5)]
 fn analyze_with_sensitivities(bencher: divan::Bencher, file: &str) {
-    let (tree, params) = load(file);
+    let (tree, params) = load(file, "nominal");
     let options = AnalyzeOptions::default();
     bencher.bench(|| bt::analyze(&tree, &params, &options).expect("analysis"));
 }

@@ -125,6 +125,7 @@ fn compile(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Result
     let gspn: Gspn = tr.net.instantiate(&Params::new())?;
     let explore = ExploreParams {
         max_states: options.max_states,
+        skip_forced: true,
         ..ExploreParams::default()
     };
     let compiled = CompiledGspn::build(&gspn, &explore).map_err(|e| match e {

@@ -342,6 +342,7 @@ pub(crate) fn explore_params(args: &NetArgs) -> ExploreParams {
     ExploreParams {
         max_states: args.max_states.unwrap_or(defaults.max_states),
         max_memory: args.max_memory.unwrap_or(defaults.max_memory),
+        ..defaults
     }
 }
 

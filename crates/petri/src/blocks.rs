@@ -7,13 +7,16 @@
 //! follow from those of the components before it by substitution, and only the diagonal blocks are
 //! factorised — by a dense LU with partial pivoting (or a division, for a
 //! component of one state), or by a sparse LU for a component larger than
-//! [`DENSE_BLOCK_LIMIT`]. Chains that finish (a behaviour tree's run, a
+//! [`DENSE_BLOCK_LIMIT`]. Components whose dense blocks are equal entry for
+//! entry share one factorisation (the same sub-chain in many contexts). Chains that finish (a behaviour tree's run, a
 //! mission) are mostly such sequences of small components, so the cost is
 //! `O(states + entries + Σ k³)` over the component sizes `k`, against the
 //! fill-in of a sparse LU of the whole matrix.
 //!
 //! Used by [`crate::absorption`] for the absorbing chain's two linear
 //! systems and for every implicit time step of its time distribution.
+
+use std::collections::HashMap;
 
 use faer::Mat;
 use faer::prelude::Solve;
@@ -156,7 +159,8 @@ impl DenseLu {
 enum Block {
     /// One state: its diagonal entry.
     Scalar(f64),
-    Dense(DenseLu),
+    /// Index in [`BlockSystem::dense`] (components with equal blocks share one).
+    Dense(usize),
     /// A sparse LU of the block's transpose.
     Sparse(Box<Lu<usize, f64>>),
 }
@@ -173,6 +177,11 @@ pub(crate) struct BlockSystem {
     /// Component of each state.
     comp: Vec<u32>,
     blocks: Vec<Block>,
+    /// The distinct dense factorisations: components whose diagonal blocks
+    /// are equal entry for entry (the same sub-chain repeated in another
+    /// context, as a finishing chain's phases often are) share one, which
+    /// keeps the factors a time step reads in cache.
+    dense: Vec<DenseLu>,
     /// Entries between components, by column.
     cols: Csr,
 }
@@ -230,6 +239,7 @@ impl BlockSystem {
             local,
             comp,
             blocks: Vec::with_capacity(found.len()),
+            dense: Vec::new(),
             cols,
         };
         sys.factor(what, out, &graph, s, c)?;
@@ -238,6 +248,8 @@ impl BlockSystem {
 
     fn factor(&mut self, what: &'static str, out: &[f64], graph: &Csr, s: f64, c: f64) -> Result<()> {
         let singular = |detail: String| Error::Singular { what, detail };
+        // Dense blocks already factorised, by their entries' bits.
+        let mut seen: HashMap<Vec<u64>, usize> = HashMap::new();
         for b in 0..self.comp_start.len() - 1 {
             let members = &self.states[self.comp_start[b] as usize..self.comp_start[b + 1] as usize];
             let k = members.len();
@@ -266,10 +278,17 @@ impl BlockSystem {
                     for (i, j, v) in entries {
                         a[j * k + i] += v;
                     }
-                    Block::Dense(
-                        DenseLu::new(k, a)
-                            .ok_or_else(|| singular(format!("a component of {k} states is singular")))?,
-                    )
+                    let bits: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
+                    match seen.get(&bits) {
+                        Some(&d) => Block::Dense(d),
+                        None => {
+                            let lu = DenseLu::new(k, a)
+                                .ok_or_else(|| singular(format!("a component of {k} states is singular")))?;
+                            self.dense.push(lu);
+                            seen.insert(bits, self.dense.len() - 1);
+                            Block::Dense(self.dense.len() - 1)
+                        }
+                    }
                 } else {
                     let lu_of = |t: &[Triplet<usize, usize, f64>]| -> Result<Lu<usize, f64>> {
                         SparseColMat::<usize, f64>::try_new_from_triplets(k, k, t)
@@ -298,7 +317,7 @@ impl BlockSystem {
                 let s: f64 = self.cols.row(j as usize).map(|(i, v)| b[i as usize] * v).sum();
                 y.push(b[j as usize] - s);
             }
-            solve_block(block, &mut y, &mut work);
+            solve_block(block, &self.dense, &mut y, &mut work);
             for (&j, &v) in members.iter().zip(&y) {
                 b[j as usize] = v;
             }
@@ -307,10 +326,10 @@ impl BlockSystem {
 }
 
 /// Solves one diagonal block's transposed system, in place.
-fn solve_block(block: &Block, y: &mut [f64], work: &mut Vec<f64>) {
+fn solve_block(block: &Block, dense: &[DenseLu], y: &mut [f64], work: &mut Vec<f64>) {
     match block {
         Block::Scalar(d) => y[0] /= d,
-        Block::Dense(lu) => lu.solve(y, work),
+        Block::Dense(i) => dense[*i].solve(y, work),
         Block::Sparse(lu) => {
             let mut m = Mat::<f64>::from_fn(y.len(), 1, |i, _| y[i]);
             lu.solve_in_place(&mut m);

@@ -18,7 +18,13 @@
 //! coefficient differs from 1). The memory guard
 //! ([`ExploreParams::max_memory`]) stops generation before the whole pipeline
 //! (generation, compilation, solve) would need more than the limit.
+//!
+//! On request ([`ExploreParams::skip_forced`]) a vanishing marking with a
+//! single firable transition is passed through instead of stored: chains
+//! of zero-time hops (a behaviour tree's control flow) then cost one edge.
 
+use hashbrown::{DefaultHashBuilder, HashTable};
+use std::hash::BuildHasher;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -46,13 +52,93 @@ pub struct ExploreParams {
     /// many bytes (see [`estimated_bytes`]). Default:
     /// [`default_max_memory`], 85 % of the memory available at the time.
     pub max_memory: u64,
+    /// Pass through *forced* vanishing markings — those where exactly one
+    /// immediate transition can fire — instead of storing them: an edge into
+    /// one goes on, in the same firing, to the first marking that is
+    /// tangible or offers a choice (at most [`FORCED_HOPS`] hops; a longer
+    /// run of forced hops, a timeless loop, is stored as it is). The
+    /// tangible markings, their rates and every choice are unchanged, so is
+    /// the CTMC; what is lost is what only the skipped markings carried: the
+    /// throughputs of the immediate transitions fired in them, and the
+    /// markings themselves (their count, their firings in a graph export;
+    /// [`ReachabilityGraph::place_bounds`] still counts their tokens).
+    /// Default: off (docs/gspn.md, *The pipeline*).
+    pub skip_forced: bool,
 }
+
+/// Where forced hops lead: the packed key of a forced vanishing marking →
+/// the key of the first marking after it that is not forced (see
+/// [`ExploreParams::skip_forced`]); pairs stored flat, `2·words` each.
+#[derive(Default)]
+struct Forced {
+    words: usize,
+    pairs: Vec<u64>,
+    index: HashTable<u32>,
+    hasher: DefaultHashBuilder,
+}
+
+impl Forced {
+    fn key(&self, i: u32) -> &[u64] {
+        let at = i as usize * 2 * self.words;
+        &self.pairs[at..at + self.words]
+    }
+
+    fn get(&self, key: &[u64]) -> Option<&[u64]> {
+        if key.len() != self.words {
+            return None;
+        }
+        let h = self.hasher.hash_one(key);
+        let i = *self.index.find(h, |&i| self.key(i) == key)?;
+        let at = (2 * i as usize + 1) * self.words;
+        Some(&self.pairs[at..at + self.words])
+    }
+
+    fn insert(&mut self, key: &[u64], end: &[u64]) {
+        if self.words != key.len() {
+            self.clear();
+            self.words = key.len();
+        }
+        let h = self.hasher.hash_one(key);
+        if self.index.find(h, |&i| self.key(i) == key).is_some() {
+            return;
+        }
+        let i = (self.pairs.len() / (2 * self.words)) as u32;
+        self.pairs.extend_from_slice(key);
+        self.pairs.extend_from_slice(end);
+        let (pairs, words, hasher) = (&self.pairs, self.words, &self.hasher);
+        self.index.insert_unique(h, i, |&j| {
+            let at = j as usize * 2 * words;
+            hasher.hash_one(&pairs[at..at + words])
+        });
+    }
+
+    /// Moves `other`'s pairs into `self`.
+    fn absorb(&mut self, other: &mut Forced) {
+        let w = other.words;
+        if w > 0 {
+            for pair in other.pairs.chunks_exact(2 * w) {
+                self.insert(&pair[..w], &pair[w..]);
+            }
+        }
+        other.clear();
+    }
+
+    fn clear(&mut self) {
+        self.pairs.clear();
+        self.index.clear();
+    }
+}
+
+/// The longest run of forced vanishing hops followed in one firing when
+/// [`ExploreParams::skip_forced`] is set.
+pub const FORCED_HOPS: usize = 4096;
 
 impl Default for ExploreParams {
     fn default() -> Self {
         ExploreParams {
             max_states: usize::MAX,
             max_memory: default_max_memory(),
+            skip_forced: false,
         }
     }
 }
@@ -250,6 +336,8 @@ impl ReachabilityGraph {
         // numbering is exactly that of expanding one marking after the other
         // (breadth-first discovery order), whatever the number of threads.
         let mut batches: Vec<Batch> = Vec::new();
+        // Forced hops already followed (learnt by the batches of earlier rounds).
+        let mut forced = Forced::default();
         let threads = rayon::current_num_threads();
         let mut i = 0usize;
         while i < store.len() {
@@ -262,7 +350,8 @@ impl ReachabilityGraph {
             batches.resize_with(chunks.max(batches.len()), Batch::default);
             let run = |(c, b): (usize, &mut Batch)| {
                 let lo = i + c * BATCH;
-                b.expand(gspn, &store, lo..(lo + BATCH).min(end))
+                let skip = params.skip_forced.then_some(&forced);
+                b.expand(gspn, &store, lo..(lo + BATCH).min(end), skip)
             };
             let events: Vec<Result<Option<Vec<u8>>>> = if parallel {
                 batches[..chunks].par_iter_mut().enumerate().map(run).collect()
@@ -276,6 +365,10 @@ impl ReachabilityGraph {
                 let layout = store.fitted_layout(&needed, || largest_successor_counts(gspn, &store, i..end));
                 store.relayout(layout);
                 relayouts += 1;
+                forced.clear();
+                for b in &mut batches {
+                    b.learnt.clear();
+                }
                 continue;
             }
             let w = store.layout().words();
@@ -283,6 +376,9 @@ impl ReachabilityGraph {
                 for (mx, &c) in max_tokens.iter_mut().zip(&b.max_tokens) {
                     *mx = (*mx).max(c);
                 }
+            }
+            for b in &mut batches[..chunks] {
+                forced.absorb(&mut b.learnt);
             }
             let mut m = i;
             for b in &batches[..chunks] {
@@ -478,6 +574,36 @@ struct Batch {
     max_tokens: Vec<u32>,
     cur: Vec<u32>,
     firable: Vec<TransitionId>,
+    /// A successor followed through forced hops, and its firable transitions.
+    next: Vec<u32>,
+    next_firable: Vec<TransitionId>,
+    /// Forced hops followed in this round (merged into the explorer's after it).
+    learnt: Forced,
+    /// The keys of the forced markings of the hops being followed.
+    path: Vec<u64>,
+}
+
+/// The fields a firing of `t` in `m` would overflow in `layout` (`None` if it
+/// fits), or the error of a count beyond `u32`.
+fn widening(gspn: &Gspn, layout: &Layout, m: &[u32], t: TransitionId) -> Result<Option<Vec<u8>>> {
+    let mut widen: Option<Vec<u8>> = None;
+    for &(p, d) in gspn.delta(t) {
+        if d > 0 {
+            let p = p as usize;
+            let new = u64::from(m[p]) + d as u64;
+            if new > u64::from(u32::MAX) {
+                return Err(Error::TokenOverflow {
+                    place: gspn.place_names()[p].clone(),
+                    limit: u64::from(u32::MAX),
+                });
+            }
+            if new > u64::from(layout.max_value(p)) {
+                let w = widen.get_or_insert_with(|| layout.widths().to_vec());
+                w[p] = w[p].max(bits_for(new as u32));
+            }
+        }
+    }
+    Ok(widen)
 }
 
 impl Batch {
@@ -490,6 +616,7 @@ impl Batch {
         gspn: &Gspn,
         store: &MarkingStore,
         markings: std::ops::Range<usize>,
+        skip_forced: Option<&Forced>,
     ) -> Result<Option<Vec<u8>>> {
         self.keys.clear();
         self.edges.clear();
@@ -514,32 +641,21 @@ impl Batch {
             } else {
                 1.0
             };
-            for &t in &self.firable {
+            for k in 0..self.firable.len() {
+                let t = self.firable[k];
                 // Fields that the firing would overflow are widened first.
-                let mut widen: Option<Vec<u8>> = None;
-                for &(p, d) in gspn.delta(t) {
-                    if d > 0 {
-                        let p = p as usize;
-                        let new = u64::from(self.cur[p]) + d as u64;
-                        if new > u64::from(u32::MAX) {
-                            return Err(Error::TokenOverflow {
-                                place: gspn.place_names()[p].clone(),
-                                limit: u64::from(u32::MAX),
-                            });
-                        }
-                        if new > u64::from(layout.max_value(p)) {
-                            let w = widen.get_or_insert_with(|| layout.widths().to_vec());
-                            w[p] = w[p].max(bits_for(new as u32));
-                        }
-                    }
-                }
-                if widen.is_some() {
-                    return Ok(widen);
+                if let Some(widen) = widening(gspn, layout, &self.cur, t)? {
+                    return Ok(Some(widen));
                 }
                 let at = self.keys.len();
                 self.keys.extend_from_slice(store.key(m));
                 for &(p, d) in gspn.delta(t) {
                     layout.add(&mut self.keys[at..at + w], p as usize, d);
+                }
+                if let Some(known) = skip_forced {
+                    if let Some(widen) = self.follow_forced(gspn, store, known, at, t)? {
+                        return Ok(Some(widen));
+                    }
                 }
                 let c = if kind == MarkingKind::Vanishing {
                     gspn.weight(t).unwrap_or(1.0) / total_weight
@@ -556,6 +672,74 @@ impl Batch {
                 .chunks_exact(w)
                 .map(|k| store.find(k).unwrap_or(NOT_FOUND)),
         );
+        Ok(None)
+    }
+
+    /// Follows the successor key at `at` (reached from `self.cur` by `t`)
+    /// through forced vanishing markings (see [`ExploreParams::skip_forced`]),
+    /// rewriting the key in place; hops followed before (`known`, or this
+    /// round's) are not followed again. Returns the widths a hop needs if it
+    /// would overflow a field.
+    fn follow_forced(
+        &mut self,
+        gspn: &Gspn,
+        store: &MarkingStore,
+        known: &Forced,
+        at: usize,
+        t: TransitionId,
+    ) -> Result<Option<Vec<u8>>> {
+        let layout = store.layout();
+        let w = layout.words();
+        self.next.clone_from(&self.cur);
+        for &(p, d) in gspn.delta(t) {
+            let c = &mut self.next[p as usize];
+            *c = (i64::from(*c) + d) as u32;
+        }
+        self.path.clear();
+        let mut ended = false;
+        for _ in 0..FORCED_HOPS {
+            let key = &self.keys[at..at + w];
+            // A stored marking is not followed through (it is one that is not
+            // forced, the initial marking, or one where the hop limit cut a run).
+            if store.find(key).is_some() {
+                ended = true;
+                break;
+            }
+            if let Some(end) = known.get(key).or_else(|| self.learnt.get(key)) {
+                let end = end.to_vec();
+                self.keys[at..at + w].copy_from_slice(&end);
+                ended = true;
+                break;
+            }
+            let kind = gspn.firable_resolved(&self.next, &mut self.next_firable)?;
+            if kind != MarkingKind::Vanishing || self.next_firable.len() != 1 {
+                // Remembered as its own end (its firing rule is not evaluated again).
+                let key = &self.keys[at..at + w];
+                self.learnt.insert(key, key);
+                ended = true;
+                break;
+            }
+            let u = self.next_firable[0];
+            if let Some(widen) = widening(gspn, layout, &self.next, u)? {
+                return Ok(Some(widen));
+            }
+            self.path.extend_from_slice(&self.keys[at..at + w]);
+            for &(p, d) in gspn.delta(u) {
+                layout.add(&mut self.keys[at..at + w], p as usize, d);
+                let c = &mut self.next[p as usize];
+                *c = (i64::from(*c) + d) as u32;
+            }
+            for (mx, &c) in self.max_tokens.iter_mut().zip(&self.next) {
+                *mx = (*mx).max(c);
+            }
+        }
+        // A run cut by the hop limit (a timeless loop) is not remembered.
+        if ended {
+            let end = &self.keys[at..at + w];
+            for k in self.path.chunks_exact(w) {
+                self.learnt.insert(k, end);
+            }
+        }
         Ok(None)
     }
 }

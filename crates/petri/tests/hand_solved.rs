@@ -683,3 +683,70 @@ fn place_capacity_blocks_like_an_inhibitor_arc() {
     let p = birth_death(k, |_| lambda, |_| mu);
     check_queue(&n, &p, 1, |n| if n > 0 { mu } else { 0.0 }, "M/M/1/5 by capacity");
 }
+
+// ---------------------------------------------------------------------------
+// Passing through forced vanishing markings (`ExploreParams::skip_forced`)
+// ---------------------------------------------------------------------------
+
+/// `A —t(1)→ X —x→ Y —y→ V`; from `V`, `left` (weight 1) to `L` or `right`
+/// (weight 3) to `R`; `L —l(2)→ A`, `R —r(5)→ A`. `X` and `Y` are forced,
+/// `V` offers a choice.
+fn forced_chain() -> Net {
+    let mut n = Net::new("forced chain");
+    let [a, px, py, v, l, r] = ["A", "X", "Y", "V", "L", "R"].map(|p| n.add_place(p, u32::from(p == "A")));
+    let t = n.add_timed("t", 1.0);
+    arcs(&mut n, t, &[a], &[px]);
+    let t = n.add_immediate("x", 1.0, 1);
+    arcs(&mut n, t, &[px], &[py]);
+    let t = n.add_immediate("y", 1.0, 1);
+    arcs(&mut n, t, &[py], &[v]);
+    let t = n.add_immediate("left", 1.0, 1);
+    arcs(&mut n, t, &[v], &[l]);
+    let t = n.add_immediate("right", 3.0, 1);
+    arcs(&mut n, t, &[v], &[r]);
+    let t = n.add_timed("l", 2.0);
+    arcs(&mut n, t, &[l], &[a]);
+    let t = n.add_timed("r", 5.0);
+    arcs(&mut n, t, &[r], &[a]);
+    n
+}
+
+const SKIP: ExploreParams = ExploreParams {
+    max_states: usize::MAX,
+    max_memory: u64::MAX,
+    skip_forced: true,
+};
+
+#[test]
+fn skipping_forced_markings_keeps_the_chain() {
+    let g = forced_chain().instantiate(&Params::new()).unwrap();
+    let full = ReachabilityGraph::explore(&g, &ExploreParams::default()).unwrap();
+    let skipped = ReachabilityGraph::explore(&g, &SKIP).unwrap();
+    // X and Y are not stored; V (a choice) is.
+    assert_eq!((full.num_tangible(), full.num_vanishing()), (3, 3));
+    assert_eq!((skipped.num_tangible(), skipped.num_vanishing()), (3, 1));
+    let (c1, c2) = (
+        CompiledGspn::build(&g, &ExploreParams::default()).unwrap(),
+        CompiledGspn::build(&g, &SKIP).unwrap(),
+    );
+    let (s1, s2) = (solve(&c1), solve(&c2));
+    // Cycle A (mean 1) → L (1/4, mean 1/2) or R (3/4, mean 1/5): mean 1 + 1/8 + 3/20.
+    let cycle = 1.0 + 0.125 + 0.15;
+    for (c, s) in [(&c1, &s1), (&c2, &s2)] {
+        assert_close(pi_where(c, s, |m| m[0] == 1), 1.0 / cycle, 1e-12, "π(A)");
+        assert_close(pi_where(c, s, |m| m[4] == 1), 0.125 / cycle, 1e-12, "π(L)");
+        assert_close(x(c, s, "t"), 1.0 / cycle, 1e-12, "X(t)");
+        assert_close(x(c, s, "left"), 0.25 / cycle, 1e-12, "X(left)");
+    }
+}
+
+#[test]
+fn skipping_forced_markings_still_finds_a_timeless_trap() {
+    // X and Y each enable one immediate transition: a forced loop, cut at
+    // the hop limit and stored there, so the elimination names the trap.
+    let g = ping_pong(None).instantiate(&Params::new()).unwrap();
+    match CompiledGspn::build(&g, &SKIP) {
+        Err(Error::TimelessTrap { .. }) => {}
+        other => panic!("expected a timeless trap, got {other:?}"),
+    }
+}

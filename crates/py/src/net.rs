@@ -103,6 +103,7 @@ fn explore_params(max_states: Option<usize>, max_memory: Option<u64>) -> Explore
     ExploreParams {
         max_states: max_states.unwrap_or(defaults.max_states),
         max_memory: max_memory.unwrap_or(defaults.max_memory),
+        ..defaults
     }
 }
 
