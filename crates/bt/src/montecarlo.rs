@@ -381,12 +381,15 @@ impl<'a> Interpreter<'a> {
         self.done(n, pass)
     }
 
+    /// A reactive sequence or fallback: the pure children before the
+    /// running one are read again (one that now stops the node resets the
+    /// running child), then the node goes on as its plain form.
     fn reactive(&mut self, n: NodeId, is_sequence: bool) -> Result<Status> {
         let kids = self.tree.node(n).children.clone();
-        let (pass, stop) = if is_sequence {
-            (Status::Success, Status::Failure)
+        let stop = if is_sequence {
+            Status::Failure
         } else {
-            (Status::Failure, Status::Success)
+            Status::Success
         };
         let running = self.mem[n.index()].idx;
         // Earlier children: pure ones are read again; the others keep their result.
@@ -396,20 +399,7 @@ impl<'a> Interpreter<'a> {
                 return self.done(n, stop);
             }
         }
-        while self.mem[n.index()].idx < kids.len() {
-            let c = kids[self.mem[n.index()].idx];
-            let s = self.tick(c)?;
-            let s = self.take(c, s);
-            if s == Status::Running {
-                return self.done(n, Status::Running);
-            }
-            if s == stop {
-                return self.done(n, stop);
-            }
-            let _ = pass;
-            self.mem[n.index()].idx += 1;
-        }
-        self.done(n, pass)
+        self.sequence(n, is_sequence)
     }
 
     fn sequence_with_memory(&mut self, n: NodeId) -> Result<Status> {
