@@ -27,21 +27,26 @@ import os
 import sys
 
 
+def fill(f, until, item):
+    """Writes item(0), item(1), ... to f until it holds `until` bytes;
+    returns how many were written."""
+    n = 0
+    while f.tell() < until:
+        f.write(item(n))
+        n += 1
+    return n
+
+
 def net_files(d, size):
-    half = size // 2
     with open(os.path.join(d, "net.toml"), "w") as f:
         f.write('name = "big"\n[params]\nlambda = 1.0\n')
-        i = 0
-        while f.tell() < half:
-            f.write(f'[[place]]\nname = "P{i}"\ninitial = 1\n')
-            i += 1
-        places, j = i, 0
-        while f.tell() < size:
-            f.write(
-                f'[[transition]]\nname = "T{j}"\nrate = "lambda"\n'
-                f'inputs = ["P{j % places}"]\noutputs = ["P{(j + 1) % places}"]\n'
-            )
-            j += 1
+        places = fill(f, size // 2, lambda i: f'[[place]]\nname = "P{i}"\ninitial = 1\n')
+        fill(
+            f,
+            size,
+            lambda j: f'[[transition]]\nname = "T{j}"\nrate = "lambda"\n'
+            f'inputs = ["P{j % places}"]\noutputs = ["P{(j + 1) % places}"]\n',
+        )
         f.write('[[transition]]\nname = "Tbad"\nrate = "lambda"\ninputs = ["nowhere"]\n')
     with open(os.path.join(d, "net.pnml"), "w") as f:
         f.write(
@@ -49,39 +54,36 @@ def net_files(d, size):
             '<pnml xmlns="http://www.pnml.org/version-2009/grammar/pnml">\n'
             '<net id="big" type="http://www.pnml.org/version-2009/grammar/ptnet">\n<page id="page0">\n'
         )
-        i = 0
-        while f.tell() < size * 2 // 5:
-            f.write(f'<place id="P{i}"><initialMarking><text>1</text></initialMarking></place>\n')
-            i += 1
-        places, j = i, 0
-        while f.tell() < size:
-            f.write(
-                f'<transition id="T{j}"/>\n<arc id="a{2 * j}" source="P{j % places}" target="T{j}"/>\n'
-                f'<arc id="a{2 * j + 1}" source="T{j}" target="P{(j + 1) % places}"/>\n'
-            )
-            j += 1
+        places = fill(
+            f,
+            size * 2 // 5,
+            lambda i: f'<place id="P{i}"><initialMarking><text>1</text></initialMarking></place>\n',
+        )
+        fill(
+            f,
+            size,
+            lambda j: f'<transition id="T{j}"/>\n<arc id="a{2 * j}" source="P{j % places}" target="T{j}"/>\n'
+            f'<arc id="a{2 * j + 1}" source="T{j}" target="P{(j + 1) % places}"/>\n',
+        )
         f.write('<arc id="bad" source="nowhere" target="T0"/>\n</page>\n</net>\n</pnml>\n')
     with open(os.path.join(d, "net.PNPRO"), "w") as f:
         f.write(
             '<?xml version="1.0" encoding="UTF-8" standalone="no"?>\n'
             '<project name="big" version="121">\n<gspn name="big">\n<nodes>\n'
         )
-        i = 0
-        while f.tell() < size * 3 // 10:
-            f.write(f'<place name="P{i}" marking="1" x="2" y="2"/>\n')
-            i += 1
-        places, j = i, 0
-        while f.tell() < size * 56 // 100:
-            f.write(f'<transition name="T{j}" type="EXP" delay="1" nservers="1" x="6" y="10"/>\n')
-            j += 1
-        transitions, k = j, 0
+        places = fill(f, size * 3 // 10, lambda i: f'<place name="P{i}" marking="1" x="2" y="2"/>\n')
+        transitions = fill(
+            f,
+            size * 56 // 100,
+            lambda j: f'<transition name="T{j}" type="EXP" delay="1" nservers="1" x="6" y="10"/>\n',
+        )
         f.write("</nodes>\n<edges>\n")
-        while f.tell() < size:
-            f.write(
-                f'<arc head="T{k % transitions}" kind="INPUT" tail="P{k % places}"/>\n'
-                f'<arc head="P{(k + 1) % places}" kind="OUTPUT" tail="T{k % transitions}"/>\n'
-            )
-            k += 1
+        fill(
+            f,
+            size,
+            lambda k: f'<arc head="T{k % transitions}" kind="INPUT" tail="P{k % places}"/>\n'
+            f'<arc head="P{(k + 1) % places}" kind="OUTPUT" tail="T{k % transitions}"/>\n',
+        )
         f.write('<arc head="T0" kind="INPUT" tail="nowhere"/>\n</edges>\n</gspn>\n</project>\n')
 
 
@@ -121,10 +123,7 @@ def log_file(d, size):
     with open(os.path.join(d, "log.jsonl"), "w") as f:
         f.write(calibration.format(net=net, b="automove", t=49.9, trajectory=trajectory))
         f.write(calibration.format(net=net, b="contour", t=89.1, trajectory=trajectory))
-        k = 1
-        while f.tell() < size:
-            f.write(mission.format(net=net, k=k))
-            k += 1
+        fill(f, size, lambda k: mission.format(net=net, k=k + 1))
 
 
 def main():
