@@ -561,27 +561,54 @@ fn reach(
             }
         }
     }
-    let mid: Vec<f64> = (0..n).map(|s| lower[s] + (upper[s] - lower[s]) / 2.0).collect();
-    let prob = &view.prob;
+    let bounds = Bounds { lower, upper, ..b };
+    Ok(optimum_of_bounds(
+        view,
+        dir,
+        &collapse,
+        bounds,
+        Vec::new(),
+        choice,
+        "interval iteration",
+    ))
+}
+
+/// The optimum from a solve's bounds: the policy of the states left to
+/// choose by the middle of their bounds (`row_reward` added per row when
+/// not empty), and the rest of the record.
+fn optimum_of_bounds(
+    view: &View<'_>,
+    dir: Direction,
+    collapse: &Collapse,
+    b: Bounds,
+    row_reward: Vec<f64>,
+    mut choice: Vec<u32>,
+    method: &'static str,
+) -> Optimum {
+    let (lower, upper) = (b.lower, b.upper);
+    let mid: Vec<f64> = (0..view.n())
+        .map(|s| lower[s] + (upper[s] - lower[s]) / 2.0)
+        .collect();
+    let (m, prob) = (view.model, &view.prob);
     let row_value = |r: usize| {
-        let m = view.model;
-        (m.entry_start[r] as usize..m.entry_start[r + 1] as usize)
+        let ahead = (m.entry_start[r] as usize..m.entry_start[r + 1] as usize)
             .map(|k| prob[k] * mid[m.col[k] as usize])
-            .sum::<f64>()
+            .sum::<f64>();
+        row_reward.get(r).map_or(ahead, |rho| rho + ahead)
     };
-    extract_policy(view, dir, &collapse, &row_value, &mut choice);
-    Ok(Optimum {
+    extract_policy(view, dir, collapse, &row_value, &mut choice);
+    Optimum {
         direction: dir,
         lower,
         upper,
         choice,
-        row_reward: Vec::new(),
+        row_reward,
         bias: Vec::new(),
-        method: "interval iteration",
+        method,
         iterations: b.iterations,
-        failed_guesses: 0,
+        failed_guesses: b.failed_guesses,
         seconds: 0.0,
-    })
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -648,27 +675,16 @@ fn total(
     let k = eq.num_states();
     let b = value_iteration::optimistic(&eq, dir, vec![0.0; k], &params.precision, stop)?;
     let (lower, upper) = spread(&collapse, &fixed, &b);
-    let mid: Vec<f64> = (0..n).map(|s| lower[s] + (upper[s] - lower[s]) / 2.0).collect();
-    let prob = &view.prob;
-    let row_value = |r: usize| {
-        rho[r]
-            + (m.entry_start[r] as usize..m.entry_start[r + 1] as usize)
-                .map(|k| prob[k] * mid[m.col[k] as usize])
-                .sum::<f64>()
-    };
-    extract_policy(view, dir, &collapse, &row_value, &mut choice);
-    Ok(Optimum {
-        direction: dir,
-        lower,
-        upper,
+    let bounds = Bounds { lower, upper, ..b };
+    Ok(optimum_of_bounds(
+        view,
+        dir,
+        &collapse,
+        bounds,
+        rho,
         choice,
-        row_reward: rho,
-        bias: Vec::new(),
-        method: "optimistic value iteration",
-        iterations: b.iterations,
-        failed_guesses: b.failed_guesses,
-        seconds: 0.0,
-    })
+        "optimistic value iteration",
+    ))
 }
 
 /// For `Rmin`: the states from which some policy reaches `target` surely
