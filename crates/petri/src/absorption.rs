@@ -25,7 +25,7 @@
 //! order (`crate::blocks`): a finishing chain is mostly small components
 //! in sequence, which a sparse LU of the whole matrix would fill in.
 
-use crate::blocks::BlockSystem;
+use crate::blocks::{BlockSystem, Csr};
 use crate::ctmc::CompiledGspn;
 use crate::error::{Error, Result};
 use crate::net::TransitionId;
@@ -143,6 +143,8 @@ fn survival_crank_nicolson(
         1.0,
         0.5 * h,
     )?;
+    // (h/2)·r_ij by column j: the right-hand side gathers p_i into each j.
+    let by_col = Csr::new(p0.len(), tr.inner.iter().map(|&(i, j, r)| (j, i, 0.5 * h * r)));
     let mut p = p0.to_vec();
     let mut rhs = vec![0.0; p.len()];
     let mut out = Vec::with_capacity(max_steps + 1);
@@ -153,11 +155,12 @@ fn survival_crank_nicolson(
             sys.solve_row(&mut p);
         } else {
             // rhs = p (I − (h/2) A)
-            for (i, v) in rhs.iter_mut().enumerate() {
-                *v = p[i] * (1.0 - 0.5 * h * tr.out_rate[i]);
-            }
-            for &(i, j, r) in &tr.inner {
-                rhs[j as usize] += 0.5 * h * r * p[i as usize];
+            for (j, v) in rhs.iter_mut().enumerate() {
+                let mut acc = p[j] * (1.0 - 0.5 * h * tr.out_rate[j]);
+                for (i, w) in by_col.row(j) {
+                    acc += w * p[i as usize];
+                }
+                *v = acc;
             }
             sys.solve_row(&mut rhs);
             std::mem::swap(&mut p, &mut rhs);

@@ -16,14 +16,14 @@
 //! Used by [`crate::absorption`] for the absorbing chain's two linear
 //! systems and for every implicit time step of its time distribution.
 
-use std::collections::HashMap;
-
 use faer::Mat;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
+use hashbrown::HashMap;
 
 use crate::error::{Error, Result};
+use crate::profile_lu::ProfileLu;
 use crate::scc::{Successors, tarjan};
 
 /// Components up to this size get a dense LU; larger ones a sparse LU.
@@ -31,15 +31,16 @@ pub(crate) const DENSE_BLOCK_LIMIT: usize = 400;
 
 /// Compressed rows: `start[i]..start[i + 1]` in `cols`/`vals`.
 #[derive(Debug, Default)]
-struct Csr {
+pub(crate) struct Csr {
     start: Vec<u32>,
     cols: Vec<u32>,
     vals: Vec<f64>,
 }
 
 impl Csr {
-    /// Rows of `(row, col, value)` entries (any order).
-    fn new(n: usize, entries: impl Iterator<Item = (u32, u32, f64)> + Clone) -> Csr {
+    /// Rows of `(row, col, value)` entries (any order; a row keeps its
+    /// entries in the order given).
+    pub(crate) fn new(n: usize, entries: impl Iterator<Item = (u32, u32, f64)> + Clone) -> Csr {
         let mut start = vec![0u32; n + 1];
         for (r, _, _) in entries.clone() {
             start[r as usize + 1] += 1;
@@ -60,8 +61,9 @@ impl Csr {
         Csr { start, cols, vals }
     }
 
+    /// The entries `(col, value)` of row `i`.
     #[inline]
-    fn row(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
+    pub(crate) fn row(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
         let r = self.start[i] as usize..self.start[i + 1] as usize;
         self.cols[r.clone()]
             .iter()
@@ -77,81 +79,6 @@ impl Successors for Csr {
 
     fn successors(&self, v: u32) -> &[u32] {
         &self.cols[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
-    }
-}
-
-/// A dense LU with partial pivoting, `P·B = L·U`, row-major, `k × k`; the
-/// factorised matrix is the block's transpose, so that the row system
-/// `x B_block = y` is a plain solve with contiguous rows.
-struct DenseLu {
-    k: usize,
-    lu: Vec<f64>,
-    perm: Vec<usize>,
-}
-
-/// `Σ a_i b_i` over equal-length slices, four partial sums (so that the
-/// compiler can use vector registers).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for l in 0..4 {
-            acc[l] += x[l] * y[l];
-        }
-    }
-    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
-}
-
-impl DenseLu {
-    fn new(k: usize, mut a: Vec<f64>) -> Option<DenseLu> {
-        let mut perm: Vec<usize> = (0..k).collect();
-        for col in 0..k {
-            let (piv, best) = (col..k)
-                .map(|r| (r, a[r * k + col].abs()))
-                .fold((col, -1.0), |b, x| if x.1 > b.1 { x } else { b });
-            if !(best > 0.0 && best.is_finite()) {
-                return None;
-            }
-            if piv != col {
-                for j in 0..k {
-                    a.swap(col * k + j, piv * k + j);
-                }
-                perm.swap(col, piv);
-            }
-            let d = a[col * k + col];
-            let (top, rest) = a.split_at_mut((col + 1) * k);
-            let pivot_row = &top[col * k + col + 1..(col + 1) * k];
-            for r in 0..k - col - 1 {
-                let row = &mut rest[r * k..(r + 1) * k];
-                let f = row[col] / d;
-                row[col] = f;
-                if f != 0.0 {
-                    for (x, &p) in row[col + 1..].iter_mut().zip(pivot_row) {
-                        *x -= f * p;
-                    }
-                }
-            }
-        }
-        Some(DenseLu { k, lu: a, perm })
-    }
-
-    /// `B z = y` for the factorised `B`, in place: `L U z = P y`.
-    fn solve(&self, y: &mut [f64], work: &mut Vec<f64>) {
-        let k = self.k;
-        work.clear();
-        work.extend(self.perm.iter().map(|&p| y[p]));
-        for i in 1..k {
-            let s = dot(&self.lu[i * k..i * k + i], &work[..i]);
-            work[i] -= s;
-        }
-        for i in (0..k).rev() {
-            let s = dot(&self.lu[i * k + i + 1..(i + 1) * k], &work[i + 1..k]);
-            work[i] = (work[i] - s) / self.lu[i * k + i];
-        }
-        y.copy_from_slice(work);
     }
 }
 
@@ -181,7 +108,7 @@ pub(crate) struct BlockSystem {
     /// are equal entry for entry (the same sub-chain repeated in another
     /// context, as a finishing chain's phases often are) share one, which
     /// keeps the factors a time step reads in cache.
-    dense: Vec<DenseLu>,
+    dense: Vec<ProfileLu>,
     /// Entries between components, by column.
     cols: Csr,
 }
@@ -279,16 +206,24 @@ impl BlockSystem {
                         a[j * k + i] += v;
                     }
                     let bits: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
-                    match seen.get(&bits) {
-                        Some(&d) => Block::Dense(d),
+                    let d = match seen.get(&bits) {
+                        Some(&d) => d,
                         None => {
-                            let lu = DenseLu::new(k, a)
+                            let lu = ProfileLu::new(k, &a)
                                 .ok_or_else(|| singular(format!("a component of {k} states is singular")))?;
                             self.dense.push(lu);
                             seen.insert(bits, self.dense.len() - 1);
-                            Block::Dense(self.dense.len() - 1)
+                            self.dense.len() - 1
                         }
+                    };
+                    // The members in the factor's order (they were sorted,
+                    // as the local indices are).
+                    let range = self.comp_start[b] as usize..self.comp_start[b + 1] as usize;
+                    let sorted = self.states[range.clone()].to_vec();
+                    for (slot, &o) in self.states[range].iter_mut().zip(self.dense[d].order()) {
+                        *slot = sorted[o as usize];
                     }
+                    Block::Dense(d)
                 } else {
                     let lu_of = |t: &[Triplet<usize, usize, f64>]| -> Result<Lu<usize, f64>> {
                         SparseColMat::<usize, f64>::try_new_from_triplets(k, k, t)
@@ -305,36 +240,40 @@ impl BlockSystem {
         Ok(())
     }
 
-    /// Solves the row system `x M = b` (that is `Mᵀ xᵀ = bᵀ`), in place.
+    /// Solves the row system `x M = b` (that is `Mᵀ xᵀ = bᵀ`), in place,
+    /// without allocating (but for components beyond [`DENSE_BLOCK_LIMIT`]).
     pub(crate) fn solve_row(&self, b: &mut [f64]) {
-        let mut y = Vec::new();
-        let mut work = Vec::new();
+        let mut buffer = [0.0f64; DENSE_BLOCK_LIMIT];
         for (blk, block) in self.blocks.iter().enumerate() {
             let members = &self.states[self.comp_start[blk] as usize..self.comp_start[blk + 1] as usize];
-            // Contributions of the components before: x_i M_ij, i earlier.
-            y.clear();
-            for &j in members {
-                let s: f64 = self.cols.row(j as usize).map(|(i, v)| b[i as usize] * v).sum();
-                y.push(b[j as usize] - s);
-            }
-            solve_block(block, &self.dense, &mut y, &mut work);
-            for (&j, &v) in members.iter().zip(&y) {
-                b[j as usize] = v;
-            }
-        }
-    }
-}
-
-/// Solves one diagonal block's transposed system, in place.
-fn solve_block(block: &Block, dense: &[DenseLu], y: &mut [f64], work: &mut Vec<f64>) {
-    match block {
-        Block::Scalar(d) => y[0] /= d,
-        Block::Dense(i) => dense[*i].solve(y, work),
-        Block::Sparse(lu) => {
-            let mut m = Mat::<f64>::from_fn(y.len(), 1, |i, _| y[i]);
-            lu.solve_in_place(&mut m);
-            for (i, v) in y.iter_mut().enumerate() {
-                *v = m[(i, 0)];
+            // b_j minus the contributions x_i M_ij of the components before.
+            let rhs = |j: u32| {
+                b[j as usize]
+                    - self
+                        .cols
+                        .row(j as usize)
+                        .map(|(i, v)| b[i as usize] * v)
+                        .sum::<f64>()
+            };
+            match block {
+                Block::Scalar(d) => b[members[0] as usize] = rhs(members[0]) / d,
+                Block::Dense(i) => {
+                    let y = &mut buffer[..members.len()];
+                    for (y, &j) in y.iter_mut().zip(members) {
+                        *y = rhs(j);
+                    }
+                    self.dense[*i].solve(y);
+                    for (&j, &v) in members.iter().zip(y.iter()) {
+                        b[j as usize] = v;
+                    }
+                }
+                Block::Sparse(lu) => {
+                    let mut m = Mat::<f64>::from_fn(members.len(), 1, |i, _| rhs(members[i]));
+                    lu.solve_in_place(&mut m);
+                    for (i, &j) in members.iter().enumerate() {
+                        b[j as usize] = m[(i, 0)];
+                    }
+                }
             }
         }
     }
