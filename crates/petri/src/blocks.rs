@@ -31,16 +31,15 @@ pub(crate) const DENSE_BLOCK_LIMIT: usize = 400;
 
 /// Compressed rows: `start[i]..start[i + 1]` in `cols`/`vals`.
 #[derive(Debug, Default)]
-pub(crate) struct Csr {
+struct Csr {
     start: Vec<u32>,
     cols: Vec<u32>,
     vals: Vec<f64>,
 }
 
 impl Csr {
-    /// Rows of `(row, col, value)` entries (any order; a row keeps its
-    /// entries in the order given).
-    pub(crate) fn new(n: usize, entries: impl Iterator<Item = (u32, u32, f64)> + Clone) -> Csr {
+    /// Rows of `(row, col, value)` entries (any order).
+    fn new(n: usize, entries: impl Iterator<Item = (u32, u32, f64)> + Clone) -> Csr {
         let mut start = vec![0u32; n + 1];
         for (r, _, _) in entries.clone() {
             start[r as usize + 1] += 1;
@@ -61,9 +60,8 @@ impl Csr {
         Csr { start, cols, vals }
     }
 
-    /// The entries `(col, value)` of row `i`.
     #[inline]
-    pub(crate) fn row(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
+    fn row(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
         let r = self.start[i] as usize..self.start[i + 1] as usize;
         self.cols[r.clone()]
             .iter()
