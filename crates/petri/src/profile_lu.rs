@@ -30,7 +30,7 @@
 //! solves are dot products over short contiguous slices.
 //!
 //! Cost for a block of `k` states whose factors hold `f` entries: ordering
-//! `O(k · (k + e log e))` over the `e` entries (every start node is tried),
+//! `O(e log e + k · (k + e))` over the `e` entries (every start node is tried),
 //! factorisation `O(Σ_i |L row i| · |U row i|)`, each solve `2f` flops.
 
 /// `Σ a_i b_i` over equal-length slices, four partial sums (so that the
