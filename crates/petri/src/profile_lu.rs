@@ -180,123 +180,18 @@ fn profile_order(k: usize, a: &[f64]) -> Vec<u32> {
     }
     let natural: Vec<u32> = (0..k as u32).collect();
     let mut best = (profile(&adj, &natural), natural);
-    // Reverse Cuthill–McKee from every root; Sloan from the best root
-    // towards the node its breadth-first search reached last.
     let mut position = vec![0u32; k];
-    let mut ends = (0, 0);
-    let mut best_rcm = usize::MAX;
     for root in 0..k as u32 {
         let order = reverse_cuthill_mckee(&adj, root);
         for (p, &v) in order.iter().enumerate() {
             position[v as usize] = p as u32;
         }
         let size = profile_with(&adj, &order, &position);
-        if size < best_rcm {
-            best_rcm = size;
-            ends = (root, order[0]);
-        }
         if size < best.0 {
             best = (size, order);
         }
     }
-    let order = sloan(&adj, ends.0, ends.1);
-    let size = profile(&adj, &order);
-    if size < best.0 {
-        best = (size, order);
-    }
     best.1
-}
-
-/// Sloan's profile-reducing order (Sloan, *An algorithm for profile and
-/// wavefront reduction of sparse matrices*, IJNME 23, 1986) from `start`
-/// towards `end`: the next node numbered is the candidate of highest
-/// priority `2·(distance to end) − (neighbours it would bring into the
-/// front)`, weights 1 and 2.
-fn sloan(adj: &[Vec<u32>], start: u32, end: u32) -> Vec<u32> {
-    const INACTIVE: u8 = 0;
-    const PREACTIVE: u8 = 1;
-    const ACTIVE: u8 = 2;
-    const DONE: u8 = 3;
-    let k = adj.len();
-    // Distances from the end node (breadth-first).
-    let mut dist = vec![u32::MAX; k];
-    let mut queue = vec![end];
-    dist[end as usize] = 0;
-    let mut head = 0;
-    while head < queue.len() {
-        let u = queue[head] as usize;
-        head += 1;
-        for &w in &adj[u] {
-            if dist[w as usize] == u32::MAX {
-                dist[w as usize] = dist[u] + 1;
-                queue.push(w);
-            }
-        }
-    }
-    let far = queue.len() as i64;
-    let mut priority: Vec<i64> = (0..k)
-        .map(|i| {
-            let d = if dist[i] == u32::MAX {
-                far
-            } else {
-                i64::from(dist[i])
-            };
-            d - 2 * (adj[i].len() as i64 + 1)
-        })
-        .collect();
-    let mut status = vec![INACTIVE; k];
-    let mut order = Vec::with_capacity(k);
-    let mut candidates: Vec<u32> = Vec::new();
-    let mut next_start = 0u32;
-    while order.len() < k {
-        if candidates.is_empty() {
-            // The first node, or the next piece of a pattern in pieces.
-            let s = if order.is_empty() {
-                start
-            } else {
-                while status[next_start as usize] != INACTIVE {
-                    next_start += 1;
-                }
-                next_start
-            };
-            status[s as usize] = PREACTIVE;
-            candidates.push(s);
-        }
-        // The candidate of highest priority (ties: the lowest index).
-        let (at, _) = candidates
-            .iter()
-            .enumerate()
-            .max_by_key(|&(_, &v)| (priority[v as usize], std::cmp::Reverse(v)))
-            .expect("a candidate");
-        let i = candidates.swap_remove(at) as usize;
-        if status[i] == PREACTIVE {
-            for &j in &adj[i] {
-                priority[j as usize] += 2;
-                if status[j as usize] == INACTIVE {
-                    status[j as usize] = PREACTIVE;
-                    candidates.push(j);
-                }
-            }
-        }
-        status[i] = DONE;
-        order.push(i as u32);
-        for &j in &adj[i] {
-            if status[j as usize] == PREACTIVE {
-                status[j as usize] = ACTIVE;
-                priority[j as usize] += 2;
-                for &m in &adj[j as usize] {
-                    if status[m as usize] != DONE {
-                        priority[m as usize] += 2;
-                        if status[m as usize] == INACTIVE {
-                            status[m as usize] = PREACTIVE;
-                            candidates.push(m);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    order
 }
 
 /// Breadth-first from `root`, neighbours by increasing degree, reversed;
