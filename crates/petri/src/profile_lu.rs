@@ -11,11 +11,11 @@
 //!   the others, so partial pivoting would keep the diagonal pivot anyway,
 //!   and the growth factor is at most 2 (Wilkinson's bound for column
 //!   diagonally dominant matrices; Higham, *Accuracy and Stability of
-//!   Numerical Algorithms*, 2nd ed., Thm. 9.9);
+//!   Numerical Algorithms*, 2nd ed., ch. 9);
 //! - column dominance passes to every Schur complement, and `Bᵀ` is an
 //!   M-matrix whose Schur complements are M-matrices: a pivot is positive
-//!   unless the block is singular (a component with no exit when `s = 0`),
-//!   which the factorisation reports.
+//!   unless the block is singular (a component with no exit when `s = 0`);
+//!   a zero or non-finite pivot is reported.
 //!
 //! A symmetric permutation `P Bᵀ Pᵀ` keeps the dominance, so the states
 //! can be renumbered freely before the factorisation. Without pivoting the
@@ -23,7 +23,7 @@
 //! row `i` of `L` starts no earlier than the first neighbour of `i` in the
 //! symmetrised pattern, and so on for the columns of `U`. The order is
 //! reverse Cuthill–McKee (George & Liu, *Computer Solution of Large Sparse
-//! Positive Definite Systems*, §4.3) from the start node whose order gives
+//! Positive Definite Systems*, 1981, ch. 4) from the start node whose order gives
 //! the smallest profile, or the natural order if that is smaller still.
 //! Each row of the factors is then kept as one contiguous slice from the
 //! first nonzero of `L` to the last nonzero of `U`, so both triangular
@@ -31,7 +31,7 @@
 //!
 //! Cost for a block of `k` states whose factors hold `f` entries: ordering
 //! `O(e log e + k · (k + e))` over the `e` entries (every start node is tried),
-//! factorisation `O(Σ_i |L row i| · |U row i|)`, each solve `2f` flops.
+//! factorisation `O(k² + Σ_i |L row i| · |U row i|)`, each solve `2f` flops.
 
 /// `Σ a_i b_i` over equal-length slices, four partial sums (so that the
 /// compiler can use vector registers).
