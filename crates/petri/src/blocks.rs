@@ -5,25 +5,30 @@
 //! Ordering the states by the chain's strongly connected components in
 //! topological order makes `M` block triangular: each component's unknowns
 //! follow from those of the components before it by substitution, and only the diagonal blocks are
-//! factorised — by a dense LU with partial pivoting (or a division, for a
-//! component of one state), or by a sparse LU for a component larger than
-//! [`DENSE_BLOCK_LIMIT`]. Components whose dense blocks are equal entry for
-//! entry share one factorisation (the same sub-chain in many contexts). Chains that finish (a behaviour tree's run, a
-//! mission) are mostly such sequences of small components, so the cost is
-//! `O(states + entries + Σ k³)` over the component sizes `k`, against the
-//! fill-in of a sparse LU of the whole matrix.
+//! factorised — by a division for a component of one state, by an LU
+//! without pivoting in a profile-reducing order stored by profile
+//! ([`crate::profile_lu`], which says why no pivoting is needed: `M` is
+//! row diagonally dominant) up to [`DENSE_BLOCK_LIMIT`] states, by a sparse
+//! LU above. Components whose blocks are equal entry for entry share one
+//! factorisation (the same sub-chain in many contexts). Each component's
+//! states are kept in its factor's order, so its right-hand side is
+//! gathered straight into one buffer on the stack and no solve allocates. Chains that
+//! finish (a behaviour tree's run, a mission) are mostly such sequences of
+//! small components, so the cost is `O(states + entries + Σ f)` per solve
+//! over the factors' stored entries `f` (at most `k²` for `k` states),
+//! against the fill-in of a sparse LU of the whole matrix.
 //!
 //! Used by [`crate::absorption`] for the absorbing chain's two linear
 //! systems and for every implicit time step of its time distribution.
-
-use std::collections::HashMap;
 
 use faer::Mat;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
+use hashbrown::HashMap;
 
 use crate::error::{Error, Result};
+use crate::profile_lu::ProfileLu;
 use crate::scc::{Successors, tarjan};
 
 /// Components up to this size get a dense LU; larger ones a sparse LU.
@@ -80,81 +85,6 @@ impl Successors for Csr {
     }
 }
 
-/// A dense LU with partial pivoting, `P·B = L·U`, row-major, `k × k`; the
-/// factorised matrix is the block's transpose, so that the row system
-/// `x B_block = y` is a plain solve with contiguous rows.
-struct DenseLu {
-    k: usize,
-    lu: Vec<f64>,
-    perm: Vec<usize>,
-}
-
-/// `Σ a_i b_i` over equal-length slices, four partial sums (so that the
-/// compiler can use vector registers).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for l in 0..4 {
-            acc[l] += x[l] * y[l];
-        }
-    }
-    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
-}
-
-impl DenseLu {
-    fn new(k: usize, mut a: Vec<f64>) -> Option<DenseLu> {
-        let mut perm: Vec<usize> = (0..k).collect();
-        for col in 0..k {
-            let (piv, best) = (col..k)
-                .map(|r| (r, a[r * k + col].abs()))
-                .fold((col, -1.0), |b, x| if x.1 > b.1 { x } else { b });
-            if !(best > 0.0 && best.is_finite()) {
-                return None;
-            }
-            if piv != col {
-                for j in 0..k {
-                    a.swap(col * k + j, piv * k + j);
-                }
-                perm.swap(col, piv);
-            }
-            let d = a[col * k + col];
-            let (top, rest) = a.split_at_mut((col + 1) * k);
-            let pivot_row = &top[col * k + col + 1..(col + 1) * k];
-            for r in 0..k - col - 1 {
-                let row = &mut rest[r * k..(r + 1) * k];
-                let f = row[col] / d;
-                row[col] = f;
-                if f != 0.0 {
-                    for (x, &p) in row[col + 1..].iter_mut().zip(pivot_row) {
-                        *x -= f * p;
-                    }
-                }
-            }
-        }
-        Some(DenseLu { k, lu: a, perm })
-    }
-
-    /// `B z = y` for the factorised `B`, in place: `L U z = P y`.
-    fn solve(&self, y: &mut [f64], work: &mut Vec<f64>) {
-        let k = self.k;
-        work.clear();
-        work.extend(self.perm.iter().map(|&p| y[p]));
-        for i in 1..k {
-            let s = dot(&self.lu[i * k..i * k + i], &work[..i]);
-            work[i] -= s;
-        }
-        for i in (0..k).rev() {
-            let s = dot(&self.lu[i * k + i + 1..(i + 1) * k], &work[i + 1..k]);
-            work[i] = (work[i] - s) / self.lu[i * k + i];
-        }
-        y.copy_from_slice(work);
-    }
-}
-
 /// The factorised diagonal block of one component.
 enum Block {
     /// One state: its diagonal entry.
@@ -181,7 +111,7 @@ pub(crate) struct BlockSystem {
     /// are equal entry for entry (the same sub-chain repeated in another
     /// context, as a finishing chain's phases often are) share one, which
     /// keeps the factors a time step reads in cache.
-    dense: Vec<DenseLu>,
+    dense: Vec<ProfileLu>,
     /// Entries between components, by column.
     cols: Csr,
 }
@@ -279,16 +209,24 @@ impl BlockSystem {
                         a[j * k + i] += v;
                     }
                     let bits: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
-                    match seen.get(&bits) {
-                        Some(&d) => Block::Dense(d),
+                    let d = match seen.get(&bits) {
+                        Some(&d) => d,
                         None => {
-                            let lu = DenseLu::new(k, a)
+                            let lu = ProfileLu::new(k, &a)
                                 .ok_or_else(|| singular(format!("a component of {k} states is singular")))?;
                             self.dense.push(lu);
                             seen.insert(bits, self.dense.len() - 1);
-                            Block::Dense(self.dense.len() - 1)
+                            self.dense.len() - 1
                         }
+                    };
+                    // The members in the factor's order (they were sorted,
+                    // as the local indices are).
+                    let range = self.comp_start[b] as usize..self.comp_start[b + 1] as usize;
+                    let sorted = self.states[range.clone()].to_vec();
+                    for (slot, &o) in self.states[range].iter_mut().zip(self.dense[d].order()) {
+                        *slot = sorted[o as usize];
                     }
+                    Block::Dense(d)
                 } else {
                     let lu_of = |t: &[Triplet<usize, usize, f64>]| -> Result<Lu<usize, f64>> {
                         SparseColMat::<usize, f64>::try_new_from_triplets(k, k, t)
@@ -305,36 +243,40 @@ impl BlockSystem {
         Ok(())
     }
 
-    /// Solves the row system `x M = b` (that is `Mᵀ xᵀ = bᵀ`), in place.
+    /// Solves the row system `x M = b` (that is `Mᵀ xᵀ = bᵀ`), in place,
+    /// without allocating (but for components beyond [`DENSE_BLOCK_LIMIT`]).
     pub(crate) fn solve_row(&self, b: &mut [f64]) {
-        let mut y = Vec::new();
-        let mut work = Vec::new();
+        let mut buffer = [0.0f64; DENSE_BLOCK_LIMIT];
         for (blk, block) in self.blocks.iter().enumerate() {
             let members = &self.states[self.comp_start[blk] as usize..self.comp_start[blk + 1] as usize];
-            // Contributions of the components before: x_i M_ij, i earlier.
-            y.clear();
-            for &j in members {
-                let s: f64 = self.cols.row(j as usize).map(|(i, v)| b[i as usize] * v).sum();
-                y.push(b[j as usize] - s);
-            }
-            solve_block(block, &self.dense, &mut y, &mut work);
-            for (&j, &v) in members.iter().zip(&y) {
-                b[j as usize] = v;
-            }
-        }
-    }
-}
-
-/// Solves one diagonal block's transposed system, in place.
-fn solve_block(block: &Block, dense: &[DenseLu], y: &mut [f64], work: &mut Vec<f64>) {
-    match block {
-        Block::Scalar(d) => y[0] /= d,
-        Block::Dense(i) => dense[*i].solve(y, work),
-        Block::Sparse(lu) => {
-            let mut m = Mat::<f64>::from_fn(y.len(), 1, |i, _| y[i]);
-            lu.solve_in_place(&mut m);
-            for (i, v) in y.iter_mut().enumerate() {
-                *v = m[(i, 0)];
+            // b_j minus the contributions x_i M_ij of the components before.
+            let rhs = |j: u32| {
+                b[j as usize]
+                    - self
+                        .cols
+                        .row(j as usize)
+                        .map(|(i, v)| b[i as usize] * v)
+                        .sum::<f64>()
+            };
+            match block {
+                Block::Scalar(d) => b[members[0] as usize] = rhs(members[0]) / d,
+                Block::Dense(i) => {
+                    let y = &mut buffer[..members.len()];
+                    for (y, &j) in y.iter_mut().zip(members) {
+                        *y = rhs(j);
+                    }
+                    self.dense[*i].solve(y);
+                    for (&j, &v) in members.iter().zip(y.iter()) {
+                        b[j as usize] = v;
+                    }
+                }
+                Block::Sparse(lu) => {
+                    let mut m = Mat::<f64>::from_fn(members.len(), 1, |i, _| rhs(members[i]));
+                    lu.solve_in_place(&mut m);
+                    for (i, &j) in members.iter().enumerate() {
+                        b[j as usize] = m[(i, 0)];
+                    }
+                }
             }
         }
     }
@@ -343,6 +285,70 @@ fn solve_block(block: &Block, dense: &[DenseLu], y: &mut [f64], work: &mut Vec<f
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// `x M = b` by a dense LU of the whole `Mᵀ`.
+    fn dense_row_solve(out: &[f64], inner: &[(u32, u32, f64)], s: f64, c: f64, b: &[f64]) -> Vec<f64> {
+        let n = out.len();
+        let mut m = Mat::<f64>::zeros(n, n);
+        for i in 0..n {
+            m[(i, i)] = s + c * out[i];
+        }
+        for &(i, j, r) in inner {
+            m[(i as usize, j as usize)] -= c * r;
+        }
+        let mt = m.transpose().to_owned();
+        let x = mt.partial_piv_lu().solve(Mat::<f64>::from_fn(n, 1, |i, _| b[i]));
+        (0..n).map(|i| x[(i, 0)]).collect()
+    }
+
+    proptest! {
+        /// Random chains — `copies` copies of a random sub-chain, each
+        /// leading to the next, their states interleaved in the numbering,
+        /// so that equal blocks repeat — solved block by block agree with a
+        /// dense solve, for the absorption's `s = 0` and a time step's `s = 1`.
+        #[test]
+        fn block_solve_matches_dense_solve(
+            m in 1usize..40,
+            copies in 1usize..4,
+            edges in proptest::collection::vec((0usize..1000, 0usize..1000, 0.01f64..5.0), 0..200),
+            leaks in proptest::collection::vec(0.001f64..1.0, 40),
+            time_step in any::<bool>(),
+        ) {
+            let n = m * copies;
+            let id = |t: usize, i: usize| (t + copies * i) as u32;
+            let mut inner = Vec::new();
+            let mut out = vec![0.0; n];
+            for t in 0..copies {
+                for &(i, j, r) in &edges {
+                    let (i, j) = (i % m, j % m);
+                    if i != j {
+                        inner.push((id(t, i), id(t, j), r));
+                    }
+                }
+                // On to the next copy (or out of the chain, for the last).
+                if t + 1 < copies {
+                    inner.push((id(t, 0), id(t + 1, 0), 1.0));
+                }
+                out[id(t, 0) as usize] += 1.0;
+                for (i, &l) in leaks[..m].iter().enumerate() {
+                    out[id(t, i) as usize] += l;
+                }
+            }
+            for &(i, _, r) in inner.iter().filter(|&&(i, j, _)| (i as usize % copies) == (j as usize % copies)) {
+                out[i as usize] += r;
+            }
+            let (s, c) = if time_step { (1.0, 0.35) } else { (0.0, 1.0) };
+            let b: Vec<f64> = (0..n).map(|i| 0.5 + (i % 4) as f64).collect();
+            let want = dense_row_solve(&out, &inner, s, c, &b);
+            let sys = BlockSystem::new("test", &out, &inner, s, c).unwrap();
+            let mut got = b.clone();
+            sys.solve_row(&mut got);
+            for (g, w) in got.iter().zip(&want) {
+                prop_assert!((g - w).abs() <= 1e-10 * w.abs().max(1.0), "{} vs {}", g, w);
+            }
+        }
+    }
 
     /// The block solve against a dense solve of the same system, on a
     /// chain with a cycle, a branch and a large component.

@@ -62,6 +62,7 @@ mod mdd;
 pub mod mdp;
 pub mod net;
 mod product_search;
+mod profile_lu;
 pub use gspn::policy;
 pub mod properties;
 pub mod reachability;

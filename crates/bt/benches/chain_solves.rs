@@ -1,0 +1,51 @@
+//! The two solving stages of the goal-patience tree's analysis, timed
+//! apart from the state-space generation: the absorption (two block
+//! solves of `x (−Q_TT) = b`) and the time distribution
+//! (`absorption_cdf_steps` on the grid `bt analyze` uses for its
+//! quantiles: 25 steps per mean time, up to the 0.99 quantile). The chain
+//! is built once from the shipped tree and nominal parameters. Figures in
+//! `crates/bt/BENCHMARKS.md`.
+
+use bt::{ReadOptions, TreeParams};
+use petri::{CompiledGspn, ExploreParams, Params};
+
+fn main() {
+    divan::main();
+}
+
+const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/bt/nav2");
+const TREE: &str = "navigate_to_pose_w_replanning_goal_patience_and_recovery.xml";
+
+/// The goal-patience tree's compiled chain and its rates.
+fn chain() -> (CompiledGspn, Vec<f64>) {
+    let tree = bt::read_file(format!("{DIR}/{TREE}"), &ReadOptions::default()).expect("a shipped tree");
+    let params = TreeParams::read_file(format!("{DIR}/nominal.toml")).expect("the shipped parameters");
+    let tr = bt::translate::translate(&tree, &params).expect("a translation");
+    let gspn = tr.net.instantiate(&Params::new()).expect("an instance");
+    let explore = ExploreParams {
+        skip_forced: true,
+        ..ExploreParams::default()
+    };
+    let compiled = CompiledGspn::build(&gspn, &explore).expect("a chain");
+    let rates = gspn.rates(&Params::new(), None).expect("rates");
+    (compiled, rates)
+}
+
+#[divan::bench(sample_count = 20)]
+fn absorption(bencher: divan::Bencher) {
+    let (compiled, rates) = chain();
+    bencher.bench(|| compiled.absorption(&rates).expect("absorption"));
+}
+
+#[divan::bench(sample_count = 20)]
+fn time_distribution(bencher: divan::Bencher) {
+    let (compiled, rates) = chain();
+    let a = compiled.absorption(&rates).expect("absorption");
+    let p_end: f64 = a.end_probability.iter().sum();
+    let h = a.mean_time / 25.0;
+    bencher.bench(|| {
+        compiled
+            .absorption_cdf_steps(&rates, h, 500, 0.99 * p_end)
+            .expect("time distribution")
+    });
+}
