@@ -464,8 +464,8 @@ mod tests {
         let mut net = Net::new("stages");
         let mut prev = net.add_place("p0", 1u32);
         for (k, &r) in rates.iter().enumerate() {
-            let next = net.add_place(&format!("p{}", k + 1), 0u32);
-            let t = net.add_timed(&format!("t{k}"), r);
+            let next = net.add_place(format!("p{}", k + 1), 0u32);
+            let t = net.add_timed(format!("t{k}"), r);
             net.input(prev, t);
             net.output(t, next);
             prev = next;
