@@ -2,7 +2,9 @@
 //! against stored reference values (`tests/data/analysis_reference.json`,
 //! computed by the analysis before the state-space generation passed
 //! through forced zero-time hops and the block solves shared equal
-//! factorisations): P(success), P(failure), P(never), the mean times, the
+//! factorisations; the quantiles by the time stepping with the TR-BDF2
+//! start, within 1.3e-3 (median 1e-4) of the matrix exponential's,
+//! `crates/bt/bench/quantiles_exact.py`): P(success), P(failure), P(never), the mean times, the
 //! quantiles, the failures at the start, every node's activity and failure
 //! share agree within 1e-9 (relative to the value's size where it exceeds
 //! 1); so do the perturbed results behind every sensitivity (a forward

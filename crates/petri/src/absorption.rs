@@ -120,16 +120,56 @@ fn transient(chain: &CompiledGspn, rates: &[f64]) -> Result<Transient> {
     })
 }
 
+/// TR-BDF2's `γ = 2 − √2`: with it, both stages of a step use the one
+/// matrix `I + (γh/2) A`.
+const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
+
+/// Grid steps taken by TR-BDF2 before Crank–Nicolson takes over, and the
+/// TR-BDF2 steps in each.
+const START_STEPS: usize = 2;
+const START_SUBSTEPS: usize = 4;
+
+/// One TR-BDF2 step of length `τ` from `p`, in place (`rhs` is scratch;
+/// `start` factorises `M_γ = I + (γτ/2) A`): the trapezoidal stage is
+/// `p_γ = 2 p M_γ⁻¹ − p`, the BDF2 stage `p' = (p_γ − (1 − γ)² p) M_γ⁻¹ /
+/// (γ(2 − γ))`.
+fn tr_bdf2_step(start: &BlockSystem, p: &mut Vec<f64>, rhs: &mut Vec<f64>) {
+    for (r, &q) in rhs.iter_mut().zip(p.iter()) {
+        *r = 2.0 * q;
+    }
+    start.solve_row(rhs);
+    let scale = 1.0 / (GAMMA * (2.0 - GAMMA));
+    let back = 1.0 + (1.0 - GAMMA) * (1.0 - GAMMA);
+    for (r, &q) in rhs.iter_mut().zip(p.iter()) {
+        *r = (*r - back * q) * scale;
+    }
+    start.solve_row(rhs);
+    std::mem::swap(p, rhs);
+}
+
 /// `P(T > t)` on the grid `t_k = k·h`, `k = 0, 1, …`, by Crank–Nicolson on
 /// the forward equation `dp/dt = p Q_TT`: `p_{k+1} (I + (h/2) A) = p_k (I −
 /// (h/2) A)` with `A = −Q_TT`, one block-triangular factorisation
 /// ([`crate::blocks`]) for every step. Second order in `h` and stable for
 /// any rate, so its cost does not grow with the fastest rate as
-/// uniformisation's does. The first two steps are four backward-Euler half
-/// steps (Rannacher's start, same matrix), which damp the components far
-/// faster than `1/h` that Crank–Nicolson alone would carry as oscillations.
-/// With `M = I + (h/2) A` the right-hand side is `p_k (2I − M)`, so a step
-/// is `p_{k+1} = 2 p_k M⁻¹ − p_k`: one block solve and no product with `A`.
+/// uniformisation's does.
+///
+/// Crank–Nicolson carries the components of the start far faster than
+/// `1/h` as oscillations (its amplification tends to −1), so the first
+/// [`START_STEPS`] grid steps are taken as [`START_SUBSTEPS`] TR-BDF2 steps
+/// of `τ = h/4` each (a trapezoidal stage over `γτ`, then a BDF2 stage:
+/// `p_γ (I + (γτ/2) A) = p (I − (γτ/2) A)`, then `p' (I + (γτ/2) A) = (p_γ −
+/// (1 − γ)² p) / (γ(2 − γ))`). TR-BDF2 is L-stable, so those components are
+/// damped — by a factor 3·10⁻⁶ over the start at `hλ = 40` — and second
+/// order, so the start does not cost accuracy. Backward-Euler half steps
+/// (Rannacher's start) damp as well but are first order: on a coarse grid
+/// their error shifts every later value (by 10⁻³ of the median on Nav2's
+/// goal-patience tree, against 2·10⁻⁵ with this start; `crates/bt/BENCHMARKS.md`).
+///
+/// With `M = I + (h/2) A`, a Crank–Nicolson step's right-hand side is
+/// `p_k (2I − M)`, so the step is `p_{k+1} = 2 p_k M⁻¹ − p_k`: one block
+/// solve and no product with `A`; so is TR-BDF2's trapezoidal stage with
+/// its own matrix.
 /// Stops after `max_steps` steps, or once the survival is at most `stop_below`.
 fn survival_crank_nicolson(
     tr: &Transient,
@@ -138,21 +178,19 @@ fn survival_crank_nicolson(
     max_steps: usize,
     stop_below: f64,
 ) -> Result<Vec<f64>> {
-    let sys = BlockSystem::new(
-        "the time distribution (Crank–Nicolson)",
-        &tr.out_rate,
-        &tr.inner,
-        1.0,
-        0.5 * h,
-    )?;
+    let what = "the time distribution (Crank–Nicolson)";
+    let sys = BlockSystem::new(what, &tr.out_rate, &tr.inner, 1.0, 0.5 * h)?;
+    let tau = h / START_SUBSTEPS as f64;
+    let start = BlockSystem::new(what, &tr.out_rate, &tr.inner, 1.0, 0.5 * GAMMA * tau)?;
     let mut p = p0.to_vec();
     let mut rhs = vec![0.0; p.len()];
     let mut out = Vec::with_capacity(max_steps + 1);
     out.push(p.iter().sum::<f64>());
     for k in 0..max_steps {
-        if k < 2 {
-            sys.solve_row(&mut p);
-            sys.solve_row(&mut p);
+        if k < START_STEPS {
+            for _ in 0..START_SUBSTEPS {
+                tr_bdf2_step(&start, &mut p, &mut rhs);
+            }
         } else {
             for (v, &q) in rhs.iter_mut().zip(&p) {
                 *v = 2.0 * q;
@@ -422,5 +460,83 @@ mod tests {
             grid[200],
             exact(t)
         );
+    }
+
+    /// A chain of timed stages from a single start (rates in order).
+    fn stages(rates: &[f64]) -> (CompiledGspn, Vec<f64>) {
+        let mut net = Net::new("stages");
+        let mut prev = net.add_place("p0", 1u32);
+        for (k, &r) in rates.iter().enumerate() {
+            let next = net.add_place(format!("p{}", k + 1), 0u32);
+            let t = net.add_timed(format!("t{k}"), r);
+            net.input(prev, t);
+            net.output(t, next);
+            prev = next;
+        }
+        let g = net.instantiate(&Params::new()).unwrap();
+        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
+        let rates = g.rates(&Params::new(), None).unwrap();
+        (c, rates)
+    }
+
+    /// A fast stage (rate 20) then a slow one (rate 0.1) on a grid of 25
+    /// steps per mean time (h = 0.402, 8 times the fast stage's mean): the
+    /// start must not shift the distribution. Exact: the hypoexponential
+    /// CDF `1 − (b e^{−a t} − a e^{−b t})/(b − a)`. Backward-Euler half
+    /// steps at the start are off by 7.3e-4 here, this start by 4.6e-5.
+    #[test]
+    fn a_fast_stage_on_a_coarse_grid_keeps_second_order_accuracy() {
+        let (a, b) = (20.0, 0.1);
+        let (c, rates) = stages(&[a, b]);
+        let h = (1.0 / a + 1.0 / b) / 25.0;
+        let grid = c.absorption_cdf_steps(&rates, h, 200, 2.0).unwrap();
+        let exact = |t: f64| 1.0 - (b * (-a * t).exp() - a * (-b * t).exp()) / (b - a);
+        let worst = grid
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| (v - exact(k as f64 * h)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 6e-5, "largest error {worst}");
+    }
+
+    /// Half the runs end at once (rate 1000), half after a slow stage
+    /// (rate 1), on a grid with h = 0.04: Crank–Nicolson alone would carry
+    /// the fast component as an oscillation (amplification −0.905 per
+    /// step); the L-stable start damps it, so the distribution is monotone
+    /// and close to the exact `0.5 (1 − e^{−1000 t}) + 0.5 (1 − e^{−t})`.
+    #[test]
+    fn a_stiff_start_does_not_oscillate() {
+        let mut net = Net::new("stiff start");
+        let s = net.add_place("s", 1u32);
+        let fast = net.add_place("fast", 0u32);
+        let slow = net.add_place("slow", 0u32);
+        let end = net.add_place("end", 0u32);
+        for (name, to) in [("to_fast", fast), ("to_slow", slow)] {
+            let t = net.add_immediate(name, 1.0, 1);
+            net.input(s, t);
+            net.output(t, to);
+        }
+        for (name, from, rate) in [("fast_end", fast, 1000.0), ("slow_end", slow, 1.0)] {
+            let t = net.add_timed(name, rate);
+            net.input(from, t);
+            net.output(t, end);
+        }
+        let g = net.instantiate(&Params::new()).unwrap();
+        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
+        let rates = g.rates(&Params::new(), None).unwrap();
+        let h = 0.04;
+        let grid = c.absorption_cdf_steps(&rates, h, 100, 2.0).unwrap();
+        let exact = |t: f64| 0.5 * (1.0 - (-1000.0 * t).exp()) + 0.5 * (1.0 - (-t).exp());
+        for (k, w) in grid.windows(2).enumerate() {
+            assert!(w[1] >= w[0], "not monotone at step {k}: {} then {}", w[0], w[1]);
+        }
+        // At t = h what is left of the fast part is the start's damping,
+        // (R(−10))⁴ · 0.5 = 8.6e-4; from the second step on it is gone and
+        // what is left is Crank–Nicolson's own error on the slow part.
+        for (k, &v) in grid.iter().enumerate().skip(1) {
+            let e = exact(k as f64 * h);
+            let bound = if k == 1 { 1e-3 } else { 5e-5 };
+            assert!((v - e).abs() < bound, "step {k}: {v} vs {e}");
+        }
     }
 }
