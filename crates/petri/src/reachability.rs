@@ -702,16 +702,11 @@ impl Batch {
     ) -> Result<Option<Vec<u8>>> {
         let layout = store.layout();
         let w = layout.words();
-        self.next.clone_from(&self.cur);
-        for &(p, d) in gspn.delta(t) {
-            let c = &mut self.next[p as usize];
-            *c = (i64::from(*c) + d) as u32;
-        }
         self.path.clear();
         self.path_hashes.clear();
         let mut ended = false;
-        // `next_enabled` is the set of `next` before `fired` fired (copied
-        // from `cur`'s when first needed).
+        // `next` is the marking of the key, `next_enabled` its set before
+        // `fired` fired; both are made from `cur`'s when first needed.
         let mut fired = t;
         let mut copied = false;
         for hop in 0..FORCED_HOPS {
@@ -724,12 +719,16 @@ impl Batch {
             }
             let h = hash_words(key);
             if let Some(end) = known.get(key, h).or_else(|| self.learnt.get(key, h)) {
-                let end = end.to_vec();
-                self.keys[at..at + w].copy_from_slice(&end);
+                self.keys[at..at + w].copy_from_slice(end);
                 ended = true;
                 break;
             }
             if !copied {
+                self.next.clone_from(&self.cur);
+                for &(p, d) in gspn.delta(t) {
+                    let c = &mut self.next[p as usize];
+                    *c = (i64::from(*c) + d) as u32;
+                }
                 self.next_enabled.clone_from(&self.enabled);
                 copied = true;
             }
