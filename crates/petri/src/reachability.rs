@@ -10,9 +10,12 @@
 //!
 //! Successors are computed on the packed marking: the transition's token
 //! changes are added to the bit fields directly, widening a field first if a
-//! count would not fit (see the `marking` module). Cost: `O(|T|)` enabling tests
-//! per marking plus one hash probe per edge (see the `marking` module for the
-//! table; lookups run in parallel rounds, see [`ReachabilityGraph::explore`]).
+//! count would not fit (see the `marking` module). The firing rule of a
+//! stored marking tests the transitions keyed on its marked places and keeps
+//! the enabled ones as a bitset (`gspn::enabling`). Cost: those enabling
+//! tests per marking plus one hash probe per edge (see the `marking` module
+//! for the table; lookups run in parallel rounds, see
+//! [`ReachabilityGraph::explore`]).
 //! Memory: the packed marking (often 8 bytes) + 21–43 bytes of hash table per
 //! marking (5 for markings wider than a word), 8 bytes per edge (+8 when some
 //! coefficient differs from 1). The memory guard
@@ -22,6 +25,12 @@
 //! On request ([`ExploreParams::skip_forced`]) a vanishing marking with a
 //! single firable transition is passed through instead of stored: chains
 //! of zero-time hops (a behaviour tree's control flow) then cost one edge.
+//! Following such a run evaluates the firing rule of each marking on it
+//! from the enabled set of the one before: only the transitions whose
+//! enabling reads a place the hop changed are tested again, on the unpacked
+//! marking, while the packed key is updated in place for the lookups. Where
+//! runs end is remembered by key (hashed once, with the store's hash) and
+//! not followed again.
 
 use hashbrown::HashTable;
 use std::time::Instant;
@@ -340,7 +349,7 @@ impl ReachabilityGraph {
         // Forced hops already followed (learnt by the batches of earlier rounds).
         let mut forced = Forced::default();
         let threads = rayon::current_num_threads();
-        let index = EnablingIndex::new(gspn);
+        let index = EnablingIndex::new(gspn, params.skip_forced);
         let mut i = 0usize;
         while i < store.len() {
             stop.check("generating the reachability graph")?;

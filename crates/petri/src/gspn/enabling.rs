@@ -30,12 +30,19 @@ use crate::net::TransitionId;
 #[derive(Debug, Clone)]
 pub(crate) struct EnablingIndex {
     /// `start[t]..start[t + 1]` in `retest`: the transitions whose
-    /// enabling may change when `t` fires, in index order.
+    /// enabling may change when `t` fires, in index order. Empty when not
+    /// asked for, or when the lists would be longer than [`RETEST_LIMIT`]
+    /// (a refresh then fills the set anew).
     start: Vec<u32>,
     retest: Vec<u32>,
     /// One bit per immediate transition.
     immediate: Vec<u64>,
 }
+
+/// The most entries the re-test lists of an [`EnablingIndex`] may hold
+/// (64 MiB): a place read by every transition and changed by every
+/// transition would make them quadratic in the transitions.
+pub(crate) const RETEST_LIMIT: usize = 1 << 24;
 
 /// Words of a bitset of `n` bits.
 fn words_for(n: usize) -> usize {
@@ -43,50 +50,21 @@ fn words_for(n: usize) -> usize {
 }
 
 impl EnablingIndex {
-    /// The index of `gspn` (linear in its arcs and in the re-test lists).
-    pub(crate) fn new(gspn: &Gspn) -> EnablingIndex {
+    /// The index of `gspn`, with the re-test lists if `incremental` (linear
+    /// in its arcs and in those lists).
+    pub(crate) fn new(gspn: &Gspn, incremental: bool) -> EnablingIndex {
         let nt = gspn.num_transitions();
-        let np = gspn.num_places();
-        // The transitions whose enabling reads each place.
-        let mut readers: Vec<Vec<u32>> = vec![Vec::new(); np];
-        for s in 0..nt {
-            let sid = TransitionId(s as u32);
-            let bounded_outputs = gspn
-                .delta(sid)
-                .iter()
-                .filter(|&&(p, d)| d > 0 && gspn.capacity[p as usize].is_some());
-            for &(p, _) in gspn.inputs(sid).iter().chain(gspn.inhibitors(sid)) {
-                readers[p as usize].push(s as u32);
-            }
-            for &(p, _) in bounded_outputs {
-                readers[p as usize].push(s as u32);
-            }
-        }
-        let mut start = Vec::with_capacity(nt + 1);
-        let mut retest = Vec::new();
-        let mut seen = vec![false; nt];
-        start.push(0);
-        for t in 0..nt {
-            let from = retest.len();
-            for &(p, _) in gspn.delta(TransitionId(t as u32)) {
-                for &s in &readers[p as usize] {
-                    if !std::mem::replace(&mut seen[s as usize], true) {
-                        retest.push(s);
-                    }
-                }
-            }
-            retest[from..].sort_unstable();
-            for &s in &retest[from..] {
-                seen[s as usize] = false;
-            }
-            start.push(retest.len() as u32);
-        }
         let mut immediate = vec![0u64; words_for(nt)];
         for (t, timing) in gspn.timing.iter().enumerate() {
             if matches!(timing, Timing::Immediate { .. }) {
                 immediate[t / 64] |= 1 << (t % 64);
             }
         }
+        let (start, retest) = if incremental {
+            retest_lists(gspn).unwrap_or_default()
+        } else {
+            Default::default()
+        };
         EnablingIndex {
             start,
             retest,
@@ -94,11 +72,57 @@ impl EnablingIndex {
         }
     }
 
-    /// The transitions to re-test after `t` fires.
+    /// The transitions to re-test after `t` fires, if listed.
     #[inline]
-    fn retest(&self, t: TransitionId) -> &[u32] {
-        &self.retest[self.start[t.index()] as usize..self.start[t.index() + 1] as usize]
+    fn retest(&self, t: TransitionId) -> Option<&[u32]> {
+        let at = self.start.get(t.index()..t.index() + 2)?;
+        Some(&self.retest[at[0] as usize..at[1] as usize])
     }
+}
+
+/// The re-test lists of [`EnablingIndex`] (`start`, `retest`), or `None`
+/// beyond [`RETEST_LIMIT`] entries.
+fn retest_lists(gspn: &Gspn) -> Option<(Vec<u32>, Vec<u32>)> {
+    let nt = gspn.num_transitions();
+    let np = gspn.num_places();
+    // The transitions whose enabling reads each place.
+    let mut readers: Vec<Vec<u32>> = vec![Vec::new(); np];
+    for s in 0..nt {
+        let sid = TransitionId(s as u32);
+        let bounded_outputs = gspn
+            .delta(sid)
+            .iter()
+            .filter(|&&(p, d)| d > 0 && gspn.capacity[p as usize].is_some());
+        for &(p, _) in gspn.inputs(sid).iter().chain(gspn.inhibitors(sid)) {
+            readers[p as usize].push(s as u32);
+        }
+        for &(p, _) in bounded_outputs {
+            readers[p as usize].push(s as u32);
+        }
+    }
+    let mut start = Vec::with_capacity(nt + 1);
+    let mut retest = Vec::new();
+    let mut seen = vec![false; nt];
+    start.push(0);
+    for t in 0..nt {
+        let from = retest.len();
+        for &(p, _) in gspn.delta(TransitionId(t as u32)) {
+            for &s in &readers[p as usize] {
+                if !std::mem::replace(&mut seen[s as usize], true) {
+                    retest.push(s);
+                }
+            }
+        }
+        retest[from..].sort_unstable();
+        for &s in &retest[from..] {
+            seen[s as usize] = false;
+        }
+        if retest.len() > RETEST_LIMIT {
+            return None;
+        }
+        start.push(retest.len() as u32);
+    }
+    Some((start, retest))
 }
 
 /// The enabled transitions of one marking (see the module docs).
@@ -146,11 +170,18 @@ impl EnabledSet {
         }
     }
 
-    /// Brings the set of a marking to `m`, that marking after firing `t`.
+    /// Brings the set of a marking to `m`, that marking after firing `t`
+    /// (by re-testing what `t` may have changed, or anew when the index has
+    /// no re-test lists).
     #[inline]
     pub(crate) fn refresh(&mut self, gspn: &Gspn, index: &EnablingIndex, t: TransitionId, m: &[u32]) {
-        for &s in index.retest(t) {
-            self.set(s as usize, gspn.is_enabled(TransitionId(s), m));
+        match index.retest(t) {
+            Some(retest) => {
+                for &s in retest {
+                    self.set(s as usize, gspn.is_enabled(TransitionId(s), m));
+                }
+            }
+            None => self.fill(gspn, m),
         }
     }
 
@@ -237,10 +268,11 @@ mod tests {
             ),
             m0 in prop::collection::vec(0u32..3, 8),
             choices in prop::collection::vec(any::<prop::sample::Index>(), 1..40),
+            incremental in any::<bool>(),
         ) {
             let net = net(8, &transitions);
             let Ok(gspn) = net.instantiate(&Params::new()) else { return Ok(()) };
-            let index = EnablingIndex::new(&gspn);
+            let index = EnablingIndex::new(&gspn, incremental);
             let mut m = m0;
             for (p, c) in m.iter_mut().enumerate() {
                 if p % 3 == 2 {
