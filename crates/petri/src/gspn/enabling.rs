@@ -232,10 +232,13 @@ mod tests {
     use crate::net::{ArcKind, Net, Params, PlaceId};
     use proptest::prelude::*;
 
+    /// An arc drawn at random: kind (input, output, inhibitor), place,
+    /// multiplicity.
+    type RandomArc = (u8, usize, u32);
+
     /// A net of `np` places (capacity 2 on every third) and the given
-    /// transitions: `(0 for timed or the priority, arcs (kind, place,
-    /// multiplicity))`.
-    fn net(np: usize, transitions: &[(u32, Vec<(u8, usize, u32)>)]) -> Net {
+    /// transitions: `(0 for timed or the priority, arcs)`.
+    fn net(np: usize, transitions: &[(u32, Vec<RandomArc>)]) -> Net {
         let mut net = Net::new("random");
         for p in 0..np {
             let id = net.add_place(format!("P{p}"), 0u32);
