@@ -5,6 +5,7 @@
 //! This module also holds the firing rule, shared by the state-space
 //! generator, the simulator and the property checks.
 
+pub(crate) mod enabling;
 pub mod policy;
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -782,6 +783,18 @@ impl Gspn {
     /// a choice marking, or names an action that is not available there.
     pub fn firable_resolved(&self, m: &[u32], out: &mut Vec<TransitionId>) -> Result<MarkingKind> {
         let kind = self.firable(m, out);
+        self.resolve(m, out, kind)
+    }
+
+    /// The choice resolution of [`firable_resolved`](Self::firable_resolved)
+    /// applied to `out`, what [`firable`](Self::firable) returned (`kind`)
+    /// for `m`.
+    pub(crate) fn resolve(
+        &self,
+        m: &[u32],
+        out: &mut Vec<TransitionId>,
+        kind: MarkingKind,
+    ) -> Result<MarkingKind> {
         if kind == MarkingKind::Tangible || !self.is_choice(out) {
             return Ok(kind);
         }

@@ -123,8 +123,10 @@ pub(crate) fn bits_for(v: u32) -> u8 {
     (32 - v.leading_zeros()).max(1) as u8
 }
 
+/// Hash of a packed key of several words (the index of wide markings, and
+/// the forced hops of `reachability`).
 #[inline]
-fn hash_words(key: &[u64]) -> u64 {
+pub(crate) fn hash_words(key: &[u64]) -> u64 {
     // Multiply-xorshift mixing per word, then the murmur3 finaliser.
     let mut h: u64 = 0x9E37_79B9_7F4A_7C15;
     for &w in key {
@@ -134,6 +136,13 @@ fn hash_words(key: &[u64]) -> u64 {
     h ^= h >> 33;
     h = h.wrapping_mul(0xC4CE_B9FE_1A85_EC53);
     h ^ (h >> 33)
+}
+
+/// Whether two packed keys are equal (word by word: keys are a few words
+/// long, too short for a call to `memcmp` to pay).
+#[inline]
+pub(crate) fn same_key(a: &[u64], b: &[u64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x == y)
 }
 
 /// Mixes a one-word key (the murmur3 64-bit finaliser).
@@ -326,7 +335,7 @@ impl MarkingStore {
                 let data = &self.data;
                 let found = table.find(hash, |&i| {
                     let i = i as usize;
-                    &data[i * w..(i + 1) * w] == key
+                    same_key(&data[i * w..(i + 1) * w], key)
                 });
                 if let Some(&i) = found {
                     (i, false)
@@ -375,7 +384,7 @@ impl MarkingStore {
             Index::Words(table) => table
                 .find(hash_words(key), |&i| {
                     let i = i as usize;
-                    &self.data[i * w..(i + 1) * w] == key
+                    same_key(&self.data[i * w..(i + 1) * w], key)
                 })
                 .copied(),
             Index::None => unreachable!("lookup in a store whose index was dropped"),

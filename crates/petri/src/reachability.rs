@@ -10,9 +10,12 @@
 //!
 //! Successors are computed on the packed marking: the transition's token
 //! changes are added to the bit fields directly, widening a field first if a
-//! count would not fit (see the `marking` module). Cost: `O(|T|)` enabling tests
-//! per marking plus one hash probe per edge (see the `marking` module for the
-//! table; lookups run in parallel rounds, see [`ReachabilityGraph::explore`]).
+//! count would not fit (see the `marking` module). The firing rule of a
+//! stored marking tests the transitions keyed on its marked places and keeps
+//! the enabled ones as a bitset (`gspn::enabling`). Cost: those enabling
+//! tests per marking plus one hash probe per edge (see the `marking` module
+//! for the table; lookups run in parallel rounds, see
+//! [`ReachabilityGraph::explore`]).
 //! Memory: the packed marking (often 8 bytes) + 21–43 bytes of hash table per
 //! marking (5 for markings wider than a word), 8 bytes per edge (+8 when some
 //! coefficient differs from 1). The memory guard
@@ -22,17 +25,23 @@
 //! On request ([`ExploreParams::skip_forced`]) a vanishing marking with a
 //! single firable transition is passed through instead of stored: chains
 //! of zero-time hops (a behaviour tree's control flow) then cost one edge.
+//! Following such a run evaluates the firing rule of each marking on it
+//! from the enabled set of the one before: only the transitions whose
+//! enabling reads a place the hop changed are tested again, on the unpacked
+//! marking, while the packed key is updated in place for the lookups. Where
+//! runs end is remembered by key (hashed once, with the store's hash) and
+//! not followed again.
 
-use hashbrown::{DefaultHashBuilder, HashTable};
-use std::hash::BuildHasher;
+use hashbrown::HashTable;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::gspn::enabling::{EnabledSet, EnablingIndex};
 use crate::gspn::{Gspn, MarkingKind};
 use crate::interrupt::{Interrupt, Stage};
-use crate::marking::{Layout, MarkingStore, bits_for};
+use crate::marking::{Layout, MarkingStore, bits_for, hash_words, same_key};
 use crate::net::TransitionId;
 use crate::scc::Successors;
 
@@ -68,13 +77,15 @@ pub struct ExploreParams {
 
 /// Where forced hops lead: the packed key of a forced vanishing marking →
 /// the key of the first marking after it that is not forced (see
-/// [`ExploreParams::skip_forced`]); pairs stored flat, `2·words` each.
+/// [`ExploreParams::skip_forced`]); pairs stored flat, `2·words` each, with
+/// the key's hash ([`hash_words`], so every table agrees and a key is hashed
+/// once per lookup).
 #[derive(Default)]
 struct Forced {
     words: usize,
     pairs: Vec<u64>,
+    hashes: Vec<u64>,
     index: HashTable<u32>,
-    hasher: DefaultHashBuilder,
 }
 
 impl Forced {
@@ -83,41 +94,39 @@ impl Forced {
         &self.pairs[at..at + self.words]
     }
 
-    fn get(&self, key: &[u64]) -> Option<&[u64]> {
+    /// Where the run from `key` (of hash `h`) ends, if known.
+    fn get(&self, key: &[u64], h: u64) -> Option<&[u64]> {
         if key.len() != self.words {
             return None;
         }
-        let h = self.hasher.hash_one(key);
-        let i = *self.index.find(h, |&i| self.key(i) == key)?;
+        let i = *self.index.find(h, |&i| same_key(self.key(i), key))?;
         let at = (2 * i as usize + 1) * self.words;
         Some(&self.pairs[at..at + self.words])
     }
 
-    fn insert(&mut self, key: &[u64], end: &[u64]) {
+    /// Remembers that the run from `key` (of hash `h`) ends at `end`.
+    fn insert(&mut self, key: &[u64], h: u64, end: &[u64]) {
         if self.words != key.len() {
             self.clear();
             self.words = key.len();
         }
-        let h = self.hasher.hash_one(key);
-        if self.index.find(h, |&i| self.key(i) == key).is_some() {
+        if self.index.find(h, |&i| same_key(self.key(i), key)).is_some() {
             return;
         }
-        let i = (self.pairs.len() / (2 * self.words)) as u32;
+        let i = self.hashes.len() as u32;
         self.pairs.extend_from_slice(key);
         self.pairs.extend_from_slice(end);
-        let (pairs, words, hasher) = (&self.pairs, self.words, &self.hasher);
-        self.index.insert_unique(h, i, |&j| {
-            let at = j as usize * 2 * words;
-            hasher.hash_one(&pairs[at..at + words])
-        });
+        self.hashes.push(h);
+        let hashes = &self.hashes;
+        self.index.insert_unique(h, i, |&j| hashes[j as usize]);
     }
 
     /// Moves `other`'s pairs into `self`.
     fn absorb(&mut self, other: &mut Forced) {
         let w = other.words;
         if w > 0 {
-            for pair in other.pairs.chunks_exact(2 * w) {
-                self.insert(&pair[..w], &pair[w..]);
+            for (pair, &h) in other.pairs.chunks_exact(2 * w).zip(&other.hashes) {
+                self.insert(&pair[..w], h, &pair[w..]);
             }
         }
         other.clear();
@@ -125,6 +134,7 @@ impl Forced {
 
     fn clear(&mut self) {
         self.pairs.clear();
+        self.hashes.clear();
         self.index.clear();
     }
 }
@@ -339,6 +349,7 @@ impl ReachabilityGraph {
         // Forced hops already followed (learnt by the batches of earlier rounds).
         let mut forced = Forced::default();
         let threads = rayon::current_num_threads();
+        let index = EnablingIndex::new(gspn, params.skip_forced);
         let mut i = 0usize;
         while i < store.len() {
             stop.check("generating the reachability graph")?;
@@ -351,7 +362,7 @@ impl ReachabilityGraph {
             let run = |(c, b): (usize, &mut Batch)| {
                 let lo = i + c * BATCH;
                 let skip = params.skip_forced.then_some(&forced);
-                b.expand(gspn, &store, lo..(lo + BATCH).min(end), skip)
+                b.expand(gspn, &index, &store, lo..(lo + BATCH).min(end), skip)
             };
             let events: Vec<Result<Option<Vec<u8>>>> = if parallel {
                 batches[..chunks].par_iter_mut().enumerate().map(run).collect()
@@ -573,14 +584,20 @@ struct Batch {
     /// Largest token count of each place over the chunk's markings.
     max_tokens: Vec<u32>,
     cur: Vec<u32>,
+    /// The transitions enabled in `cur`, and those that may fire there.
+    enabled: EnabledSet,
     firable: Vec<TransitionId>,
-    /// A successor followed through forced hops, and its firable transitions.
+    /// A successor followed through forced hops, its enabled and its firable
+    /// transitions.
     next: Vec<u32>,
+    next_enabled: EnabledSet,
     next_firable: Vec<TransitionId>,
     /// Forced hops followed in this round (merged into the explorer's after it).
     learnt: Forced,
-    /// The keys of the forced markings of the hops being followed.
+    /// The keys of the forced markings of the hops being followed, and
+    /// their hashes.
     path: Vec<u64>,
+    path_hashes: Vec<u64>,
 }
 
 /// The fields a firing of `t` in `m` would overflow in `layout` (`None` if it
@@ -614,6 +631,7 @@ impl Batch {
     fn expand(
         &mut self,
         gspn: &Gspn,
+        index: &EnablingIndex,
         store: &MarkingStore,
         markings: std::ops::Range<usize>,
         skip_forced: Option<&Forced>,
@@ -634,7 +652,9 @@ impl Batch {
             for (mx, &c) in self.max_tokens.iter_mut().zip(&self.cur) {
                 *mx = (*mx).max(c);
             }
-            let kind = gspn.firable_resolved(&self.cur, &mut self.firable)?;
+            self.enabled.fill(gspn, &self.cur);
+            let kind = self.enabled.firable(gspn, index, &mut self.firable);
+            let kind = gspn.resolve(&self.cur, &mut self.firable, kind)?;
             self.vanishing.push(kind == MarkingKind::Vanishing);
             let total_weight: f64 = if kind == MarkingKind::Vanishing {
                 self.firable.iter().map(|&t| gspn.weight(t).unwrap_or(1.0)).sum()
@@ -653,7 +673,7 @@ impl Batch {
                     layout.add(&mut self.keys[at..at + w], p as usize, d);
                 }
                 if let Some(known) = skip_forced {
-                    if let Some(widen) = self.follow_forced(gspn, store, known, at, t)? {
+                    if let Some(widen) = self.follow_forced(gspn, index, store, known, at, t)? {
                         return Ok(Some(widen));
                     }
                 }
@@ -683,6 +703,7 @@ impl Batch {
     fn follow_forced(
         &mut self,
         gspn: &Gspn,
+        index: &EnablingIndex,
         store: &MarkingStore,
         known: &Forced,
         at: usize,
@@ -690,14 +711,14 @@ impl Batch {
     ) -> Result<Option<Vec<u8>>> {
         let layout = store.layout();
         let w = layout.words();
-        self.next.clone_from(&self.cur);
-        for &(p, d) in gspn.delta(t) {
-            let c = &mut self.next[p as usize];
-            *c = (i64::from(*c) + d) as u32;
-        }
         self.path.clear();
+        self.path_hashes.clear();
         let mut ended = false;
-        for _ in 0..FORCED_HOPS {
+        // `next` is the marking of the key, `next_enabled` its set before
+        // `fired` fired; both are made from `cur`'s when first needed.
+        let mut fired = t;
+        let mut copied = false;
+        for hop in 0..FORCED_HOPS {
             let key = &self.keys[at..at + w];
             // A stored marking is not followed through (it is one that is not
             // forced, the initial marking, or one where the hop limit cut a run).
@@ -705,17 +726,28 @@ impl Batch {
                 ended = true;
                 break;
             }
-            if let Some(end) = known.get(key).or_else(|| self.learnt.get(key)) {
-                let end = end.to_vec();
-                self.keys[at..at + w].copy_from_slice(&end);
+            let h = hash_words(key);
+            if let Some(end) = known.get(key, h).or_else(|| self.learnt.get(key, h)) {
+                self.keys[at..at + w].copy_from_slice(end);
                 ended = true;
                 break;
             }
-            let kind = gspn.firable_resolved(&self.next, &mut self.next_firable)?;
+            if !copied {
+                self.next.clone_from(&self.cur);
+                for &(p, d) in gspn.delta(t) {
+                    let c = &mut self.next[p as usize];
+                    *c = (i64::from(*c) + d) as u32;
+                }
+                self.next_enabled.clone_from(&self.enabled);
+                copied = true;
+            }
+            self.next_enabled.refresh(gspn, index, fired, &self.next);
+            let kind = self.next_enabled.firable(gspn, index, &mut self.next_firable);
+            let kind = gspn.resolve(&self.next, &mut self.next_firable, kind)?;
             if kind != MarkingKind::Vanishing || self.next_firable.len() != 1 {
                 // Remembered as its own end (its firing rule is not evaluated again).
-                let key = &self.keys[at..at + w];
-                self.learnt.insert(key, key);
+                self.learnt
+                    .insert(&self.keys[at..at + w], h, &self.keys[at..at + w]);
                 ended = true;
                 break;
             }
@@ -724,20 +756,26 @@ impl Batch {
                 return Ok(Some(widen));
             }
             self.path.extend_from_slice(&self.keys[at..at + w]);
+            self.path_hashes.push(h);
             for &(p, d) in gspn.delta(u) {
                 layout.add(&mut self.keys[at..at + w], p as usize, d);
                 let c = &mut self.next[p as usize];
                 *c = (i64::from(*c) + d) as u32;
             }
-            for (mx, &c) in self.max_tokens.iter_mut().zip(&self.next) {
-                *mx = (*mx).max(c);
+            // Largest counts: only the places this hop changed (and, at the
+            // first hop, those `t` changed) hold counts not yet counted.
+            let changed = if hop == 0 { gspn.delta(t) } else { &[] };
+            for &(p, _) in changed.iter().chain(gspn.delta(u)) {
+                let mx = &mut self.max_tokens[p as usize];
+                *mx = (*mx).max(self.next[p as usize]);
             }
+            fired = u;
         }
         // A run cut by the hop limit (a timeless loop) is not remembered.
         if ended {
             let end = &self.keys[at..at + w];
-            for k in self.path.chunks_exact(w) {
-                self.learnt.insert(k, end);
+            for (k, &h) in self.path.chunks_exact(w).zip(&self.path_hashes) {
+                self.learnt.insert(k, h, end);
             }
         }
         Ok(None)
