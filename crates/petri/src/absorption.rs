@@ -130,20 +130,20 @@ const START_STEPS: usize = 2;
 const START_SUBSTEPS: usize = 4;
 
 /// One TR-BDF2 step of length `τ` from `p`, in place (`rhs` is scratch;
-/// `start` factorises `M_γ = I + (γτ/2) A`): the trapezoidal stage is
+/// `start` factorises `M_γ = I + (γτ/2) A`; both vectors in its order): the trapezoidal stage is
 /// `p_γ = 2 p M_γ⁻¹ − p`, the BDF2 stage `p' = (p_γ − (1 − γ)² p) M_γ⁻¹ /
 /// (γ(2 − γ))`.
 fn tr_bdf2_step(start: &BlockSystem, p: &mut Vec<f64>, rhs: &mut Vec<f64>) {
     for (r, &q) in rhs.iter_mut().zip(p.iter()) {
         *r = 2.0 * q;
     }
-    start.solve_row(rhs);
+    start.solve_ordered(rhs);
     let scale = 1.0 / (GAMMA * (2.0 - GAMMA));
     let back = 1.0 + (1.0 - GAMMA) * (1.0 - GAMMA);
     for (r, &q) in rhs.iter_mut().zip(p.iter()) {
         *r = (*r - back * q) * scale;
     }
-    start.solve_row(rhs);
+    start.solve_ordered(rhs);
     std::mem::swap(p, rhs);
 }
 
@@ -182,7 +182,10 @@ fn survival_crank_nicolson(
     let sys = BlockSystem::new(what, &tr.out_rate, &tr.inner, 1.0, 0.5 * h)?;
     let tau = h / START_SUBSTEPS as f64;
     let start = BlockSystem::new(what, &tr.out_rate, &tr.inner, 1.0, 0.5 * GAMMA * tau)?;
-    let mut p = p0.to_vec();
+    // The vectors are kept in the systems' order (both systems have the
+    // same pattern, so the same order; if not, one re-ordering between the
+    // start and the rest).
+    let mut p: Vec<f64> = start.order().iter().map(|&st| p0[st as usize]).collect();
     let mut rhs = vec![0.0; p.len()];
     let mut out = Vec::with_capacity(max_steps + 1);
     out.push(p.iter().sum::<f64>());
@@ -191,11 +194,19 @@ fn survival_crank_nicolson(
             for _ in 0..START_SUBSTEPS {
                 tr_bdf2_step(&start, &mut p, &mut rhs);
             }
+            if k + 1 == START_STEPS && start.order() != sys.order() {
+                for (&st, &v) in start.order().iter().zip(&p) {
+                    rhs[st as usize] = v;
+                }
+                for (v, &st) in p.iter_mut().zip(sys.order()) {
+                    *v = rhs[st as usize];
+                }
+            }
         } else {
             for (v, &q) in rhs.iter_mut().zip(&p) {
                 *v = 2.0 * q;
             }
-            sys.solve_row(&mut rhs);
+            sys.solve_ordered(&mut rhs);
             for (v, &q) in rhs.iter_mut().zip(&p) {
                 *v -= q;
             }

@@ -11,8 +11,9 @@
 //! row diagonally dominant) up to [`DENSE_BLOCK_LIMIT`] states, by a sparse
 //! LU above. Components whose blocks are equal entry for entry share one
 //! factorisation (the same sub-chain in many contexts). Each component's
-//! states are kept in its factor's order, so its right-hand side is
-//! gathered straight into one buffer on the stack and no solve allocates. Chains that
+//! states are kept in its factor's order, and a vector kept in that order
+//! throughout ([`BlockSystem::order`], as the time steps do) is solved in
+//! place, each component's unknowns contiguous. Chains that
 //! finish (a behaviour tree's run, a mission) are mostly such sequences of
 //! small components, so the cost is `O(states + entries + Σ f)` per solve
 //! over the factors' stored entries `f` (at most `k²` for `k` states),
@@ -112,7 +113,8 @@ pub(crate) struct BlockSystem {
     /// context, as a finishing chain's phases often are) share one, which
     /// keeps the factors a time step reads in cache.
     dense: Vec<ProfileLu>,
-    /// Entries between components, by column.
+    /// Entries between components, by column, both indices positions in
+    /// `states` (filled once the factors have fixed the order).
     cols: Csr,
 }
 
@@ -155,14 +157,6 @@ impl BlockSystem {
             states.extend_from_slice(v);
             comp_start.push(states.len() as u32);
         }
-        // Entries between components, by column: M_ij = −c·r_ij.
-        let cols = Csr::new(
-            n,
-            inner
-                .iter()
-                .filter(|&&(i, j, _)| comp[i as usize] != comp[j as usize])
-                .map(|&(i, j, r)| (j, i, -c * r)),
-        );
         let mut sys = BlockSystem {
             states,
             comp_start,
@@ -170,9 +164,23 @@ impl BlockSystem {
             comp,
             blocks: Vec::with_capacity(found.len()),
             dense: Vec::new(),
-            cols,
+            cols: Csr::default(),
         };
         sys.factor(what, out, &graph, s, c)?;
+        // Entries between components, by column: M_ij = −c·r_ij, at the
+        // states' final positions.
+        let mut pos = vec![0u32; n];
+        for (k, &st) in sys.states.iter().enumerate() {
+            pos[st as usize] = k as u32;
+        }
+        let comp = &sys.comp;
+        sys.cols = Csr::new(
+            n,
+            inner
+                .iter()
+                .filter(|&&(i, j, _)| comp[i as usize] != comp[j as usize])
+                .map(|&(i, j, r)| (pos[j as usize], pos[i as usize], -c * r)),
+        );
         Ok(sys)
     }
 
@@ -243,38 +251,43 @@ impl BlockSystem {
         Ok(())
     }
 
+    /// The order the system keeps a vector in: position → state. A
+    /// vector in this order is solved by [`BlockSystem::solve_ordered`]
+    /// with every component's unknowns contiguous.
+    pub(crate) fn order(&self) -> &[u32] {
+        &self.states
+    }
+
     /// Solves the row system `x M = b` (that is `Mᵀ xᵀ = bᵀ`), in place,
-    /// without allocating (but for components beyond [`DENSE_BLOCK_LIMIT`]).
+    /// `b` indexed by state (one copy into [`BlockSystem::order`] and back).
     pub(crate) fn solve_row(&self, b: &mut [f64]) {
-        let mut buffer = [0.0f64; DENSE_BLOCK_LIMIT];
+        let mut y: Vec<f64> = self.states.iter().map(|&st| b[st as usize]).collect();
+        self.solve_ordered(&mut y);
+        for (&st, &v) in self.states.iter().zip(&y) {
+            b[st as usize] = v;
+        }
+    }
+
+    /// Solves `x M = b` in place with `b` in [`BlockSystem::order`]: each
+    /// component's right-hand side (its entries minus the contributions of
+    /// the components before) is formed where it lies and solved there,
+    /// without allocating (but for components beyond [`DENSE_BLOCK_LIMIT`]).
+    pub(crate) fn solve_ordered(&self, b: &mut [f64]) {
         for (blk, block) in self.blocks.iter().enumerate() {
-            let members = &self.states[self.comp_start[blk] as usize..self.comp_start[blk + 1] as usize];
-            // b_j minus the contributions x_i M_ij of the components before.
-            let rhs = |j: u32| {
-                b[j as usize]
-                    - self
-                        .cols
-                        .row(j as usize)
-                        .map(|(i, v)| b[i as usize] * v)
-                        .sum::<f64>()
-            };
+            let range = self.comp_start[blk] as usize..self.comp_start[blk + 1] as usize;
+            for j in range.clone() {
+                let s: f64 = self.cols.row(j).map(|(i, v)| b[i as usize] * v).sum();
+                b[j] -= s;
+            }
+            let y = &mut b[range];
             match block {
-                Block::Scalar(d) => b[members[0] as usize] = rhs(members[0]) / d,
-                Block::Dense(i) => {
-                    let y = &mut buffer[..members.len()];
-                    for (y, &j) in y.iter_mut().zip(members) {
-                        *y = rhs(j);
-                    }
-                    self.dense[*i].solve(y);
-                    for (&j, &v) in members.iter().zip(y.iter()) {
-                        b[j as usize] = v;
-                    }
-                }
+                Block::Scalar(d) => y[0] /= d,
+                Block::Dense(i) => self.dense[*i].solve(y),
                 Block::Sparse(lu) => {
-                    let mut m = Mat::<f64>::from_fn(members.len(), 1, |i, _| rhs(members[i]));
+                    let mut m = Mat::<f64>::from_fn(y.len(), 1, |i, _| y[i]);
                     lu.solve_in_place(&mut m);
-                    for (i, &j) in members.iter().enumerate() {
-                        b[j as usize] = m[(i, 0)];
+                    for (i, v) in y.iter_mut().enumerate() {
+                        *v = m[(i, 0)];
                     }
                 }
             }
