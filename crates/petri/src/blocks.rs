@@ -29,7 +29,7 @@ use faer::sparse::{SparseColMat, Triplet};
 use hashbrown::HashMap;
 
 use crate::error::{Error, Result};
-use crate::profile_lu::ProfileLu;
+use crate::profile_lu::{ProfileLu, profile_order};
 use crate::scc::{Successors, tarjan};
 
 /// Components up to this size get a dense LU; larger ones a sparse LU.
@@ -188,6 +188,8 @@ impl BlockSystem {
         let singular = |detail: String| Error::Singular { what, detail };
         // Dense blocks already factorised, by their entries' bits.
         let mut seen: HashMap<Vec<u64>, usize> = HashMap::new();
+        // Profile orders already found, by the blocks' patterns.
+        let mut orders: HashMap<Vec<u64>, Vec<u32>> = HashMap::new();
         for b in 0..self.comp_start.len() - 1 {
             let members = &self.states[self.comp_start[b] as usize..self.comp_start[b + 1] as usize];
             let k = members.len();
@@ -220,7 +222,20 @@ impl BlockSystem {
                     let d = match seen.get(&bits) {
                         Some(&d) => d,
                         None => {
-                            let lu = ProfileLu::new(k, &a)
+                            // The order depends on the pattern only: found
+                            // once for the blocks that share one.
+                            let mut pattern = vec![0u64; (k * k).div_ceil(64) + 1];
+                            pattern[0] = k as u64;
+                            for (e, v) in a.iter().enumerate() {
+                                if *v != 0.0 {
+                                    pattern[1 + e / 64] |= 1 << (e % 64);
+                                }
+                            }
+                            let order = orders
+                                .entry(pattern)
+                                .or_insert_with(|| profile_order(k, &a))
+                                .clone();
+                            let lu = ProfileLu::with_order(k, &a, order)
                                 .ok_or_else(|| singular(format!("a component of {k} states is singular")))?;
                             self.dense.push(lu);
                             seen.insert(bits, self.dense.len() - 1);

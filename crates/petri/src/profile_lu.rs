@@ -54,7 +54,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// `first[i]..=last[i]` in one slice.
 #[derive(Debug, Clone)]
 pub(crate) struct ProfileLu {
-    /// New position → index in the matrix given to [`ProfileLu::new`].
+    /// New position → index in the matrix given to [`ProfileLu::with_order`].
     order: Vec<u32>,
     /// First column stored in each row (`L`'s first nonzero, or the diagonal).
     first: Vec<u32>,
@@ -64,11 +64,18 @@ pub(crate) struct ProfileLu {
 }
 
 impl ProfileLu {
-    /// Factorises the row-major `k × k` matrix `a`, which must be column
-    /// diagonally dominant (see the module doc). `None` if a pivot is zero
-    /// or not finite (a singular block).
+    /// As [`ProfileLu::with_order`], finding the order.
+    #[cfg(test)]
     pub(crate) fn new(k: usize, a: &[f64]) -> Option<ProfileLu> {
-        let order = profile_order(k, a);
+        ProfileLu::with_order(k, a, profile_order(k, a))
+    }
+
+    /// Factorises the row-major `k × k` matrix `a`, which must be column
+    /// diagonally dominant (see the module doc), renumbered by `order`
+    /// (position → index): [`profile_order`]'s for `a`'s pattern, found once
+    /// for the blocks that share one. `None` if a pivot is zero or not
+    /// finite (a singular block).
+    pub(crate) fn with_order(k: usize, a: &[f64], order: Vec<u32>) -> Option<ProfileLu> {
         let mut m = vec![0.0; k * k];
         for (p, &op) in order.iter().enumerate() {
             for (q, &oq) in order.iter().enumerate() {
@@ -99,7 +106,7 @@ impl ProfileLu {
         })
     }
 
-    /// The renumbering: position → index in the matrix given to [`ProfileLu::new`].
+    /// The renumbering: position → index in the matrix given to [`ProfileLu::with_order`].
     pub(crate) fn order(&self) -> &[u32] {
         &self.order
     }
@@ -162,7 +169,7 @@ fn eliminate(k: usize, m: &mut [f64]) -> Option<()> {
 /// The symmetric renumbering (position → index) with the smallest profile
 /// `Σ_i (i − first neighbour of i)` of the symmetrised pattern of `a`
 /// among reverse Cuthill–McKee from every start node and the natural order.
-fn profile_order(k: usize, a: &[f64]) -> Vec<u32> {
+pub(crate) fn profile_order(k: usize, a: &[f64]) -> Vec<u32> {
     let mut adj: Vec<Vec<u32>> = vec![Vec::new(); k];
     for i in 0..k {
         for j in 0..i {
