@@ -182,10 +182,10 @@ fn survival_crank_nicolson(
     let sys = BlockSystem::new(what, &tr.out_rate, &tr.inner, 1.0, 0.5 * h)?;
     let tau = h / START_SUBSTEPS as f64;
     let start = BlockSystem::new(what, &tr.out_rate, &tr.inner, 1.0, 0.5 * GAMMA * tau)?;
-    // The vectors are kept in the systems' order (both systems have the
-    // same pattern, so the same order; if not, one re-ordering between the
-    // start and the rest).
-    let mut p: Vec<f64> = start.order().iter().map(|&st| p0[st as usize]).collect();
+    // The vectors are kept in the systems' order, which depends on the
+    // chain's pattern only: the same for both.
+    debug_assert_eq!(start.order(), sys.order());
+    let mut p: Vec<f64> = sys.order().iter().map(|&st| p0[st as usize]).collect();
     let mut rhs = vec![0.0; p.len()];
     let mut out = Vec::with_capacity(max_steps + 1);
     out.push(p.iter().sum::<f64>());
@@ -193,14 +193,6 @@ fn survival_crank_nicolson(
         if k < START_STEPS {
             for _ in 0..START_SUBSTEPS {
                 tr_bdf2_step(&start, &mut p, &mut rhs);
-            }
-            if k + 1 == START_STEPS && start.order() != sys.order() {
-                for (&st, &v) in start.order().iter().zip(&p) {
-                    rhs[st as usize] = v;
-                }
-                for (v, &st) in p.iter_mut().zip(sys.order()) {
-                    *v = rhs[st as usize];
-                }
             }
         } else {
             for (v, &q) in rhs.iter_mut().zip(&p) {

@@ -96,6 +96,41 @@ enum Block {
     Sparse(Box<Lu<usize, f64>>),
 }
 
+/// A component's pattern (`v` its states, sorted; their positions in `v`
+/// written to `local`): the component's size, then one bit per entry of the
+/// `k × k` block, the diagonal included.
+fn pattern_key(v: &[u32], graph: &Csr, comp: &[u32], local: &mut [u32]) -> Vec<u64> {
+    let k = v.len();
+    for (i, &st) in v.iter().enumerate() {
+        local[st as usize] = i as u32;
+    }
+    let mut key = vec![0u64; (k * k).div_ceil(64) + 1];
+    key[0] = k as u64;
+    let mut set = |e: usize| key[1 + e / 64] |= 1 << (e % 64);
+    for (i, &st) in v.iter().enumerate() {
+        set(i * k + i);
+        for &j in graph.successors(st) {
+            if comp[j as usize] == comp[st as usize] {
+                set(local[j as usize] as usize * k + i);
+            }
+        }
+    }
+    key
+}
+
+/// The block pattern of a [`pattern_key`] as a matrix of ones and zeros.
+fn pattern_matrix(k: usize, key: &[u64]) -> Vec<f64> {
+    (0..k * k)
+        .map(|e| {
+            if key[1 + e / 64] >> (e % 64) & 1 == 1 {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
 /// `M = s·I + c·A` factorised block by block.
 pub(crate) struct BlockSystem {
     /// States grouped by component, components in topological order
@@ -149,12 +184,29 @@ impl BlockSystem {
         let mut comp_start = vec![0u32];
         let mut local = vec![0u32; n];
         let mut comp = vec![0u32; n];
+        // Profile orders already found, by the components' patterns.
+        let mut orders: HashMap<Vec<u64>, Vec<u32>> = HashMap::new();
         for (b, v) in found.iter().enumerate() {
-            for (k, &st) in v.iter().enumerate() {
-                local[st as usize] = k as u32;
+            for &st in v {
                 comp[st as usize] = b as u32;
             }
-            states.extend_from_slice(v);
+        }
+        for v in &found {
+            // A component's states in the profile order of its pattern (the
+            // order depends on the chain's pattern only, so every system of
+            // the same chain numbers its vectors alike).
+            let ordered = if v.len() > 1 && v.len() <= DENSE_BLOCK_LIMIT {
+                let order = orders
+                    .entry(pattern_key(v, &graph, &comp, &mut local))
+                    .or_insert_with_key(|key| profile_order(v.len(), &pattern_matrix(v.len(), key)));
+                order.iter().map(|&o| v[o as usize]).collect()
+            } else {
+                v.clone()
+            };
+            for (k, &st) in ordered.iter().enumerate() {
+                local[st as usize] = k as u32;
+            }
+            states.extend_from_slice(&ordered);
             comp_start.push(states.len() as u32);
         }
         let mut sys = BlockSystem {
@@ -188,8 +240,6 @@ impl BlockSystem {
         let singular = |detail: String| Error::Singular { what, detail };
         // Dense blocks already factorised, by their entries' bits.
         let mut seen: HashMap<Vec<u64>, usize> = HashMap::new();
-        // Profile orders already found, by the blocks' patterns.
-        let mut orders: HashMap<Vec<u64>, Vec<u32>> = HashMap::new();
         for b in 0..self.comp_start.len() - 1 {
             let members = &self.states[self.comp_start[b] as usize..self.comp_start[b + 1] as usize];
             let k = members.len();
@@ -222,33 +272,13 @@ impl BlockSystem {
                     let d = match seen.get(&bits) {
                         Some(&d) => d,
                         None => {
-                            // The order depends on the pattern only: found
-                            // once for the blocks that share one.
-                            let mut pattern = vec![0u64; (k * k).div_ceil(64) + 1];
-                            pattern[0] = k as u64;
-                            for (e, v) in a.iter().enumerate() {
-                                if *v != 0.0 {
-                                    pattern[1 + e / 64] |= 1 << (e % 64);
-                                }
-                            }
-                            let order = orders
-                                .entry(pattern)
-                                .or_insert_with(|| profile_order(k, &a))
-                                .clone();
-                            let lu = ProfileLu::with_order(k, &a, order)
+                            let lu = ProfileLu::new(k, a)
                                 .ok_or_else(|| singular(format!("a component of {k} states is singular")))?;
                             self.dense.push(lu);
                             seen.insert(bits, self.dense.len() - 1);
                             self.dense.len() - 1
                         }
                     };
-                    // The members in the factor's order (they were sorted,
-                    // as the local indices are).
-                    let range = self.comp_start[b] as usize..self.comp_start[b + 1] as usize;
-                    let sorted = self.states[range.clone()].to_vec();
-                    for (slot, &o) in self.states[range].iter_mut().zip(self.dense[d].order()) {
-                        *slot = sorted[o as usize];
-                    }
                     Block::Dense(d)
                 } else {
                     let lu_of = |t: &[Triplet<usize, usize, f64>]| -> Result<Lu<usize, f64>> {
@@ -268,7 +298,8 @@ impl BlockSystem {
 
     /// The order the system keeps a vector in: position → state. A
     /// vector in this order is solved by [`BlockSystem::solve_ordered`]
-    /// with every component's unknowns contiguous.
+    /// with every component's unknowns contiguous. It depends on the
+    /// pattern of `inner` only (not on the rates, `s` or `c`).
     pub(crate) fn order(&self) -> &[u32] {
         &self.states
     }

@@ -18,7 +18,9 @@
 //!   a zero or non-finite pivot is reported.
 //!
 //! A symmetric permutation `P Bᵀ Pᵀ` keeps the dominance, so the states
-//! can be renumbered freely before the factorisation. Without pivoting the
+//! can be renumbered freely before the factorisation ([`profile_order`]
+//! chooses the order from the pattern alone; [`crate::blocks`] numbers a
+//! component's states that way before it builds the block). Without pivoting the
 //! fill of `L` and `U` stays inside the envelope of the permuted pattern:
 //! row `i` of `L` starts no earlier than the first neighbour of `i` in the
 //! symmetrised pattern, and so on for the columns of `U`. The order is
@@ -49,13 +51,11 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
-/// `A = L U` of a `k × k` matrix renumbered by [`ProfileLu::order`], with
-/// each row `i` of `L` (unit diagonal, not stored) and `U` kept as columns
-/// `first[i]..=last[i]` in one slice.
+/// `A = L U` of a `k × k` matrix (in the order its caller chose, see
+/// [`profile_order`]), with each row `i` of `L` (unit diagonal, not stored)
+/// and `U` kept as columns `first[i]..=last[i]` in one slice.
 #[derive(Debug, Clone)]
 pub(crate) struct ProfileLu {
-    /// New position → index in the matrix given to [`ProfileLu::with_order`].
-    order: Vec<u32>,
     /// First column stored in each row (`L`'s first nonzero, or the diagonal).
     first: Vec<u32>,
     /// Row `i` is `values[start[i]..start[i + 1]]`.
@@ -64,24 +64,10 @@ pub(crate) struct ProfileLu {
 }
 
 impl ProfileLu {
-    /// As [`ProfileLu::with_order`], finding the order.
-    #[cfg(test)]
-    pub(crate) fn new(k: usize, a: &[f64]) -> Option<ProfileLu> {
-        ProfileLu::with_order(k, a, profile_order(k, a))
-    }
-
-    /// Factorises the row-major `k × k` matrix `a`, which must be column
-    /// diagonally dominant (see the module doc), renumbered by `order`
-    /// (position → index): [`profile_order`]'s for `a`'s pattern, found once
-    /// for the blocks that share one. `None` if a pivot is zero or not
-    /// finite (a singular block).
-    pub(crate) fn with_order(k: usize, a: &[f64], order: Vec<u32>) -> Option<ProfileLu> {
-        let mut m = vec![0.0; k * k];
-        for (p, &op) in order.iter().enumerate() {
-            for (q, &oq) in order.iter().enumerate() {
-                m[p * k + q] = a[op as usize * k + oq as usize];
-            }
-        }
+    /// Factorises the row-major `k × k` matrix `a` as it is numbered, which
+    /// must be column diagonally dominant (see the module doc). `None` if a
+    /// pivot is zero or not finite (a singular block).
+    pub(crate) fn new(k: usize, mut m: Vec<f64>) -> Option<ProfileLu> {
         eliminate(k, &mut m)?;
         let mut first = Vec::with_capacity(k);
         let mut start = Vec::with_capacity(k + 1);
@@ -98,17 +84,7 @@ impl ProfileLu {
             values.extend_from_slice(&row[lo..=hi]);
             start.push(values.len() as u32);
         }
-        Some(ProfileLu {
-            order,
-            first,
-            start,
-            values,
-        })
-    }
-
-    /// The renumbering: position → index in the matrix given to [`ProfileLu::with_order`].
-    pub(crate) fn order(&self) -> &[u32] {
-        &self.order
+        Some(ProfileLu { first, start, values })
     }
 
     /// Entries stored (both factors with the diagonal).
@@ -117,7 +93,7 @@ impl ProfileLu {
         self.values.len()
     }
 
-    /// `A z = y` in place, `y` in the renumbered order.
+    /// `A z = y` in place.
     pub(crate) fn solve(&self, y: &mut [f64]) {
         let k = self.first.len();
         for i in 0..k {
@@ -275,6 +251,17 @@ mod tests {
         a
     }
 
+    /// `a` renumbered: entry `(p, q)` is `a[order[p]][order[q]]`.
+    fn renumbered(k: usize, a: &[f64], order: &[u32]) -> Vec<f64> {
+        let mut m = vec![0.0; k * k];
+        for (p, &op) in order.iter().enumerate() {
+            for (q, &oq) in order.iter().enumerate() {
+                m[p * k + q] = a[op as usize * k + oq as usize];
+            }
+        }
+        m
+    }
+
     proptest! {
         /// The profile LU solves `A z = y` as a dense product checks, for
         /// random diagonally dominant blocks and any renumbering it picks.
@@ -293,13 +280,14 @@ mod tests {
             let mut leak: Vec<f64> = leak_seed[..k].to_vec();
             leak[0] += 0.5; // at least one exit: nonsingular even when s = 0
             let a = transposed_block(k, &rates, &leak, s, 0.7);
-            let lu = ProfileLu::new(k, &a).expect("a nonsingular block");
+            let order = profile_order(k, &a);
+            let lu = ProfileLu::new(k, renumbered(k, &a, &order)).expect("a nonsingular block");
             let want: Vec<f64> = (0..k).map(|i| 1.0 + (i % 3) as f64).collect();
             // y = A z in the original numbering, then renumbered.
             let y: Vec<f64> = (0..k).map(|i| dot(&a[i * k..(i + 1) * k], &want)).collect();
-            let mut z: Vec<f64> = lu.order().iter().map(|&o| y[o as usize]).collect();
+            let mut z: Vec<f64> = order.iter().map(|&o| y[o as usize]).collect();
             lu.solve(&mut z);
-            for (p, &o) in lu.order().iter().enumerate() {
+            for (p, &o) in order.iter().enumerate() {
                 let w = want[o as usize];
                 prop_assert!((z[p] - w).abs() <= 1e-10 * w.abs().max(1.0), "{} vs {}", z[p], w);
             }
@@ -314,7 +302,7 @@ mod tests {
         let label = |i: usize| (i * 7) % k;
         let rates: Vec<_> = (0..k).map(|i| (label(i), label((i + 1) % k), 1.0)).collect();
         let a = transposed_block(k, &rates, &vec![0.1; k], 0.0, 1.0);
-        let lu = ProfileLu::new(k, &a).unwrap();
+        let lu = ProfileLu::new(k, renumbered(k, &a, &profile_order(k, &a))).unwrap();
         // A ring in its natural order has a profile of ~2k per factor;
         // scattered, ~k²/2.
         assert!(lu.stored() <= 5 * k, "{} entries stored", lu.stored());
@@ -324,6 +312,6 @@ mod tests {
     #[test]
     fn a_component_without_exit_is_singular() {
         let a = transposed_block(2, &[(0, 1, 1.0), (1, 0, 2.0)], &[0.0, 0.0], 0.0, 1.0);
-        assert!(ProfileLu::new(2, &a).is_none());
+        assert!(ProfileLu::new(2, a).is_none());
     }
 }
