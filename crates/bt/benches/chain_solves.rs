@@ -6,8 +6,8 @@
 //! is built once from the shipped tree and nominal parameters. Figures in
 //! `crates/bt/BENCHMARKS.md`.
 
-use bt::{ReadOptions, TreeParams};
-use petri::{CompiledGspn, ExploreParams, Params};
+use bt::{AnalyzeOptions, ReadOptions, TreeParams};
+use petri::CompiledGspn;
 
 fn main() {
     divan::main();
@@ -21,14 +21,7 @@ fn chain() -> (CompiledGspn, Vec<f64>) {
     let tree = bt::read_file(format!("{DIR}/{TREE}"), &ReadOptions::default()).expect("a shipped tree");
     let params = TreeParams::read_file(format!("{DIR}/nominal.toml")).expect("the shipped parameters");
     let tr = bt::translate::translate(&tree, &params).expect("a translation");
-    let gspn = tr.net.instantiate(&Params::new()).expect("an instance");
-    let explore = ExploreParams {
-        skip_forced: true,
-        ..ExploreParams::default()
-    };
-    let compiled = CompiledGspn::build(&gspn, &explore).expect("a chain");
-    let rates = gspn.rates(&Params::new(), None).expect("rates");
-    (compiled, rates)
+    bt::analyze::chain(&tr, AnalyzeOptions::default().max_states).expect("a chain")
 }
 
 #[divan::bench(sample_count = 20)]

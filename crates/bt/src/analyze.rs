@@ -120,11 +120,13 @@ struct Solved {
     ends: Vec<u8>,
 }
 
-fn compile(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Result<Solved> {
-    let tr = translate(tree, params)?;
+/// The CTMC of a translated tree, as `analyze` solves it (forced zero-time
+/// hops passed through, at most `max_states` markings), and the rate of
+/// every transition.
+pub fn chain(tr: &Translation, max_states: usize) -> Result<(CompiledGspn, Vec<f64>)> {
     let gspn: Gspn = tr.net.instantiate(&Params::new())?;
     let explore = ExploreParams {
-        max_states: options.max_states,
+        max_states,
         skip_forced: true,
         ..ExploreParams::default()
     };
@@ -135,6 +137,12 @@ fn compile(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Result
         e => Error::Petri(e),
     })?;
     let rates = gspn.rates(&Params::new(), None)?;
+    Ok((compiled, rates))
+}
+
+fn compile(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Result<Solved> {
+    let tr = translate(tree, params)?;
+    let (compiled, rates) = chain(&tr, options.max_states)?;
     let ends = compiled
         .bottom_components()
         .iter()
