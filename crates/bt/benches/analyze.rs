@@ -2,8 +2,9 @@
 //! nodes (`navigate_on_route_graph_w_recovery.xml`), the two 11,492-state
 //! ones and the largest chain (the goal-patience tree, 29,384 states) —
 //! with both parameter sets, without sensitivities (the target of issue
-//! 49: ≤ 100 ms each); and with sensitivities on the first two. Figures in
-//! `crates/bt/BENCHMARKS.md`.
+//! 49: ≤ 100 ms each); with the sidecar's defaults (every condition drawn
+//! at each evaluation: no condition state in the chain); and with
+//! sensitivities on the first two. Figures in `crates/bt/BENCHMARKS.md`.
 
 use bt::{AnalyzeOptions, ReadOptions, Tree, TreeParams};
 
@@ -20,9 +21,14 @@ const LARGEST: [&str; 4] = [
     "navigate_to_pose_w_replanning_goal_patience_and_recovery.xml",
 ];
 
+/// The tree `file` and the parameter set `set` (`""`: the defaults).
 fn load(file: &str, set: &str) -> (Tree, TreeParams) {
     let tree = bt::read_file(format!("{DIR}/{file}"), &ReadOptions::default()).expect("a shipped tree");
-    let params = TreeParams::read_file(format!("{DIR}/{set}.toml")).expect("the shipped parameters");
+    let params = if set.is_empty() {
+        TreeParams::default()
+    } else {
+        TreeParams::read_file(format!("{DIR}/{set}.toml")).expect("the shipped parameters")
+    };
     (tree, params)
 }
 
@@ -43,6 +49,11 @@ fn analyze_nominal(bencher: divan::Bencher, file: &str) {
 #[divan::bench(args = LARGEST, sample_count = 20)]
 fn analyze_degraded(bencher: divan::Bencher, file: &str) {
     without_sensitivities(bencher, file, "degraded");
+}
+
+#[divan::bench(args = LARGEST, sample_count = 20)]
+fn analyze_defaults(bencher: divan::Bencher, file: &str) {
+    without_sensitivities(bencher, file, "");
 }
 
 #[divan::bench(args = ["navigate_on_route_graph_w_recovery.xml", "navigate_to_pose_w_replanning_and_recovery.xml"], sample_count = 5)]
