@@ -17,6 +17,7 @@
 use std::collections::BTreeMap;
 
 use petri::{CompiledGspn, ExploreParams, Gspn, Params};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
@@ -352,89 +353,108 @@ fn sensitivities(
     p0: f64,
     t0: f64,
 ) -> Result<Vec<Sensitivity>> {
-    let mut out = Vec::new();
     let no_sens = AnalyzeOptions {
         sensitivities: false,
         ..options.clone()
     };
-    for (key, n) in keys(tree, params) {
-        let is_action = matches!(tree.node(n).kind, Kind::Action);
-        // Rates: scale the key's transitions and re-solve the same chain.
-        let role = if is_action {
-            RateRole::Duration
-        } else {
-            RateRole::Change
-        };
-        let (name, value) = if is_action {
-            let a = params.action(tree, n);
-            ("mean_time", 0.5 * (a.mean_time_success + a.mean_time_failure))
-        } else {
-            ("change_rate", params.condition(tree, n).change_rate)
-        };
-        let touched: Vec<usize> =
-            s.tr.roles
-                .iter()
-                .enumerate()
-                .filter(|(_, r)| {
-                    r.is_some_and(|(m, rr)| {
-                        rr == role
-                            && (if is_action {
-                                tree.node(m).param_key() == key
-                            } else {
-                                params.condition_key(tree, m) == key
-                            })
-                    })
+    // Every key is independent of the others: its re-solve and its
+    // re-compilation run in parallel, collected in key order (the same
+    // report for any number of threads).
+    let per_key: Vec<Vec<Sensitivity>> = keys(tree, params)
+        .into_par_iter()
+        .map(|kn| key_sensitivities(tree, params, &no_sens, s, (p0, t0), kn))
+        .collect::<Result<_>>()?;
+    let mut out: Vec<Sensitivity> = per_key.into_iter().flatten().collect();
+    out.sort_by(|a, b| b.d_p_success.abs().total_cmp(&a.d_p_success.abs()));
+    Ok(out)
+}
+
+/// The sensitivities to one key's parameters: its rate (a re-solve of the
+/// compiled chain) and its probability (a re-compilation).
+fn key_sensitivities(
+    tree: &Tree,
+    params: &TreeParams,
+    no_sens: &AnalyzeOptions,
+    s: &Solved,
+    (p0, t0): (f64, f64),
+    (key, n): (String, NodeId),
+) -> Result<Vec<Sensitivity>> {
+    let mut out = Vec::new();
+    let is_action = matches!(tree.node(n).kind, Kind::Action);
+    // Rates: scale the key's transitions and re-solve the same chain.
+    let role = if is_action {
+        RateRole::Duration
+    } else {
+        RateRole::Change
+    };
+    let (name, value) = if is_action {
+        let a = params.action(tree, n);
+        ("mean_time", 0.5 * (a.mean_time_success + a.mean_time_failure))
+    } else {
+        ("change_rate", params.condition(tree, n).change_rate)
+    };
+    let touched: Vec<usize> =
+        s.tr.roles
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| {
+                r.is_some_and(|(m, rr)| {
+                    rr == role
+                        && (if is_action {
+                            tree.node(m).param_key() == key
+                        } else {
+                            params.condition_key(tree, m) == key
+                        })
                 })
-                .map(|(t, _)| t)
-                .collect();
-        if !touched.is_empty() && value > 0.0 {
-            let h = 1e-4;
-            let mut rates = s.rates.clone();
-            for &t in &touched {
-                // A duration scaled by (1 + h) divides its rates; a change rate multiplies them.
-                rates[t] = if is_action {
-                    rates[t] / (1.0 + h)
-                } else {
-                    rates[t] * (1.0 + h)
-                };
-            }
-            let (p, _, _, t, _) = outcome(s, &rates)?;
-            out.push(Sensitivity {
-                key: key.clone(),
-                parameter: name.into(),
-                value,
-                d_p_success: (p - p0) / (h * value),
-                d_mean_time: (t - t0) / (h * value),
-            });
+            })
+            .map(|(t, _)| t)
+            .collect();
+    if !touched.is_empty() && value > 0.0 {
+        let h = 1e-4;
+        let mut rates = s.rates.clone();
+        for &t in &touched {
+            // A duration scaled by (1 + h) divides its rates; a change rate multiplies them.
+            rates[t] = if is_action {
+                rates[t] / (1.0 + h)
+            } else {
+                rates[t] * (1.0 + h)
+            };
         }
-        // Probabilities: re-translate.
-        let (pname, pvalue) = if is_action {
-            ("p_success", params.action(tree, n).p_success)
-        } else {
-            ("p_true", params.condition(tree, n).p_true)
-        };
-        let h = if pvalue + 1e-4 <= 1.0 { 1e-4 } else { -1e-4 };
-        let mut shifted = params.clone();
-        if is_action {
-            let mut a = params.action(tree, n);
-            a.p_success += h;
-            shifted.actions.insert(key.clone(), a);
-        } else {
-            let mut c = params.condition(tree, n);
-            c.p_true += h;
-            shifted.conditions.insert(key.clone(), c);
-        }
-        let s2 = compile(tree, &shifted, &no_sens)?;
-        let (p, _, _, t, _) = outcome(&s2, &s2.rates)?;
+        let (p, _, _, t, _) = outcome(s, &rates)?;
         out.push(Sensitivity {
-            key,
-            parameter: pname.into(),
-            value: pvalue,
-            d_p_success: (p - p0) / h,
-            d_mean_time: (t - t0) / h,
+            key: key.clone(),
+            parameter: name.into(),
+            value,
+            d_p_success: (p - p0) / (h * value),
+            d_mean_time: (t - t0) / (h * value),
         });
     }
-    out.sort_by(|a, b| b.d_p_success.abs().total_cmp(&a.d_p_success.abs()));
+    // Probabilities: re-translate.
+    let (pname, pvalue) = if is_action {
+        ("p_success", params.action(tree, n).p_success)
+    } else {
+        ("p_true", params.condition(tree, n).p_true)
+    };
+    let h = if pvalue + 1e-4 <= 1.0 { 1e-4 } else { -1e-4 };
+    let mut shifted = params.clone();
+    if is_action {
+        let mut a = params.action(tree, n);
+        a.p_success += h;
+        shifted.actions.insert(key.clone(), a);
+    } else {
+        let mut c = params.condition(tree, n);
+        c.p_true += h;
+        shifted.conditions.insert(key.clone(), c);
+    }
+    let s2 = compile(tree, &shifted, no_sens)?;
+    let (p, _, _, t, _) = outcome(&s2, &s2.rates)?;
+    out.push(Sensitivity {
+        key,
+        parameter: pname.into(),
+        value: pvalue,
+        d_p_success: (p - p0) / h,
+        d_mean_time: (t - t0) / h,
+    });
     Ok(out)
 }
 
