@@ -30,7 +30,7 @@
 //! | the net instantiated, firing rule | [`gspn`] |
 //! | reachability graph | [`reachability`] |
 //! | vanishing elimination, CTMC, long-run solution, measures | [`ctmc`] |
-//! | nets that finish: end probabilities, mean time, its distribution | [`absorption`] |
+//! | nets that finish: end probabilities, mean time, its distribution | [`absorption`], [`survival`] |
 //! | steady-state methods (GTH, LU, BiCGSTAB, Gauss–Seidel) | [`steady_state`], [`krylov`] |
 //! | structural analysis | [`incidence`], [`invariants`] |
 //! | behavioural properties | [`properties`] |
@@ -73,6 +73,7 @@ pub mod steady_state;
 pub mod structure;
 pub mod structured;
 pub mod suggest;
+pub mod survival;
 mod sweep;
 mod vanishing;
 

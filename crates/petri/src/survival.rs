@@ -1,0 +1,527 @@
+//! The distribution of the time to the end of an absorbing chain as a
+//! function of `t`, from a shift-and-invert Krylov space: every quantile
+//! from a few dozen block solves, to about ten significant digits.
+//!
+//! With `A = −Q_TT` the negated generator of the transient states and `p₀`
+//! the initial distribution on them, the mass not yet ended at `t` is the
+//! survival `S(t) = p₀ e^{−tA} 1`. A time-stepping method (Crank–Nicolson
+//! on a grid, [`crate::CompiledGspn::absorption_cdf_steps`]) pays one block
+//! solve per step, ~25 per mean time for quantiles to 10⁻⁴; uniformisation
+//! pays a product per `1/Λ`, hopeless when rates span orders of magnitude.
+//!
+//! Here the row vectors `p₀, p₀ M⁻¹, p₀ M⁻², …` with `M = I + γA` span a
+//! *rational* Krylov space (Moret & Novati, *RD-rational approximations of
+//! the matrix exponential*, BIT 44, 2004; van den Eshof & Hochbruck,
+//! *Preconditioning Lanczos approximations to the matrix exponential*, SIAM
+//! J. Sci. Comput. 27, 2006). Arnoldi (modified Gram–Schmidt, a second
+//! pass where the first cancelled most of the vector) gives an orthonormal
+//! basis `V_m` and the Hessenberg `H_m` of `M⁻¹` on it (transposed: `p ↦ p
+//! M⁻¹` acts on rows), so `A ≈ (H_m⁻¹ − I)/γ` there and
+//!
+//! `S(t) ≈ ‖p₀‖ (1ᵀ V_m) exp(t G) e₁`, `G = (I − H_m⁻¹)/γ`,
+//!
+//! for every `t` at once: the small matrix's exponential replaces the
+//! steps. Its error does not depend on the fastest rate (the stiff part
+//! is what `M⁻¹` damps) and falls geometrically with `m` for `t` of the
+//! order of `γ` and beyond; `γ` a quarter of the mean time to the end
+//! serves the body and the tail of the distribution (`bt analyze`: 20–34
+//! vectors on Nav2's large chains, quantiles within 1.1·10⁻⁹ of the matrix
+//! exponential's; `crates/bt/BENCHMARKS.md`).
+//!
+//! **When to stop** (`m`): every 2 vectors from 8 on, the times where `S`
+//! falls to the caller's levels (the quantiles) are read off; the space is
+//! kept once two successive sizes agree on them to the tolerance,
+//! relatively (or once it is invariant: a breakdown, after which the
+//! result is exact). `S` converges more slowly at times far below `γ`; as
+//! the check is on the times asked for, a quantile there costs more
+//! vectors, not accuracy.
+//! A space that has not settled by [`MAX_VECTORS`] vectors is an
+//! [`Error::NoConvergence`], on which a caller can fall back to the grid.
+//!
+//! **Reading a time off `S`** ([`Survival::first_below`]): `exp(δG)` for a
+//! step `δ` of the horizon over [`GRID`] marches `u_k = exp(kδG) e₁` to
+//! the first step below the level; inside it, a bisection takes one
+//! matrix–vector product per halving with `exp(δ/2^l · G)` (each by its
+//! own scaling and squaring, computed once per call as deep as needed)
+//! until the interval is [`RESOLUTION`] of the time, then interpolates
+//! linearly.
+//!
+//! Deterministic: one thread, a fixed order of operations.
+
+use crate::blocks::BlockSystem;
+use crate::error::{Error, Result};
+
+/// Largest Krylov space (block solves).
+pub const MAX_VECTORS: usize = 64;
+/// Steps of the march over the horizon in [`Survival::first_below`].
+pub const GRID: usize = 512;
+/// Bisections inside a step of the march stop once the interval is at
+/// most this fraction of the time (linear interpolation is then exact to
+/// ~10⁻¹⁰ of it)…
+pub const RESOLUTION: f64 = 1e-5;
+/// … or after this many.
+pub const MAX_HALVINGS: usize = 60;
+
+/// `S(t) = P(the run has not ended by t)` for every `t ≥ 0`, approximated
+/// on a Krylov space (see the module doc).
+#[derive(Debug, Clone)]
+pub struct Survival {
+    /// `‖p₀‖ · 1ᵀ V_m`.
+    weights: Vec<f64>,
+    /// `G = (I − H_m⁻¹)/γ`, `m × m`, row-major.
+    g: Vec<f64>,
+    /// Block solves done.
+    solves: usize,
+    /// The times of the levels it was built for.
+    times: Vec<Option<f64>>,
+}
+
+impl Survival {
+    /// A chain with no mass left in its transient states.
+    fn ended() -> Survival {
+        Survival {
+            weights: Vec::new(),
+            g: Vec::new(),
+            solves: 0,
+            times: Vec::new(),
+        }
+    }
+
+    /// For each level the space was built for, the first time `S` falls to
+    /// it within the horizon ([`Survival::first_below`]).
+    pub fn times(&self) -> &[Option<f64>] {
+        &self.times
+    }
+
+    /// Size of the space (block solves done to build it).
+    pub fn solves(&self) -> usize {
+        self.solves
+    }
+
+    fn dim(&self) -> usize {
+        self.weights.len()
+    }
+
+    /// `S(t)`.
+    pub fn at(&self, t: f64) -> f64 {
+        let m = self.dim();
+        if m == 0 {
+            return 0.0;
+        }
+        let e = expm(&scaled(&self.g, t), m);
+        (0..m).map(|i| self.weights[i] * e[i * m]).sum()
+    }
+
+    /// For each level, the first `t ≤ horizon` where `S(t) ≤ level`
+    /// (`None` if `S` stays above it up to the horizon).
+    pub fn first_below(&self, levels: &[f64], horizon: f64) -> Vec<Option<f64>> {
+        let m = self.dim();
+        if m == 0 {
+            return levels.iter().map(|_| Some(0.0)).collect();
+        }
+        let delta = horizon / GRID as f64;
+        // ladder[l] = exp(δ/2^l · G), each by its own scaling and squaring
+        // (squaring a finer one would keep its few significant digits),
+        // made as deep as a bisection needs.
+        let mut ladder = Ladder {
+            g: &self.g,
+            m,
+            delta,
+            steps: vec![expm(&scaled(&self.g, delta), m)],
+        };
+        let mut out = vec![None; levels.len()];
+        let mut u = unit(m);
+        let mut next = vec![0.0; m];
+        let mut s_u = dot(&self.weights, &u);
+        for (slot, &level) in out.iter_mut().zip(levels) {
+            if s_u <= level {
+                *slot = Some(0.0);
+            }
+        }
+        for k in 0..GRID {
+            if out.iter().all(Option::is_some) {
+                break;
+            }
+            mat_vec(&ladder.steps[0], &u, &mut next);
+            let s_next = dot(&self.weights, &next);
+            for (slot, &level) in out.iter_mut().zip(levels) {
+                if slot.is_none() && s_next <= level {
+                    let bracket = (k as f64 * delta, s_u, s_next);
+                    *slot = Some(ladder.bisect(&self.weights, &u, bracket, level));
+                }
+            }
+            std::mem::swap(&mut u, &mut next);
+            s_u = s_next;
+        }
+        out
+    }
+}
+
+/// `exp(δ/2^l · G)` for `l = 0, 1, …` as far as computed.
+struct Ladder<'a> {
+    g: &'a [f64],
+    m: usize,
+    delta: f64,
+    steps: Vec<Vec<f64>>,
+}
+
+impl Ladder<'_> {
+    fn step(&mut self, l: usize) -> &[f64] {
+        while self.steps.len() <= l {
+            let h = self.delta / f64::powi(2.0, self.steps.len() as i32);
+            self.steps.push(expm(&scaled(self.g, h), self.m));
+        }
+        &self.steps[l]
+    }
+
+    /// The time in `[lo, lo + δ]` where `S` crosses `level`, from `u` at
+    /// `lo` (`bracket = (lo, S(lo), S(lo + δ))`, `S(lo) > level ≥ S(lo +
+    /// δ)`): halvings until the interval is at most [`RESOLUTION`] of the
+    /// time (and at most [`MAX_HALVINGS`]), then linear interpolation.
+    fn bisect(&mut self, weights: &[f64], u: &[f64], bracket: (f64, f64, f64), level: f64) -> f64 {
+        let (mut lo, mut s_lo, mut s_hi) = bracket;
+        let mut u = u.to_vec();
+        let mut next = vec![0.0; u.len()];
+        let mut width = self.delta;
+        for l in 1..=MAX_HALVINGS {
+            if width <= RESOLUTION * lo {
+                break;
+            }
+            width *= 0.5;
+            mat_vec(self.step(l), &u, &mut next);
+            let s_mid = dot(weights, &next);
+            if s_mid <= level {
+                s_hi = s_mid;
+            } else {
+                lo += width;
+                s_lo = s_mid;
+                std::mem::swap(&mut u, &mut next);
+            }
+        }
+        let f = if s_lo > s_hi {
+            ((s_lo - level) / (s_lo - s_hi)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        lo + f * width
+    }
+}
+
+/// Builds the survival of the row vector `p0` (in `sys`'s order) under
+/// `M = I + γA` (`sys`), growing the space until the times where `S`
+/// falls to `levels` (within `horizon`) agree between two successive
+/// sizes to `tolerance`, relatively.
+pub(crate) fn build(
+    sys: &BlockSystem,
+    p0: &[f64],
+    gamma: f64,
+    horizon: f64,
+    levels: &[f64],
+    tolerance: f64,
+) -> Result<Survival> {
+    let n = p0.len();
+    let beta = norm(p0);
+    if n == 0 || beta == 0.0 {
+        let mut s = Survival::ended();
+        s.times = levels.iter().map(|_| Some(0.0)).collect();
+        return Ok(s);
+    }
+    let max = MAX_VECTORS.min(n);
+    let mut basis: Vec<Vec<f64>> = vec![p0.iter().map(|&x| x / beta).collect()];
+    // 1ᵀ v of each basis vector.
+    let mut sums = vec![total(&basis[0])];
+    // h[j][i]: column j of the Hessenberg, row i ≤ j + 1.
+    let mut h = vec![vec![0.0; max + 1]; max];
+    let mut previous: Option<Vec<Option<f64>>> = None;
+    let mut last_change = f64::INFINITY;
+    for j in 0..max {
+        let mut w = basis[j].clone();
+        sys.solve_ordered(&mut w);
+        let before = norm(&w);
+        if !before.is_finite() {
+            return Err(Error::NotFinite {
+                what: "the time distribution (Krylov space)".into(),
+                value: before,
+                cause: "a block solve lost all precision".into(),
+            });
+        }
+        // Modified Gram–Schmidt, and once more if it cancelled most of `w`
+        // (Daniel, Gragg, Kaufman & Stewart's criterion, η = 1/√2).
+        let mut rest = before;
+        for _ in 0..2 {
+            let entering = rest;
+            for (i, v) in basis.iter().enumerate() {
+                let c = dot(v, &w);
+                h[j][i] += c;
+                axpy(&mut w, -c, v);
+            }
+            rest = norm(&w);
+            if rest > std::f64::consts::FRAC_1_SQRT_2 * entering {
+                break;
+            }
+        }
+        h[j][j + 1] = rest;
+        let m = j + 1;
+        let invariant = rest <= 1e-13 * before || m == n;
+        if invariant || m == max || (m >= 8 && m % 2 == 0) {
+            let mut candidate = project(&sums, &h, m, beta, gamma)?;
+            candidate.times = candidate.first_below(levels, horizon);
+            if invariant {
+                return Ok(candidate);
+            }
+            if let Some(prev) = &previous {
+                last_change = change(prev, &candidate.times, horizon);
+                if last_change <= tolerance {
+                    return Ok(candidate);
+                }
+            }
+            previous = Some(candidate.times);
+        }
+        if m < max {
+            for x in &mut w {
+                *x /= rest;
+            }
+            sums.push(total(&w));
+            basis.push(w);
+        }
+    }
+    Err(Error::NoConvergence {
+        solver: "the time distribution (shift-and-invert Krylov)",
+        iterations: max,
+        residual: last_change,
+        tolerance,
+    })
+}
+
+/// The largest relative change between two sets of times (infinite if
+/// one reaches a level within the horizon and the other does not).
+fn change(a: &[Option<f64>], b: &[Option<f64>], horizon: f64) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| match (x, y) {
+            (Some(x), Some(y)) => (x - y).abs() / x.abs().max(y.abs()).max(1e-12 * horizon),
+            (None, None) => 0.0,
+            _ => f64::INFINITY,
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The survival on the first `m` vectors (`sums` their `1ᵀ v`): `G = (I −
+/// H_m⁻¹)/γ`, weights `β 1ᵀ V_m`.
+fn project(sums: &[f64], h: &[Vec<f64>], m: usize, beta: f64, gamma: f64) -> Result<Survival> {
+    let mut hm = vec![0.0; m * m];
+    for (j, col) in h.iter().enumerate().take(m) {
+        for i in 0..m {
+            hm[i * m + j] = col[i];
+        }
+    }
+    let inv = invert(hm, m).ok_or_else(|| Error::NotFinite {
+        what: "the time distribution (Krylov space)".into(),
+        value: 0.0,
+        cause: "the projected shift-and-invert matrix is singular".into(),
+    })?;
+    let mut g = vec![0.0; m * m];
+    for i in 0..m {
+        for j in 0..m {
+            let id = if i == j { 1.0 } else { 0.0 };
+            g[i * m + j] = (id - inv[i * m + j]) / gamma;
+        }
+    }
+    let weights = sums[..m].iter().map(|&v| beta * v).collect();
+    Ok(Survival {
+        weights,
+        g,
+        solves: m,
+        times: Vec::new(),
+    })
+}
+
+/// `a · b` with eight running sums (lanes fixed by position, added in a
+/// fixed order: deterministic, and free of the one-add-at-a-time chain).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in ca.zip(cb) {
+        for k in 0..8 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
+}
+
+/// `Σ a` with the lanes of [`dot`].
+fn total(a: &[f64]) -> f64 {
+    let mut acc = [0.0; 8];
+    let c = a.chunks_exact(8);
+    let tail: f64 = c.remainder().iter().sum();
+    for x in c {
+        for k in 0..8 {
+            acc[k] += x[k];
+        }
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
+    for (yi, &xi) in y.iter_mut().zip(x) {
+        *yi += a * xi;
+    }
+}
+
+fn unit(m: usize) -> Vec<f64> {
+    let mut u = vec![0.0; m];
+    u[0] = 1.0;
+    u
+}
+
+fn scaled(a: &[f64], s: f64) -> Vec<f64> {
+    a.iter().map(|&x| x * s).collect()
+}
+
+/// `y = A x`, `A` `m × m` row-major.
+fn mat_vec(a: &[f64], x: &[f64], y: &mut [f64]) {
+    let m = x.len();
+    for (i, yi) in y.iter_mut().enumerate() {
+        *yi = dot(&a[i * m..(i + 1) * m], x);
+    }
+}
+
+fn mat_mul(a: &[f64], b: &[f64], m: usize) -> Vec<f64> {
+    let mut c = vec![0.0; m * m];
+    for i in 0..m {
+        for k in 0..m {
+            let aik = a[i * m + k];
+            if aik != 0.0 {
+                axpy(&mut c[i * m..(i + 1) * m], aik, &b[k * m..(k + 1) * m]);
+            }
+        }
+    }
+    c
+}
+
+/// `exp(X)` of an `m × m` matrix: scaled by `2^s` to a 1-norm `ν ≤ ½`, a
+/// Taylor series of the least degree `K ≤ 16` with `ν^{K+1}/(K+1)! ≤
+/// 10⁻¹⁸`, squared `s` times.
+fn expm(x: &[f64], m: usize) -> Vec<f64> {
+    let norm1 = (0..m)
+        .map(|j| (0..m).map(|i| x[i * m + j].abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let s = if norm1 > 0.5 {
+        (norm1 / 0.5).log2().ceil() as i32
+    } else {
+        0
+    };
+    let y = scaled(x, f64::powi(2.0, -s));
+    let nu = norm1 * f64::powi(2.0, -s);
+    let mut degree = 1;
+    let mut term = nu;
+    while degree < 16 {
+        term *= nu / (degree + 1) as f64;
+        if term <= 1e-18 {
+            break;
+        }
+        degree += 1;
+    }
+    // Horner: I + Y (I + Y/2 (I + Y/3 (… (I + Y/K))))
+    let mut e = identity(m);
+    for k in (1..=degree).rev() {
+        let mut next = mat_mul(&y, &e, m);
+        for v in &mut next {
+            *v /= k as f64;
+        }
+        for i in 0..m {
+            next[i * m + i] += 1.0;
+        }
+        e = next;
+    }
+    for _ in 0..s {
+        e = mat_mul(&e, &e, m);
+    }
+    e
+}
+
+fn identity(m: usize) -> Vec<f64> {
+    let mut e = vec![0.0; m * m];
+    for i in 0..m {
+        e[i * m + i] = 1.0;
+    }
+    e
+}
+
+/// The inverse of an `m × m` matrix by Gauss–Jordan with partial pivoting;
+/// `None` if it is singular.
+fn invert(mut a: Vec<f64>, m: usize) -> Option<Vec<f64>> {
+    let mut inv = identity(m);
+    for col in 0..m {
+        let pivot = (col..m).max_by(|&i, &j| a[i * m + col].abs().total_cmp(&a[j * m + col].abs()))?;
+        let p = a[pivot * m + col];
+        if p == 0.0 || !p.is_finite() {
+            return None;
+        }
+        if pivot != col {
+            for k in 0..m {
+                a.swap(pivot * m + k, col * m + k);
+                inv.swap(pivot * m + k, col * m + k);
+            }
+        }
+        for k in 0..m {
+            a[col * m + k] /= p;
+            inv[col * m + k] /= p;
+        }
+        for i in 0..m {
+            if i != col {
+                let f = a[i * m + col];
+                if f != 0.0 {
+                    for k in 0..m {
+                        a[i * m + k] -= f * a[col * m + k];
+                        inv[i * m + k] -= f * inv[col * m + k];
+                    }
+                }
+            }
+        }
+    }
+    Some(inv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn expm_of_a_rotation_and_a_decay() {
+        // exp([[0, -θ], [θ, 0]]) is the rotation by θ.
+        let th = 2.5;
+        let e = expm(&[0.0, -th, th, 0.0], 2);
+        for (a, b) in e.iter().zip([th.cos(), -th.sin(), th.sin(), th.cos()]) {
+            assert!((a - b).abs() < 1e-14, "{a} vs {b}");
+        }
+        // A Jordan block: exp([[-λ, 1], [0, -λ]]) = e^{-λ} [[1, 1], [0, 1]].
+        let l = 40.0;
+        let e = expm(&[-l, 1.0, 0.0, -l], 2);
+        let d = (-l).exp();
+        for (a, b) in e.iter().zip([d, d, 0.0, d]) {
+            assert!((a - b).abs() <= 1e-12 * d, "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn inverse_times_matrix_is_identity() {
+        let a = vec![0.0, 2.0, 1.0, 1.0, 0.0, 3.0, 4.0, 1.0, 0.0];
+        let inv = invert(a.clone(), 3).unwrap();
+        let p = mat_mul(&a, &inv, 3);
+        for (x, y) in p.iter().zip(identity(3)) {
+            assert!((x - y).abs() < 1e-14);
+        }
+        assert!(invert(vec![1.0, 2.0, 2.0, 4.0], 2).is_none());
+    }
+}
