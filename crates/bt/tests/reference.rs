@@ -2,12 +2,13 @@
 //! against stored reference values (`tests/data/analysis_reference.json`,
 //! computed by the analysis before the state-space generation passed
 //! through forced zero-time hops and the block solves shared equal
-//! factorisations; the quantiles by the time stepping with the TR-BDF2
-//! start, within 1.3e-3 (median 1e-4) of the matrix exponential's,
-//! `crates/bt/bench/quantiles_exact.py`): P(success), P(failure), P(never), the mean times, the
-//! quantiles, the failures at the start, every node's activity and failure
-//! share agree within 1e-9 (relative to the value's size where it exceeds
-//! 1); so do the perturbed results behind every sensitivity (a forward
+//! factorisations; the quantiles are an independent computation's, SciPy's
+//! matrix exponential with Brent's method, `crates/bt/bench/quantiles_exact.py`):
+//! P(success), P(failure), P(never), the mean times, the failures at the
+//! start, every node's activity and failure share agree within 1e-9
+//! (relative to the value's size where it exceeds 1), the quantiles within
+//! 1e-8 relatively (the Krylov space is grown until its sizes agree to
+//! 1e-9, `petri::survival`); so do the perturbed results behind every sensitivity (a forward
 //! difference with step δ: the quotient within 1e-9 / δ — the rounding of
 //! a different state order alone moves it by about 1e-8 relative).
 //!
@@ -54,7 +55,12 @@ fn compare(case: &Value) -> Vec<String> {
         close(&format!("{tag} {k}"), num(&got[k]), num(&want[k]), &mut bad);
     }
     for (q, (g, w)) in pairs(&got["quantiles"], &want["quantiles"], &tag).enumerate() {
-        close(&format!("{tag} quantile {q}"), num(&g[1]), num(&w[1]), &mut bad);
+        let (g, w) = (num(&g[1]), num(&w[1]));
+        if (g - w).abs() > 1e-8 * w.abs() {
+            bad.push(format!(
+                "{tag} quantile {q}: {g:e} against {w:e} (the matrix exponential's)"
+            ));
+        }
     }
     for (g, w) in pairs(&got["nodes"], &want["nodes"], &tag) {
         assert_eq!(g["path"], w["path"], "{tag}: nodes");
