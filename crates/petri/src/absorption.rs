@@ -123,6 +123,18 @@ fn transient(chain: &CompiledGspn, rates: &[f64]) -> Result<Transient> {
     })
 }
 
+/// The initial distribution on the transient states (in `tr`'s numbering).
+fn initial_transient(chain: &CompiledGspn, tr: &Transient) -> Vec<f64> {
+    let mut p = vec![0.0; tr.states.len()];
+    for &(s, w) in chain.initial_distribution() {
+        let i = tr.local[s as usize];
+        if i != u32::MAX {
+            p[i as usize] += w;
+        }
+    }
+    p
+}
+
 /// TR-BDF2's `γ = 2 − √2`: with it, both stages of a step use the one
 /// matrix `I + (γh/2) A`.
 const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
@@ -253,21 +265,15 @@ impl CompiledGspn {
             return Err(Error::Invalid(format!("a time step must be > 0 (got {h})")));
         }
         let tr = transient(self, rates)?;
-        let mut p = vec![0.0; tr.states.len()];
-        for &(s, w) in self.initial_distribution() {
-            let i = tr.local[s as usize];
-            if i != u32::MAX {
-                p[i as usize] += w;
-            }
-        }
+        let p = initial_transient(self, &tr);
         let survival = survival_crank_nicolson(&tr, &p, h, max_steps, 1.0 - level)?;
         Ok(survival.into_iter().map(|v| (1.0 - v).clamp(0.0, 1.0)).collect())
     }
 
     /// `S(t) = P(the run has not ended by t)` for every `t` at once, from a
     /// shift-and-invert Krylov space with `M = I − shift·Q_TT`
-    /// ([`crate::survival`]): `shift` about half the mean time to the end
-    /// suits every quantile of the time; the space grows until two sizes
+    /// ([`crate::survival`]): `shift` a quarter to a half of the mean time
+    /// to the end suits every quantile of the time; the space grows until two sizes
     /// agree, to `tolerance` relatively, on the first times within
     /// `horizon` where `S` falls to `levels` ([`Survival::times`](crate::survival::Survival::times)).
     ///
@@ -291,13 +297,7 @@ impl CompiledGspn {
             }
         }
         let tr = transient(self, rates)?;
-        let mut p = vec![0.0; tr.states.len()];
-        for &(s, w) in self.initial_distribution() {
-            let i = tr.local[s as usize];
-            if i != u32::MAX {
-                p[i as usize] += w;
-            }
-        }
+        let p = initial_transient(self, &tr);
         let sys = BlockSystem::new(
             "the time distribution (Krylov space)",
             &tr.out_rate,
@@ -388,13 +388,7 @@ impl CompiledGspn {
     ) -> Result<Vec<f64>> {
         let tr = transient(self, rates)?;
         let m = tr.states.len();
-        let mut p = vec![0.0; m];
-        for &(s, w) in self.initial_distribution() {
-            let i = tr.local[s as usize];
-            if i != u32::MAX {
-                p[i as usize] += w;
-            }
-        }
+        let mut p = initial_transient(self, &tr);
         let lambda = tr.out_rate.iter().copied().fold(0.0, f64::max) * 1.02;
         if lambda == 0.0 || m == 0 {
             return Ok(times.iter().map(|_| 1.0 - p.iter().sum::<f64>()).collect());
@@ -550,13 +544,9 @@ mod tests {
         assert!(worst < 6e-5, "largest error {worst}");
     }
 
-    /// Half the runs end at once (rate 1000), half after a slow stage
-    /// (rate 1), on a grid with h = 0.04: Crank–Nicolson alone would carry
-    /// the fast component as an oscillation (amplification −0.905 per
-    /// step); the L-stable start damps it, so the distribution is monotone
-    /// and close to the exact `0.5 (1 − e^{−1000 t}) + 0.5 (1 − e^{−t})`.
-    #[test]
-    fn a_stiff_start_does_not_oscillate() {
+    /// Half the runs end at once (rate 1000), half after a slow stage (rate
+    /// 1): `S(t) = 0.5 e^{−1000t} + 0.5 e^{−t}`.
+    fn stiff_mixture() -> (CompiledGspn, Vec<f64>) {
         let mut net = Net::new("stiff start");
         let s = net.add_place("s", 1u32);
         let fast = net.add_place("fast", 0u32);
@@ -575,6 +565,17 @@ mod tests {
         let g = net.instantiate(&Params::new()).unwrap();
         let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
         let rates = g.rates(&Params::new(), None).unwrap();
+        (c, rates)
+    }
+
+    /// Half the runs end at once (rate 1000), half after a slow stage
+    /// (rate 1), on a grid with h = 0.04: Crank–Nicolson alone would carry
+    /// the fast component as an oscillation (amplification −0.905 per
+    /// step); the L-stable start damps it, so the distribution is monotone
+    /// and close to the exact `0.5 (1 − e^{−1000 t}) + 0.5 (1 − e^{−t})`.
+    #[test]
+    fn a_stiff_start_does_not_oscillate() {
+        let (c, rates) = stiff_mixture();
         let h = 0.04;
         let grid = c.absorption_cdf_steps(&rates, h, 100, 2.0).unwrap();
         let exact = |t: f64| 0.5 * (1.0 - (-1000.0 * t).exp()) + 0.5 * (1.0 - (-t).exp());
@@ -663,24 +664,7 @@ mod tests {
     /// met at the start is 0.
     #[test]
     fn krylov_survival_of_a_stiff_mixture() {
-        let mut net = Net::new("stiff start");
-        let s0 = net.add_place("s", 1u32);
-        let fast = net.add_place("fast", 0u32);
-        let slow = net.add_place("slow", 0u32);
-        let end = net.add_place("end", 0u32);
-        for (name, to) in [("to_fast", fast), ("to_slow", slow)] {
-            let t = net.add_immediate(name, 1.0, 1);
-            net.input(s0, t);
-            net.output(t, to);
-        }
-        for (name, from, rate) in [("fast_end", fast, 1000.0), ("slow_end", slow, 1.0)] {
-            let t = net.add_timed(name, rate);
-            net.input(from, t);
-            net.output(t, end);
-        }
-        let g = net.instantiate(&Params::new()).unwrap();
-        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
-        let rates = g.rates(&Params::new(), None).unwrap();
+        let (c, rates) = stiff_mixture();
         let exact = |t: f64| 0.5 * (-1000.0 * t).exp() + 0.5 * (-t).exp();
         let levels = [0.8, 0.4, 0.05, 1e-9, 1.0];
         let s = c
