@@ -36,9 +36,10 @@
 //! factorisation `O(k² + Σ_i |L row i| · |U row i|)`, each solve `2f` flops.
 
 /// `Σ a_i b_i` over equal-length slices, four partial sums (so that the
-/// compiler can use vector registers).
+/// compiler can use vector registers; fixed lanes, so deterministic). Also
+/// the Krylov space's products ([`crate::survival`]).
 #[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0f64; 4];
     let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
     let (ra, rb) = (ca.remainder(), cb.remainder());

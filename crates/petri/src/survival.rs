@@ -48,8 +48,12 @@
 //!
 //! Deterministic: one thread, a fixed order of operations.
 
+use faer::prelude::Solve;
+use faer::{Col, Mat, Scale};
+
 use crate::blocks::BlockSystem;
 use crate::error::{Error, Result};
+use crate::profile_lu::dot;
 
 /// Largest Krylov space (block solves).
 pub const MAX_VECTORS: usize = 64;
@@ -68,8 +72,8 @@ pub const MAX_HALVINGS: usize = 60;
 pub struct Survival {
     /// `‖p₀‖ · 1ᵀ V_m`.
     weights: Vec<f64>,
-    /// `G = (I − H_m⁻¹)/γ`, `m × m`, row-major.
-    g: Vec<f64>,
+    /// `G = (I − H_m⁻¹)/γ`, `m × m`.
+    g: Mat<f64>,
     /// Block solves done.
     solves: usize,
     /// The times of the levels it was built for.
@@ -81,7 +85,7 @@ impl Survival {
     fn ended() -> Survival {
         Survival {
             weights: Vec::new(),
-            g: Vec::new(),
+            g: Mat::zeros(0, 0),
             solves: 0,
             times: Vec::new(),
         }
@@ -108,8 +112,8 @@ impl Survival {
         if m == 0 {
             return 0.0;
         }
-        let e = expm(&scaled(&self.g, t), m);
-        (0..m).map(|i| self.weights[i] * e[i * m]).sum()
+        let e = expm(&(&self.g * Scale(t)));
+        (0..m).map(|i| self.weights[i] * e[(i, 0)]).sum()
     }
 
     /// For each level, the first `t ≤ horizon` where `S(t) ≤ level`
@@ -125,14 +129,12 @@ impl Survival {
         // made as deep as a bisection needs.
         let mut ladder = Ladder {
             g: &self.g,
-            m,
             delta,
-            steps: vec![expm(&scaled(&self.g, delta), m)],
+            steps: vec![expm(&(&self.g * Scale(delta)))],
         };
         let mut out = vec![None; levels.len()];
         let mut u = unit(m);
-        let mut next = vec![0.0; m];
-        let mut s_u = dot(&self.weights, &u);
+        let mut s_u = self.weights[0];
         for (slot, &level) in out.iter_mut().zip(levels) {
             if s_u <= level {
                 *slot = Some(0.0);
@@ -142,34 +144,38 @@ impl Survival {
             if out.iter().all(Option::is_some) {
                 break;
             }
-            mat_vec(&ladder.steps[0], &u, &mut next);
-            let s_next = dot(&self.weights, &next);
+            let next = &ladder.steps[0] * &u;
+            let s_next = self.weigh(&next);
             for (slot, &level) in out.iter_mut().zip(levels) {
                 if slot.is_none() && s_next <= level {
                     let bracket = (k as f64 * delta, s_u, s_next);
-                    *slot = Some(ladder.bisect(&self.weights, &u, bracket, level));
+                    *slot = Some(ladder.bisect(self, &u, bracket, level));
                 }
             }
-            std::mem::swap(&mut u, &mut next);
+            u = next;
             s_u = s_next;
         }
         out
+    }
+
+    /// `S` at the point of the small space `u` (`‖p₀‖ 1ᵀ V_m u`).
+    fn weigh(&self, u: &Col<f64>) -> f64 {
+        self.weights.iter().enumerate().map(|(i, &w)| w * u[i]).sum()
     }
 }
 
 /// `exp(δ/2^l · G)` for `l = 0, 1, …` as far as computed.
 struct Ladder<'a> {
-    g: &'a [f64],
-    m: usize,
+    g: &'a Mat<f64>,
     delta: f64,
-    steps: Vec<Vec<f64>>,
+    steps: Vec<Mat<f64>>,
 }
 
 impl Ladder<'_> {
-    fn step(&mut self, l: usize) -> &[f64] {
+    fn step(&mut self, l: usize) -> &Mat<f64> {
         while self.steps.len() <= l {
             let h = self.delta / f64::powi(2.0, self.steps.len() as i32);
-            self.steps.push(expm(&scaled(self.g, h), self.m));
+            self.steps.push(expm(&(self.g * Scale(h))));
         }
         &self.steps[l]
     }
@@ -178,24 +184,23 @@ impl Ladder<'_> {
     /// `lo` (`bracket = (lo, S(lo), S(lo + δ))`, `S(lo) > level ≥ S(lo +
     /// δ)`): halvings until the interval is at most [`RESOLUTION`] of the
     /// time (and at most [`MAX_HALVINGS`]), then linear interpolation.
-    fn bisect(&mut self, weights: &[f64], u: &[f64], bracket: (f64, f64, f64), level: f64) -> f64 {
+    fn bisect(&mut self, s: &Survival, u: &Col<f64>, bracket: (f64, f64, f64), level: f64) -> f64 {
         let (mut lo, mut s_lo, mut s_hi) = bracket;
-        let mut u = u.to_vec();
-        let mut next = vec![0.0; u.len()];
+        let mut u = u.clone();
         let mut width = self.delta;
         for l in 1..=MAX_HALVINGS {
             if width <= RESOLUTION * lo {
                 break;
             }
             width *= 0.5;
-            mat_vec(self.step(l), &u, &mut next);
-            let s_mid = dot(weights, &next);
+            let next = self.step(l) * &u;
+            let s_mid = s.weigh(&next);
             if s_mid <= level {
                 s_hi = s_mid;
             } else {
                 lo += width;
                 s_lo = s_mid;
-                std::mem::swap(&mut u, &mut next);
+                u = next;
             }
         }
         let f = if s_lo > s_hi {
@@ -229,7 +234,7 @@ pub(crate) fn build(
     let max = MAX_VECTORS.min(n);
     let mut basis: Vec<Vec<f64>> = vec![p0.iter().map(|&x| x / beta).collect()];
     // 1ᵀ v of each basis vector.
-    let mut sums = vec![total(&basis[0])];
+    let mut sums = vec![basis[0].iter().sum::<f64>()];
     // h[j][i]: column j of the Hessenberg, row i ≤ j + 1.
     let mut h = vec![vec![0.0; max + 1]; max];
     let mut previous: Option<Vec<Option<f64>>> = None;
@@ -281,7 +286,7 @@ pub(crate) fn build(
             for x in &mut w {
                 *x /= rest;
             }
-            sums.push(total(&w));
+            sums.push(w.iter().sum::<f64>());
             basis.push(w);
         }
     }
@@ -309,24 +314,16 @@ fn change(a: &[Option<f64>], b: &[Option<f64>], horizon: f64) -> f64 {
 /// The survival on the first `m` vectors (`sums` their `1ᵀ v`): `G = (I −
 /// H_m⁻¹)/γ`, weights `β 1ᵀ V_m`.
 fn project(sums: &[f64], h: &[Vec<f64>], m: usize, beta: f64, gamma: f64) -> Result<Survival> {
-    let mut hm = vec![0.0; m * m];
-    for (j, col) in h.iter().enumerate().take(m) {
-        for i in 0..m {
-            hm[i * m + j] = col[i];
-        }
+    let hm = Mat::<f64>::from_fn(m, m, |i, j| h[j][i]);
+    let inv = hm.partial_piv_lu().solve(Mat::<f64>::identity(m, m));
+    if !(0..m).all(|j| (0..m).all(|i| inv[(i, j)].is_finite())) {
+        return Err(Error::NotFinite {
+            what: "the time distribution (Krylov space)".into(),
+            value: f64::NAN,
+            cause: "the projected shift-and-invert matrix is singular".into(),
+        });
     }
-    let inv = invert(hm, m).ok_or_else(|| Error::NotFinite {
-        what: "the time distribution (Krylov space)".into(),
-        value: 0.0,
-        cause: "the projected shift-and-invert matrix is singular".into(),
-    })?;
-    let mut g = vec![0.0; m * m];
-    for i in 0..m {
-        for j in 0..m {
-            let id = if i == j { 1.0 } else { 0.0 };
-            g[i * m + j] = (id - inv[i * m + j]) / gamma;
-        }
-    }
+    let g = Mat::<f64>::from_fn(m, m, |i, j| (f64::from(u8::from(i == j)) - inv[(i, j)]) / gamma);
     let weights = sums[..m].iter().map(|&v| beta * v).collect();
     Ok(Survival {
         weights,
@@ -334,38 +331,6 @@ fn project(sums: &[f64], h: &[Vec<f64>], m: usize, beta: f64, gamma: f64) -> Res
         solves: m,
         times: Vec::new(),
     })
-}
-
-/// `a · b` with eight running sums (lanes fixed by position, added in a
-/// fixed order: deterministic, and free of the one-add-at-a-time chain).
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in ca.zip(cb) {
-        for k in 0..8 {
-            acc[k] += x[k] * y[k];
-        }
-    }
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
-}
-
-/// `Σ a` with the lanes of [`dot`].
-fn total(a: &[f64]) -> f64 {
-    let mut acc = [0.0; 8];
-    let c = a.chunks_exact(8);
-    let tail: f64 = c.remainder().iter().sum();
-    for x in c {
-        for k in 0..8 {
-            acc[k] += x[k];
-        }
-    }
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 fn norm(a: &[f64]) -> f64 {
@@ -378,50 +343,23 @@ fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
     }
 }
 
-fn unit(m: usize) -> Vec<f64> {
-    let mut u = vec![0.0; m];
-    u[0] = 1.0;
-    u
+fn unit(m: usize) -> Col<f64> {
+    Col::from_fn(m, |i| f64::from(u8::from(i == 0)))
 }
 
-fn scaled(a: &[f64], s: f64) -> Vec<f64> {
-    a.iter().map(|&x| x * s).collect()
-}
-
-/// `y = A x`, `A` `m × m` row-major.
-fn mat_vec(a: &[f64], x: &[f64], y: &mut [f64]) {
-    let m = x.len();
-    for (i, yi) in y.iter_mut().enumerate() {
-        *yi = dot(&a[i * m..(i + 1) * m], x);
-    }
-}
-
-fn mat_mul(a: &[f64], b: &[f64], m: usize) -> Vec<f64> {
-    let mut c = vec![0.0; m * m];
-    for i in 0..m {
-        for k in 0..m {
-            let aik = a[i * m + k];
-            if aik != 0.0 {
-                axpy(&mut c[i * m..(i + 1) * m], aik, &b[k * m..(k + 1) * m]);
-            }
-        }
-    }
-    c
-}
-
-/// `exp(X)` of an `m × m` matrix: scaled by `2^s` to a 1-norm `ν ≤ ½`, a
-/// Taylor series of the least degree `K ≤ 16` with `ν^{K+1}/(K+1)! ≤
-/// 10⁻¹⁸`, squared `s` times.
-fn expm(x: &[f64], m: usize) -> Vec<f64> {
+/// `exp(X)`: scaled by `2^s` to a 1-norm `ν ≤ ½`, a Taylor series of the
+/// least degree `K ≤ 16` with `ν^{K+1}/(K+1)! ≤ 10⁻¹⁸`, squared `s` times.
+fn expm(x: &Mat<f64>) -> Mat<f64> {
+    let m = x.nrows();
     let norm1 = (0..m)
-        .map(|j| (0..m).map(|i| x[i * m + j].abs()).sum::<f64>())
+        .map(|j| (0..m).map(|i| x[(i, j)].abs()).sum::<f64>())
         .fold(0.0, f64::max);
     let s = if norm1 > 0.5 {
         (norm1 / 0.5).log2().ceil() as i32
     } else {
         0
     };
-    let y = scaled(x, f64::powi(2.0, -s));
+    let y = x * Scale(f64::powi(2.0, -s));
     let nu = norm1 * f64::powi(2.0, -s);
     let mut degree = 1;
     let mut term = nu;
@@ -433,95 +371,43 @@ fn expm(x: &[f64], m: usize) -> Vec<f64> {
         degree += 1;
     }
     // Horner: I + Y (I + Y/2 (I + Y/3 (… (I + Y/K))))
-    let mut e = identity(m);
+    let identity = Mat::<f64>::identity(m, m);
+    let mut e = identity.clone();
     for k in (1..=degree).rev() {
-        let mut next = mat_mul(&y, &e, m);
-        for v in &mut next {
-            *v /= k as f64;
-        }
-        for i in 0..m {
-            next[i * m + i] += 1.0;
-        }
-        e = next;
+        e = &identity + (&y * &e) * Scale(1.0 / k as f64);
     }
     for _ in 0..s {
-        e = mat_mul(&e, &e, m);
+        e = &e * &e;
     }
     e
-}
-
-fn identity(m: usize) -> Vec<f64> {
-    let mut e = vec![0.0; m * m];
-    for i in 0..m {
-        e[i * m + i] = 1.0;
-    }
-    e
-}
-
-/// The inverse of an `m × m` matrix by Gauss–Jordan with partial pivoting;
-/// `None` if it is singular.
-fn invert(mut a: Vec<f64>, m: usize) -> Option<Vec<f64>> {
-    let mut inv = identity(m);
-    for col in 0..m {
-        let pivot = (col..m).max_by(|&i, &j| a[i * m + col].abs().total_cmp(&a[j * m + col].abs()))?;
-        let p = a[pivot * m + col];
-        if p == 0.0 || !p.is_finite() {
-            return None;
-        }
-        if pivot != col {
-            for k in 0..m {
-                a.swap(pivot * m + k, col * m + k);
-                inv.swap(pivot * m + k, col * m + k);
-            }
-        }
-        for k in 0..m {
-            a[col * m + k] /= p;
-            inv[col * m + k] /= p;
-        }
-        for i in 0..m {
-            if i != col {
-                let f = a[i * m + col];
-                if f != 0.0 {
-                    for k in 0..m {
-                        a[i * m + k] -= f * a[col * m + k];
-                        inv[i * m + k] -= f * inv[col * m + k];
-                    }
-                }
-            }
-        }
-    }
-    Some(inv)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn mat2(a: [f64; 4]) -> Mat<f64> {
+        Mat::from_fn(2, 2, |i, j| a[2 * i + j])
+    }
+
     #[test]
     fn expm_of_a_rotation_and_a_decay() {
         // exp([[0, -θ], [θ, 0]]) is the rotation by θ.
         let th = 2.5;
-        let e = expm(&[0.0, -th, th, 0.0], 2);
-        for (a, b) in e.iter().zip([th.cos(), -th.sin(), th.sin(), th.cos()]) {
+        let e = expm(&mat2([0.0, -th, th, 0.0]));
+        let want = mat2([th.cos(), -th.sin(), th.sin(), th.cos()]);
+        for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+            let (a, b) = (e[(i, j)], want[(i, j)]);
             assert!((a - b).abs() < 1e-14, "{a} vs {b}");
         }
         // A Jordan block: exp([[-λ, 1], [0, -λ]]) = e^{-λ} [[1, 1], [0, 1]].
         let l = 40.0;
-        let e = expm(&[-l, 1.0, 0.0, -l], 2);
+        let e = expm(&mat2([-l, 1.0, 0.0, -l]));
         let d = (-l).exp();
-        for (a, b) in e.iter().zip([d, d, 0.0, d]) {
+        let want = mat2([d, d, 0.0, d]);
+        for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+            let (a, b) = (e[(i, j)], want[(i, j)]);
             assert!((a - b).abs() <= 1e-12 * d, "{a} vs {b}");
         }
-    }
-
-    #[test]
-    fn inverse_times_matrix_is_identity() {
-        let a = vec![0.0, 2.0, 1.0, 1.0, 0.0, 3.0, 4.0, 1.0, 0.0];
-        let inv = invert(a.clone(), 3).unwrap();
-        let p = mat_mul(&a, &inv, 3);
-        for (x, y) in p.iter().zip(identity(3)) {
-            assert!((x - y).abs() < 1e-14);
-        }
-        assert!(invert(vec![1.0, 2.0, 2.0, 4.0], 2).is_none());
     }
 }
