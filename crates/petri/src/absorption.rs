@@ -200,7 +200,7 @@ fn survival_crank_nicolson(
     // The vectors are kept in the systems' order, which depends on the
     // chain's pattern only: the same for both.
     debug_assert_eq!(start.order(), sys.order());
-    let mut p: Vec<f64> = sys.order().iter().map(|&st| p0[st as usize]).collect();
+    let mut p = sys.ordered(p0);
     let mut rhs = vec![0.0; p.len()];
     let mut out = Vec::with_capacity(max_steps + 1);
     out.push(p.iter().sum::<f64>());
@@ -297,7 +297,6 @@ impl CompiledGspn {
             }
         }
         let tr = transient(self, rates)?;
-        let p = initial_transient(self, &tr);
         let sys = BlockSystem::new(
             "the time distribution (Krylov space)",
             &tr.out_rate,
@@ -305,7 +304,7 @@ impl CompiledGspn {
             1.0,
             shift,
         )?;
-        let p: Vec<f64> = sys.order().iter().map(|&st| p[st as usize]).collect();
+        let p = sys.ordered(&initial_transient(self, &tr));
         crate::survival::build(&sys, &p, shift, horizon, levels, tolerance)
     }
 

@@ -304,10 +304,15 @@ impl BlockSystem {
         &self.states
     }
 
+    /// A vector indexed by state, copied into [`BlockSystem::order`].
+    pub(crate) fn ordered(&self, v: &[f64]) -> Vec<f64> {
+        self.states.iter().map(|&st| v[st as usize]).collect()
+    }
+
     /// Solves the row system `x M = b` (that is `Mᵀ xᵀ = bᵀ`), in place,
     /// `b` indexed by state (one copy into [`BlockSystem::order`] and back).
     pub(crate) fn solve_row(&self, b: &mut [f64]) {
-        let mut y: Vec<f64> = self.states.iter().map(|&st| b[st as usize]).collect();
+        let mut y = self.ordered(b);
         self.solve_ordered(&mut y);
         for (&st, &v) in self.states.iter().zip(&y) {
             b[st as usize] = v;
