@@ -443,6 +443,14 @@ impl CompiledGspn {
 mod tests {
     use crate::{CompiledGspn, ExploreParams, Net, Params};
 
+    /// The compiled chain of `net` and the rate of every transition.
+    fn compiled(net: &Net) -> (CompiledGspn, Vec<f64>) {
+        let g = net.instantiate(&Params::new()).unwrap();
+        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
+        let rates = g.rates(&Params::new(), None).unwrap();
+        (c, rates)
+    }
+
     /// start → (rate a) ok, or (rate b) ko: P(ok) = a/(a+b), E[T] = 1/(a+b).
     #[test]
     fn race_of_two_exponentials() {
@@ -456,9 +464,7 @@ mod tests {
         net.output(a, ok);
         net.input(s, b);
         net.output(b, ko);
-        let g = net.instantiate(&Params::new()).unwrap();
-        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
-        let rates = g.rates(&Params::new(), None).unwrap();
+        let (c, rates) = compiled(&net);
         let r = c.absorption(&rates).unwrap();
         let okb = c
             .bottom_components()
@@ -487,9 +493,7 @@ mod tests {
         net.output(t1, p1);
         net.input(p1, t2);
         net.output(t2, p2);
-        let g = net.instantiate(&Params::new()).unwrap();
-        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
-        let rates = g.rates(&Params::new(), None).unwrap();
+        let (c, rates) = compiled(&net);
         let r = c.absorption(&rates).unwrap();
         assert!((r.mean_time - 1.0).abs() < 1e-12);
         let t = 0.7;
@@ -517,10 +521,7 @@ mod tests {
             net.output(t, next);
             prev = next;
         }
-        let g = net.instantiate(&Params::new()).unwrap();
-        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
-        let rates = g.rates(&Params::new(), None).unwrap();
-        (c, rates)
+        compiled(&net)
     }
 
     /// A fast stage (rate 20) then a slow one (rate 0.1) on a grid of 25
@@ -561,10 +562,7 @@ mod tests {
             net.input(from, t);
             net.output(t, end);
         }
-        let g = net.instantiate(&Params::new()).unwrap();
-        let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
-        let rates = g.rates(&Params::new(), None).unwrap();
-        (c, rates)
+        compiled(&net)
     }
 
     /// Half the runs end at once (rate 1000), half after a slow stage
@@ -712,9 +710,7 @@ mod tests {
                 net.input(places[from], t);
                 net.output(t, if to < n { places[to] } else { ends[to - n] });
             }
-            let g = net.instantiate(&Params::new()).unwrap();
-            let c = CompiledGspn::build(&g, &ExploreParams::default()).unwrap();
-            let rates = g.rates(&Params::new(), None).unwrap();
+            let (c, rates) = compiled(&net);
             let mean = c.absorption(&rates).unwrap().mean_time;
             let levels = [0.5, 0.1, 0.01];
             let s = c.absorption_survival(&rates, 0.25 * mean, 20.0 * mean, &levels, 1e-10).unwrap();
