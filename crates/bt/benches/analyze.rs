@@ -14,12 +14,13 @@ fn main() {
 
 const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/bt/nav2");
 
-const LARGEST: [&str; 4] = [
-    "navigate_on_route_graph_w_recovery.xml",
-    "navigate_to_pose_w_replanning_and_recovery.xml",
-    "navigate_through_poses_w_replanning_and_recovery.xml",
-    "navigate_to_pose_w_replanning_goal_patience_and_recovery.xml",
-];
+/// The four largest shipped trees (`models/bt/nav2/largest.txt`).
+fn largest() -> Vec<&'static str> {
+    include_str!("../../../models/bt/nav2/largest.txt")
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .collect()
+}
 
 /// The tree `file` and the parameter set `set` (`""`: the defaults).
 fn load(file: &str, set: &str) -> (Tree, TreeParams) {
@@ -41,17 +42,17 @@ fn without_sensitivities(bencher: divan::Bencher, file: &str, set: &str) {
     bencher.bench(|| bt::analyze(&tree, &params, &options).expect("analysis"));
 }
 
-#[divan::bench(args = LARGEST, sample_count = 20)]
+#[divan::bench(args = largest(), sample_count = 20)]
 fn analyze_nominal(bencher: divan::Bencher, file: &str) {
     without_sensitivities(bencher, file, "nominal");
 }
 
-#[divan::bench(args = LARGEST, sample_count = 20)]
+#[divan::bench(args = largest(), sample_count = 20)]
 fn analyze_degraded(bencher: divan::Bencher, file: &str) {
     without_sensitivities(bencher, file, "degraded");
 }
 
-#[divan::bench(args = LARGEST, sample_count = 20)]
+#[divan::bench(args = largest(), sample_count = 20)]
 fn analyze_defaults(bencher: divan::Bencher, file: &str) {
     without_sensitivities(bencher, file, "");
 }

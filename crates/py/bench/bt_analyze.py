@@ -18,11 +18,11 @@ from pathlib import Path
 import petrinav as pn
 
 NAV2 = Path(__file__).resolve().parents[3] / "models" / "bt" / "nav2"
+# The four largest shipped trees (models/bt/nav2/largest.txt).
 TREES = [
-    "navigate_on_route_graph_w_recovery.xml",
-    "navigate_to_pose_w_replanning_and_recovery.xml",
-    "navigate_through_poses_w_replanning_and_recovery.xml",
-    "navigate_to_pose_w_replanning_goal_patience_and_recovery.xml",
+    line
+    for line in (NAV2 / "largest.txt").read_text().splitlines()
+    if line.strip() and not line.startswith("#")
 ]
 
 
