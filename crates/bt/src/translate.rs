@@ -5,7 +5,9 @@
 //! each node is a sub-net that a token enters through its `go` place and
 //! leaves through `ok` or `ko`. Zero-time logic (control flow, conditions
 //! read, outcome draws) is immediate transitions; durations are timed ones
-//! (Erlang chains of `phases` exponential stages). A parent that stops a
+//! (Erlang chains of `phases` exponential stages; an action whose duration
+//! does not depend on its outcome draws the outcome in its last stage, a
+//! race of two timed transitions, which halves the running states). A parent that stops a
 //! running child (reactive pre-emption, a parallel decided, a pipeline that
 //! failed, a timeout) marks the child's `halt` place; high-priority
 //! transitions then clear every place of the child's subtree, one place
@@ -506,6 +508,35 @@ impl Builder<'_> {
 
     fn action(&mut self, n: NodeId, io: Io) {
         let a = self.params.action(self.tree, n);
+        let p = a.p_success;
+        let mean = a.mean_time_success;
+        if p > 0.0 && p < 1.0 && mean > 0.0 && a.mean_time_failure == mean {
+            // One duration whatever the outcome: the outcome is drawn by
+            // the last stage (two timed transitions, rates in the ratio
+            // p : 1 − p), not at the start — the same law of outcome and
+            // time, without a choice marking or a running state per outcome.
+            let run = self.place(n, "run");
+            self.flow(n, "start", &[io.go], &[run]);
+            let rate = f64::from(a.phases) / mean;
+            let mut at = run;
+            for k in 1..a.phases {
+                let next = self.place(n, "phase");
+                let t = self.timed(n, &format!("stage{k}"), rate, Trigger::Phase, RateRole::Duration);
+                self.arc_in(at, t);
+                self.arc_out(t, next);
+                at = next;
+            }
+            let k = a.phases;
+            for (w, out, trig, what) in [
+                (p, io.ok, Trigger::Success { node: n }, "ok"),
+                (1.0 - p, io.ko, Trigger::Failure { node: n }, "ko"),
+            ] {
+                let t = self.timed(n, &format!("stage{k}_{what}"), w * rate, trig, RateRole::Duration);
+                self.arc_in(at, t);
+                self.arc_out(t, out);
+            }
+            return;
+        }
         for (success, w, mean) in [
             (true, a.p_success, a.mean_time_success),
             (false, 1.0 - a.p_success, a.mean_time_failure),

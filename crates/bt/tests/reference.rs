@@ -12,9 +12,16 @@
 //! difference with step δ: the quotient within 1e-9 / δ — the rounding of
 //! a different state order alone moves it by about 1e-8 relative).
 //!
-//! The fast test covers the trees up to 2,140 states, sensitivities
-//! included; `cargo test -p bt --release --test reference -- --ignored`
-//! covers the three large ones (11,492 and 29,384 states) too.
+//! The state counts (and net sizes) are the current translation's: an
+//! action with one mean time draws its outcome in its last stage since
+//! 2026-12-07, which halved the chains (29,384 → 14,640 states on the
+//! goal-patience tree) and left every other value within the tolerances
+//! above.
+//!
+//! The fast test covers the trees up to 5,000 states (the largest fast one
+//! has 1,250), sensitivities included; `cargo test -p bt --release --test
+//! reference -- --ignored` covers the three large ones (5,520 and 14,640
+//! states) too.
 
 use bt::{AnalyzeOptions, ReadOptions, TreeParams};
 use serde_json::Value;
