@@ -129,6 +129,7 @@ pub fn chain(tr: &Translation, max_states: usize) -> Result<(CompiledGspn, Vec<f
     let explore = ExploreParams {
         max_states,
         skip_forced: true,
+        forced_context: tr.world.clone(),
         ..ExploreParams::default()
     };
     let compiled = CompiledGspn::build(&gspn, &explore).map_err(|e| match e {
@@ -258,15 +259,28 @@ fn node_stats(
     blame: &BTreeMap<NodeId, f64>,
     p_failure: f64,
 ) -> Vec<NodeStat> {
+    // Per place, the nodes active while it is marked; per state, each node
+    // counted once (`seen`) over its marked places.
+    let mut nodes_of = vec![Vec::new(); s.tr.net.places.len()];
+    for (n, places) in s.tr.activity.iter().enumerate() {
+        for p in places {
+            nodes_of[p.index()].push(n);
+        }
+    }
     let mut active = vec![0.0; tree.len()];
+    let mut seen = vec![usize::MAX; tree.len()];
+    let mut m = vec![0; s.tr.net.places.len()];
     for (st, &x) in a.sojourn.iter().enumerate() {
         if x <= 0.0 {
             continue;
         }
-        let m = s.compiled.tangible_marking(st);
-        for (n, places) in s.tr.activity.iter().enumerate() {
-            if places.iter().any(|p| m[p.index()] > 0) {
-                active[n] += x;
+        s.compiled.tangible_marking_into(st, &mut m);
+        for (p, _) in m.iter().enumerate().filter(|(_, c)| **c > 0) {
+            for &n in &nodes_of[p] {
+                if seen[n] != st {
+                    seen[n] = st;
+                    active[n] += x;
+                }
             }
         }
     }

@@ -96,6 +96,12 @@ pub struct Translation {
     /// Per transition: the node whose parameter sets its rate, and how
     /// (`None` for immediate transitions).
     pub roles: Vec<Option<(NodeId, RateRole)>>,
+    /// The places of the world: every persistent condition's `true` and
+    /// `false` places. The zero-time control flow only tests them, so the
+    /// analysis passes them to the state-space generation as the context
+    /// its memory of forced hops may leave out
+    /// ([`petri::ExploreParams::forced_context`]).
+    pub world: Vec<PlaceId>,
 }
 
 /// The interface of a node's sub-net.
@@ -177,6 +183,7 @@ pub fn translate(tree: &Tree, params: &TreeParams) -> Result<Translation> {
     let roles = (0..b.net.transitions.len())
         .map(|t| b.roles.get(&TransitionId(t as u32)).copied())
         .collect();
+    let world = b.conditions.values().flat_map(|&(t, f)| [t, f]).collect();
     Ok(Translation {
         net: b.net,
         done_ok,
@@ -184,6 +191,7 @@ pub fn translate(tree: &Tree, params: &TreeParams) -> Result<Translation> {
         activity,
         roles,
         triggers,
+        world,
     })
 }
 

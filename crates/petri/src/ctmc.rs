@@ -721,8 +721,14 @@ impl CompiledGspn {
     /// Token counts of tangible marking `s`.
     pub fn tangible_marking(&self, s: usize) -> Vec<u32> {
         let mut m = vec![0; self.gspn.num_places()];
-        self.store.decode(self.rg_index(s), &mut m);
+        self.tangible_marking_into(s, &mut m);
         m
+    }
+
+    /// [`tangible_marking`](Self::tangible_marking) into `m` (one count per
+    /// place), for a loop over many states without allocating.
+    pub fn tangible_marking_into(&self, s: usize, m: &mut [u32]) {
+        self.store.decode(self.rg_index(s), m);
     }
 
     /// The symbolic entries leaving tangible state `s`: `(target, transition,

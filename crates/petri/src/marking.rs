@@ -94,6 +94,15 @@ impl Layout {
         }
     }
 
+    /// The bits of the fields of `places`, one mask word per key word.
+    pub(crate) fn mask_of(&self, places: impl Iterator<Item = usize>) -> Vec<u64> {
+        let mut bits = vec![0; self.words];
+        for p in places {
+            bits[self.word[p] as usize] |= mask(self.width[p]) << self.shift[p];
+        }
+        bits
+    }
+
     pub(crate) fn encode(&self, m: &[u32], key: &mut [u64]) {
         key.iter_mut().for_each(|w| *w = 0);
         for (p, &v) in m.iter().enumerate() {
@@ -399,14 +408,22 @@ impl MarkingStore {
     /// just wide enough for the largest count stored and for the firing
     /// (Kanban 8: sixteen 4-bit fields, one word, where headroom would take
     /// two). Tight fields may need more relayouts later; a word per marking
-    /// is worth it.
+    /// is worth it. No field is made narrower than `floor` (the widths that
+    /// earlier firings asked for: markings that are followed but not stored
+    /// — forced hops — are not among the counts, and fitting them out of
+    /// their width would make the relayouts take turns forever).
     ///
     /// `pending` gives the largest counts of markings about to be stored
     /// (the successors of the round being expanded): fitting to the stored
     /// ones alone could take from a field the width a pending marking
     /// needs, and the next attempt would widen it again and shrink another
     /// (a livelock met on Kanban 8). It is called only when fitting.
-    pub(crate) fn fitted_layout(&self, needed: &[u8], pending: impl FnOnce() -> Vec<u32>) -> Layout {
+    pub(crate) fn fitted_layout(
+        &self,
+        needed: &[u8],
+        floor: &[u8],
+        pending: impl FnOnce() -> Vec<u32>,
+    ) -> Layout {
         let old = &self.layout;
         let roomy: Vec<u8> = needed
             .iter()
@@ -429,7 +446,8 @@ impl MarkingStore {
             .iter()
             .zip(&old.width)
             .zip(&largest)
-            .map(|((&n, &w), &l)| bits_for(l).max(if n > w { n } else { 0 }))
+            .zip(floor)
+            .map(|(((&n, &w), &l), &f)| bits_for(l).max(if n > w { n } else { 0 }).max(f))
             .collect();
         let tight = Layout::new(tight);
         if tight.words() < roomy.words() {
@@ -514,7 +532,7 @@ mod tests {
         // would make 65: the fields are fitted instead.
         let mut needed = store.layout().widths().to_vec();
         needed[15] = 4;
-        let fitted = store.fitted_layout(&needed, || vec![0; 16]);
+        let fitted = store.fitted_layout(&needed, &[0; 16], || vec![0; 16]);
         assert_eq!(fitted.words(), 1);
         assert_eq!(fitted.widths(), &[4; 16]);
         store.relayout(fitted);
@@ -523,12 +541,32 @@ mod tests {
         assert_eq!(m, first);
         // Room to spare: one bit of headroom, as before.
         let small = MarkingStore::new(Layout::for_marking(&[1, 1], 1));
-        assert_eq!(small.fitted_layout(&[2, 1], || unreachable!()).widths(), &[3, 1]);
+        assert_eq!(
+            small.fitted_layout(&[2, 1], &[0, 0], || unreachable!()).widths(),
+            &[3, 1]
+        );
         // A pending count keeps its width: 15 in field 0 needs 4 bits even
         // though no stored marking has more than 8 there.
         let mut pending = vec![0; 16];
         pending[0] = 15;
-        assert_eq!(store.fitted_layout(&needed, || pending).widths()[0], 4);
+        assert_eq!(store.fitted_layout(&needed, &[0; 16], || pending).widths()[0], 4);
+        // A floor keeps a field that a firing asked for before: fields of 30,
+        // 30 and 4 bits holding 1s, the last to grow to 5 bits, are fitted
+        // to 1, 1 and 5 bits — or to 1, 20 and 5 when a firing once asked
+        // for 20 bits in the second.
+        let mut wide = MarkingStore::new(Layout::new(vec![30, 30, 4]));
+        let mut key = vec![0; 1];
+        wide.layout().encode(&[1, 1, 1], &mut key);
+        wide.insert(&key);
+        let grow = [30, 30, 5];
+        assert_eq!(
+            wide.fitted_layout(&grow, &[0; 3], || vec![0; 3]).widths(),
+            &[1, 1, 5]
+        );
+        assert_eq!(
+            wide.fitted_layout(&grow, &[0, 20, 0], || vec![0; 3]).widths(),
+            &[1, 20, 5]
+        );
     }
 
     #[test]

@@ -42,7 +42,7 @@ use crate::gspn::enabling::{EnabledSet, EnablingIndex};
 use crate::gspn::{Gspn, MarkingKind};
 use crate::interrupt::{Interrupt, Stage};
 use crate::marking::{Layout, MarkingStore, bits_for, hash_words, same_key};
-use crate::net::TransitionId;
+use crate::net::{PlaceId, TransitionId};
 use crate::scc::Successors;
 
 /// Index of a marking in a [`ReachabilityGraph`] (0 is the initial marking).
@@ -73,6 +73,18 @@ pub struct ExploreParams {
     /// [`ReachabilityGraph::place_bounds`] still counts their tokens).
     /// Default: off (docs/gspn.md, *The pipeline*).
     pub skip_forced: bool,
+    /// With [`skip_forced`](Self::skip_forced): places that the memory of
+    /// forced hops may leave out. A stretch of forced hops that neither
+    /// reads nor changes these places (no transition with an arc on one
+    /// fires, and none could become enabled whatever they hold) is
+    /// remembered once for every count they hold, and replayed in one step
+    /// from any marking that differs from it only there — e.g. the states of
+    /// independent processes of the environment that the zero-time control
+    /// flow tests now and then, which would otherwise repeat every forced
+    /// run once per combination of their states. Only the speed depends on
+    /// the set: the graph is the same for any (docs/gspn.md, *The
+    /// pipeline*). Ignored for nets with decisions. Default: none.
+    pub forced_context: Vec<PlaceId>,
 }
 
 /// Where forced hops lead: the packed key of a forced vanishing marking →
@@ -85,6 +97,9 @@ struct Forced {
     words: usize,
     pairs: Vec<u64>,
     hashes: Vec<u64>,
+    /// Per pair: what the user of the table stores with it (a stretch's
+    /// length and whether it ends its run, see [`Context`]; 0 otherwise).
+    tags: Vec<u32>,
     index: HashTable<u32>,
 }
 
@@ -96,16 +111,26 @@ impl Forced {
 
     /// Where the run from `key` (of hash `h`) ends, if known.
     fn get(&self, key: &[u64], h: u64) -> Option<&[u64]> {
+        self.get_tagged(key, h).map(|(end, _)| end)
+    }
+
+    /// [`get`](Self::get), with the pair's tag.
+    fn get_tagged(&self, key: &[u64], h: u64) -> Option<(&[u64], u32)> {
         if key.len() != self.words {
             return None;
         }
         let i = *self.index.find(h, |&i| same_key(self.key(i), key))?;
         let at = (2 * i as usize + 1) * self.words;
-        Some(&self.pairs[at..at + self.words])
+        Some((&self.pairs[at..at + self.words], self.tags[i as usize]))
     }
 
     /// Remembers that the run from `key` (of hash `h`) ends at `end`.
     fn insert(&mut self, key: &[u64], h: u64, end: &[u64]) {
+        self.insert_tagged(key, h, end, 0);
+    }
+
+    /// [`insert`](Self::insert), with a tag.
+    fn insert_tagged(&mut self, key: &[u64], h: u64, end: &[u64], tag: u32) {
         if self.words != key.len() {
             self.clear();
             self.words = key.len();
@@ -117,6 +142,7 @@ impl Forced {
         self.pairs.extend_from_slice(key);
         self.pairs.extend_from_slice(end);
         self.hashes.push(h);
+        self.tags.push(tag);
         let hashes = &self.hashes;
         self.index.insert_unique(h, i, |&j| hashes[j as usize]);
     }
@@ -125,8 +151,13 @@ impl Forced {
     fn absorb(&mut self, other: &mut Forced) {
         let w = other.words;
         if w > 0 {
-            for (pair, &h) in other.pairs.chunks_exact(2 * w).zip(&other.hashes) {
-                self.insert(&pair[..w], h, &pair[w..]);
+            for ((pair, &h), &tag) in other
+                .pairs
+                .chunks_exact(2 * w)
+                .zip(&other.hashes)
+                .zip(&other.tags)
+            {
+                self.insert_tagged(&pair[..w], h, &pair[w..], tag);
             }
         }
         other.clear();
@@ -135,7 +166,190 @@ impl Forced {
     fn clear(&mut self) {
         self.pairs.clear();
         self.hashes.clear();
+        self.tags.clear();
         self.index.clear();
+    }
+}
+
+/// What [`ExploreParams::forced_context`] lets the memory of forced hops
+/// leave out, and how to check that a stretch of hops may.
+///
+/// A hop from marking `x` by the one firable transition `u` is *free of
+/// the context* when `u` has no arc on a context place and no immediate
+/// transition with an arc on one could be enabled in `x` whatever the
+/// context places hold (one of its other input or inhibitor places rules
+/// it out). Then the immediate transitions enabled in `x` are those enabled
+/// in every `x'` that differs from `x` only in context places, so `x'` is
+/// forced too, by the same `u`, and the hop changes no context place: a
+/// stretch of free hops from `x` is the same stretch from `x'`, ending in
+/// the same marking but for the context places, which keep `x'`'s counts.
+/// A stretch whose last marking is not forced and free in that sense ends
+/// the run from every such `x'` ([`COMPLETE`]); one that stops before a hop
+/// that is not free (a condition read, say) is continued from there as any
+/// run. Stretches are keyed by the marking with the context fields cleared.
+struct Context {
+    /// Per transition: it has an arc (of any kind) on a context place.
+    touches: Vec<bool>,
+    /// The immediate transitions with an arc on a context place: their
+    /// other input places and inhibitor places, `(place, multiplicity)`.
+    watch: Vec<Watched>,
+    places: Vec<u32>,
+    /// The bits of the context fields in the current layout.
+    bits: Vec<u64>,
+    /// The initial marking, context fields cleared: no stretch passes
+    /// through a marking that may be it (the initial marking is stored, so a
+    /// run would stop there).
+    initial: Vec<u64>,
+}
+
+/// An immediate transition with an arc on a context place: its other
+/// input places and inhibitor places, `(place, multiplicity)`.
+struct Watched {
+    inputs: Vec<(u32, u32)>,
+    inhibitors: Vec<(u32, u32)>,
+}
+
+/// Tag bit of a remembered stretch that ends its run.
+const COMPLETE: u32 = 1 << 31;
+
+impl Context {
+    /// The context of `places` in `gspn`, if it can serve (a net with
+    /// decisions resolves choices by whole markings: none).
+    fn new(gspn: &Gspn, places: &[PlaceId]) -> Option<Context> {
+        if places.is_empty() || gspn.has_decisions() {
+            return None;
+        }
+        let mut is_context = vec![false; gspn.num_places()];
+        for p in places {
+            *is_context.get_mut(p.index())? = true;
+        }
+        let on = |arcs: &[(u32, u32)]| arcs.iter().any(|&(p, _)| is_context[p as usize]);
+        let others = |arcs: &[(u32, u32)]| -> Vec<(u32, u32)> {
+            arcs.iter()
+                .copied()
+                .filter(|&(p, _)| !is_context[p as usize])
+                .collect()
+        };
+        let mut touches = Vec::with_capacity(gspn.num_transitions());
+        let mut watch = Vec::new();
+        for t in (0..gspn.num_transitions() as u32).map(TransitionId) {
+            let touched = on(gspn.inputs(t)) || on(gspn.outputs(t)) || on(gspn.inhibitors(t));
+            touches.push(touched);
+            if touched && gspn.is_immediate(t) {
+                watch.push(Watched {
+                    inputs: others(gspn.inputs(t)),
+                    inhibitors: others(gspn.inhibitors(t)),
+                });
+            }
+        }
+        let mut places: Vec<u32> = places.iter().map(|p| p.0).collect();
+        places.sort_unstable();
+        places.dedup();
+        Some(Context {
+            touches,
+            watch,
+            places,
+            bits: Vec::new(),
+            initial: Vec::new(),
+        })
+    }
+
+    /// Brings the masks to `layout` (at the start and after a relayout).
+    fn fit(&mut self, layout: &Layout, m0: &[u32]) {
+        self.bits = layout.mask_of(self.places.iter().map(|&p| p as usize));
+        self.initial = vec![0; layout.words()];
+        layout.encode(m0, &mut self.initial);
+        for (k, b) in self.initial.iter_mut().zip(&self.bits) {
+            *k &= !b;
+        }
+    }
+
+    /// Whether no immediate transition with an arc on a context place could
+    /// be enabled in `m`, whatever the context places hold.
+    fn free(&self, m: &[u32]) -> bool {
+        !self.watch.iter().any(|t| {
+            t.inputs.iter().all(|&(p, w)| m[p as usize] >= w)
+                && t.inhibitors.iter().all(|&(p, w)| m[p as usize] < w)
+        })
+    }
+
+    /// `key` with the context fields cleared, into `out`.
+    fn project(&self, key: &[u64], out: &mut Vec<u64>) {
+        out.clear();
+        out.extend(key.iter().zip(&self.bits).map(|(k, b)| k & !b));
+    }
+}
+
+/// What generation remembers from round to round: where forced hops lead,
+/// the stretches free of the context, the widths firings asked for.
+struct Memory {
+    /// Forced hops already followed (learnt by the batches of earlier rounds).
+    forced: Forced,
+    /// Stretches free of the context, learnt likewise ([`Context`]).
+    free: Forced,
+    context: Option<Context>,
+    /// Per place, the widest field a firing asked for: no relayout fits a
+    /// field below it (see `MarkingStore::fitted_layout`).
+    floor: Vec<u8>,
+    /// Forced markings evaluated ([`ExploreStats::forced_evaluated`]).
+    evaluated: usize,
+}
+
+impl Memory {
+    fn new(gspn: &Gspn, params: &ExploreParams, layout: &Layout, m0: &[u32]) -> Memory {
+        let mut context = params
+            .skip_forced
+            .then(|| Context::new(gspn, &params.forced_context))
+            .flatten();
+        if let Some(cx) = context.as_mut() {
+            cx.fit(layout, m0);
+        }
+        Memory {
+            forced: Forced::default(),
+            free: Forced::default(),
+            context,
+            floor: vec![0; m0.len()],
+            evaluated: 0,
+        }
+    }
+
+    /// The layout to widen `store`'s to for a firing that needs `needed`.
+    fn fitted(&mut self, store: &MarkingStore, needed: &[u8], pending: impl FnOnce() -> Vec<u32>) -> Layout {
+        for ((f, &n), &w) in self.floor.iter_mut().zip(needed).zip(store.layout().widths()) {
+            if n > w {
+                *f = (*f).max(n);
+            }
+        }
+        store.fitted_layout(needed, &self.floor, pending)
+    }
+
+    /// Forgets what was learnt in the old layout (after a relayout to `layout`).
+    fn forget(&mut self, layout: &Layout, m0: &[u32], batches: &mut [Batch]) {
+        self.forced.clear();
+        self.free.clear();
+        if let Some(cx) = self.context.as_mut() {
+            cx.fit(layout, m0);
+        }
+        for b in batches {
+            b.learnt.clear();
+            b.learnt_free.clear();
+            b.cut = false;
+        }
+    }
+
+    /// Takes in what a round's batches learnt.
+    fn absorb(&mut self, batches: &mut [Batch]) {
+        for b in batches.iter_mut() {
+            self.evaluated += b.evaluated;
+            self.forced.absorb(&mut b.learnt);
+            self.free.absorb(&mut b.learnt_free);
+        }
+        // A run cut by the hop limit stores a forced marking, which a
+        // remembered stretch would pass through: none is used from now on.
+        if batches.iter().any(|b| b.cut) {
+            self.context = None;
+            self.free.clear();
+        }
     }
 }
 
@@ -149,6 +363,7 @@ impl Default for ExploreParams {
             max_states: usize::MAX,
             max_memory: default_max_memory(),
             skip_forced: false,
+            forced_context: Vec::new(),
         }
     }
 }
@@ -258,6 +473,11 @@ pub struct ExploreStats {
     /// vanishing flags, targets, transitions, coefficients) when
     /// generation ended.
     pub edge_bytes: usize,
+    /// With [`ExploreParams::skip_forced`]: the forced markings whose firing
+    /// rule was evaluated to follow a hop (each once; fewer with
+    /// [`ExploreParams::forced_context`], whose remembered stretches are
+    /// replayed instead).
+    pub forced_evaluated: usize,
 }
 
 /// A store holding only the initial marking `m0` (index 0), in the
@@ -346,8 +566,7 @@ impl ReachabilityGraph {
         // numbering is exactly that of expanding one marking after the other
         // (breadth-first discovery order), whatever the number of threads.
         let mut batches: Vec<Batch> = Vec::new();
-        // Forced hops already followed (learnt by the batches of earlier rounds).
-        let mut forced = Forced::default();
+        let mut memory = Memory::new(gspn, params, store.layout(), &m0);
         let threads = rayon::current_num_threads();
         let index = EnablingIndex::new(gspn, params.skip_forced);
         let mut i = 0usize;
@@ -361,8 +580,9 @@ impl ReachabilityGraph {
             batches.resize_with(chunks.max(batches.len()), Batch::default);
             let run = |(c, b): (usize, &mut Batch)| {
                 let lo = i + c * BATCH;
-                let skip = params.skip_forced.then_some(&forced);
-                b.expand(gspn, &index, &store, lo..(lo + BATCH).min(end), skip)
+                let skip = params.skip_forced.then_some(&memory.forced);
+                let context = memory.context.as_ref().map(|cx| (cx, &memory.free));
+                b.expand(gspn, &index, &store, lo..(lo + BATCH).min(end), skip, context)
             };
             let events: Vec<Result<Option<Vec<u8>>>> = if parallel {
                 batches[..chunks].par_iter_mut().enumerate().map(run).collect()
@@ -373,13 +593,11 @@ impl ReachabilityGraph {
             // (then the round is computed again in the new layout).
             if let Some(event) = events.into_iter().find_map(|e| e.transpose()) {
                 let needed = event?;
-                let layout = store.fitted_layout(&needed, || largest_successor_counts(gspn, &store, i..end));
+                let layout =
+                    memory.fitted(&store, &needed, || largest_successor_counts(gspn, &store, i..end));
                 store.relayout(layout);
                 relayouts += 1;
-                forced.clear();
-                for b in &mut batches {
-                    b.learnt.clear();
-                }
+                memory.forget(store.layout(), &m0, &mut batches);
                 continue;
             }
             let w = store.layout().words();
@@ -388,9 +606,7 @@ impl ReachabilityGraph {
                     *mx = (*mx).max(c);
                 }
             }
-            for b in &mut batches[..chunks] {
-                forced.absorb(&mut b.learnt);
-            }
+            memory.absorb(&mut batches[..chunks]);
             let mut m = i;
             for b in &batches[..chunks] {
                 let mut e = 0;
@@ -449,6 +665,7 @@ impl ReachabilityGraph {
             marking_bytes: store.heap_bytes() - store.index_bytes(),
             index_bytes: store.index_bytes(),
             edge_bytes: edge_bytes(&offsets, &vanishing, &targets, &transitions, coeffs.as_ref()),
+            forced_evaluated: memory.evaluated,
         };
         Ok(ReachabilityGraph {
             store,
@@ -598,6 +815,18 @@ struct Batch {
     /// their hashes.
     path: Vec<u64>,
     path_hashes: Vec<u64>,
+    /// Stretches free of the context learnt in this round (see [`Context`]).
+    learnt_free: Forced,
+    /// A key with the context cleared, and the start of the stretch being
+    /// learnt (empty when none is).
+    projected: Vec<u64>,
+    stretch: Vec<u64>,
+    /// The end of a remembered stretch being replayed.
+    replayed: Vec<u64>,
+    /// A run cut by the hop limit was met in this round.
+    cut: bool,
+    /// Markings whose firing rule was evaluated while following hops.
+    evaluated: usize,
 }
 
 /// The fields a firing of `t` in `m` would overflow in `layout` (`None` if it
@@ -635,12 +864,15 @@ impl Batch {
         store: &MarkingStore,
         markings: std::ops::Range<usize>,
         skip_forced: Option<&Forced>,
+        context: Option<(&Context, &Forced)>,
     ) -> Result<Option<Vec<u8>>> {
         self.keys.clear();
         self.edges.clear();
         self.found.clear();
         self.ends.clear();
         self.vanishing.clear();
+        self.cut = false;
+        self.evaluated = 0;
         let np = gspn.num_places();
         self.max_tokens.clear();
         self.max_tokens.resize(np, 0);
@@ -673,7 +905,7 @@ impl Batch {
                     layout.add(&mut self.keys[at..at + w], p as usize, d);
                 }
                 if let Some(known) = skip_forced {
-                    if let Some(widen) = self.follow_forced(gspn, index, store, known, at, t)? {
+                    if let Some(widen) = self.follow_forced(gspn, index, store, known, context, at, t)? {
                         return Ok(Some(widen));
                     }
                 }
@@ -698,14 +930,17 @@ impl Batch {
     /// Follows the successor key at `at` (reached from `self.cur` by `t`)
     /// through forced vanishing markings (see [`ExploreParams::skip_forced`]),
     /// rewriting the key in place; hops followed before (`known`, or this
-    /// round's) are not followed again. Returns the widths a hop needs if it
-    /// would overflow a field.
+    /// round's) are not followed again, nor are stretches free of the
+    /// `context` (with the stretches known before; see [`Context`]).
+    /// Returns the widths a hop needs if it would overflow a field.
+    #[allow(clippy::too_many_arguments)]
     fn follow_forced(
         &mut self,
         gspn: &Gspn,
         index: &EnablingIndex,
         store: &MarkingStore,
         known: &Forced,
+        context: Option<(&Context, &Forced)>,
         at: usize,
         t: TransitionId,
     ) -> Result<Option<Vec<u8>>> {
@@ -713,45 +948,106 @@ impl Batch {
         let w = layout.words();
         self.path.clear();
         self.path_hashes.clear();
+        self.stretch.clear();
         let mut ended = false;
         // `next` is the marking of the key, `next_enabled` its set before
-        // `fired` fired; both are made from `cur`'s when first needed.
+        // `fired` fired; both are made from `cur`'s when first needed, or
+        // decoded afresh after a remembered stretch (`stale`).
         let mut fired = t;
         let mut copied = false;
-        for hop in 0..FORCED_HOPS {
+        let mut stale = false;
+        // Hops of the stretch being learnt, and of the whole run.
+        let mut stretch_hops = 0u32;
+        let mut hops = 0usize;
+        while hops < FORCED_HOPS {
             let key = &self.keys[at..at + w];
             // A stored marking is not followed through (it is one that is not
             // forced, the initial marking, or one where the hop limit cut a run).
             if store.find(key).is_some() {
+                self.end_stretch(context, at, w, stretch_hops, false);
                 ended = true;
                 break;
             }
             let h = hash_words(key);
+            // The stretch being learnt stops where a run's remembered end
+            // is read, not at that end (the hops in between may not be free
+            // of the context).
+            if !self.stretch.is_empty() && (known.get(key, h).is_some() || self.learnt.get(key, h).is_some())
+            {
+                self.end_stretch(context, at, w, stretch_hops, false);
+            }
+            let key = &self.keys[at..at + w];
             if let Some(end) = known.get(key, h).or_else(|| self.learnt.get(key, h)) {
                 self.keys[at..at + w].copy_from_slice(end);
                 ended = true;
                 break;
             }
-            if !copied {
-                self.next.clone_from(&self.cur);
-                for &(p, d) in gspn.delta(t) {
-                    let c = &mut self.next[p as usize];
-                    *c = (i64::from(*c) + d) as u32;
+            if let Some((cx, free)) = context {
+                cx.project(&self.keys[at..at + w], &mut self.projected);
+                if self.stretch.is_empty() {
+                    let hp = hash_words(&self.projected);
+                    let remembered = free
+                        .get_tagged(&self.projected, hp)
+                        .or_else(|| self.learnt_free.get_tagged(&self.projected, hp));
+                    if let Some((end, tag)) = remembered {
+                        self.replayed.clear();
+                        self.replayed.extend_from_slice(end);
+                        hops += self.replay(cx, layout, at, h, tag);
+                        if tag & COMPLETE != 0 {
+                            ended = true;
+                            break;
+                        }
+                        stale = true;
+                        continue;
+                    }
+                    self.stretch.clone_from(&self.projected);
+                } else if self.projected == cx.initial {
+                    // Possibly the initial marking (stored): the stretch
+                    // stops before it, and a new one starts there.
+                    self.end_stretch(context, at, w, stretch_hops, false);
+                    stretch_hops = 0;
+                    self.stretch.clone_from(&self.projected);
                 }
-                self.next_enabled.clone_from(&self.enabled);
-                copied = true;
             }
-            self.next_enabled.refresh(gspn, index, fired, &self.next);
+            if stale {
+                layout.decode(&self.keys[at..at + w], &mut self.next);
+                self.next_enabled.fill(gspn, &self.next);
+                stale = false;
+                copied = true;
+            } else {
+                if !copied {
+                    self.next.clone_from(&self.cur);
+                    for &(p, d) in gspn.delta(t) {
+                        let c = &mut self.next[p as usize];
+                        *c = (i64::from(*c) + d) as u32;
+                    }
+                    self.next_enabled.clone_from(&self.enabled);
+                    copied = true;
+                }
+                self.next_enabled.refresh(gspn, index, fired, &self.next);
+            }
+            self.evaluated += 1;
             let kind = self.next_enabled.firable(gspn, index, &mut self.next_firable);
             let kind = gspn.resolve(&self.next, &mut self.next_firable, kind)?;
+            let free = context.is_some_and(|(cx, _)| cx.free(&self.next));
             if kind != MarkingKind::Vanishing || self.next_firable.len() != 1 {
                 // Remembered as its own end (its firing rule is not evaluated again).
                 self.learnt
                     .insert(&self.keys[at..at + w], h, &self.keys[at..at + w]);
+                self.end_stretch(context, at, w, stretch_hops, free);
                 ended = true;
                 break;
             }
             let u = self.next_firable[0];
+            if !free || context.is_some_and(|(cx, _)| cx.touches[u.index()]) {
+                // Not free of the context: the stretch stops here, and a new
+                // one may start after this hop.
+                self.end_stretch(context, at, w, stretch_hops, false);
+                self.stretch.clear();
+                stretch_hops = 0;
+            } else {
+                stretch_hops += 1;
+            }
             if let Some(widen) = widening(gspn, layout, &self.next, u)? {
                 return Ok(Some(widen));
             }
@@ -764,12 +1060,13 @@ impl Batch {
             }
             // Largest counts: only the places this hop changed (and, at the
             // first hop, those `t` changed) hold counts not yet counted.
-            let changed = if hop == 0 { gspn.delta(t) } else { &[] };
+            let changed = if hops == 0 { gspn.delta(t) } else { &[] };
             for &(p, _) in changed.iter().chain(gspn.delta(u)) {
                 let mx = &mut self.max_tokens[p as usize];
                 *mx = (*mx).max(self.next[p as usize]);
             }
             fired = u;
+            hops += 1;
         }
         // A run cut by the hop limit (a timeless loop) is not remembered.
         if ended {
@@ -777,8 +1074,56 @@ impl Batch {
             for (k, &h) in self.path.chunks_exact(w).zip(&self.path_hashes) {
                 self.learnt.insert(k, h, end);
             }
+        } else {
+            self.cut = true;
         }
         Ok(None)
+    }
+
+    /// Replays a remembered stretch of tag `tag` from the key at `at` (of
+    /// hash `h`) to its end, `self.replayed` with the key's context fields;
+    /// returns the hops it stands for.
+    fn replay(&mut self, cx: &Context, layout: &Layout, at: usize, h: u64, tag: u32) -> usize {
+        let key = &mut self.keys[at..at + layout.words()];
+        self.path.extend_from_slice(key);
+        self.path_hashes.push(h);
+        // The context fields are the key's, their counts those of every
+        // marking of the stretch (counted as a hop would count them: only if
+        // it has one).
+        let hops = tag & !COMPLETE;
+        if hops > 0 {
+            for &p in &cx.places {
+                let mx = &mut self.max_tokens[p as usize];
+                *mx = (*mx).max(layout.get(key, p as usize));
+            }
+        }
+        for ((k, &e), &b) in key.iter_mut().zip(&self.replayed).zip(&cx.bits) {
+            *k = (*k & b) | e;
+        }
+        hops.max(1) as usize
+    }
+
+    /// Remembers the stretch being learnt, from `self.stretch` to the key at
+    /// `at`, if it has hops (`complete`: the key's marking ends the run from
+    /// every marking of the stretch's start, see [`Context`]).
+    fn end_stretch(
+        &mut self,
+        context: Option<(&Context, &Forced)>,
+        at: usize,
+        w: usize,
+        hops: u32,
+        complete: bool,
+    ) {
+        let Some((cx, _)) = context else { return };
+        if self.stretch.is_empty() || (hops == 0 && !complete) {
+            return;
+        }
+        cx.project(&self.keys[at..at + w], &mut self.projected);
+        let tag = hops.min(!COMPLETE) | if complete { COMPLETE } else { 0 };
+        let h = hash_words(&self.stretch);
+        self.learnt_free
+            .insert_tagged(&self.stretch, h, &self.projected, tag);
+        self.stretch.clear();
     }
 }
 

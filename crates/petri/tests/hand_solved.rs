@@ -715,6 +715,7 @@ const SKIP: ExploreParams = ExploreParams {
     max_states: usize::MAX,
     max_memory: u64::MAX,
     skip_forced: true,
+    forced_context: Vec::new(),
 };
 
 #[test]
