@@ -1010,6 +1010,7 @@ impl Batch {
                 }
             }
             if stale {
+                self.next.resize(self.cur.len(), 0);
                 layout.decode(&self.keys[at..at + w], &mut self.next);
                 self.next_enabled.fill(gspn, &self.next);
                 stale = false;

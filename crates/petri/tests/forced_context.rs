@@ -14,9 +14,13 @@ use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 
 fn explore(net: &Net, context: Vec<PlaceId>) -> Result<ReachabilityGraph> {
+    explore_up_to(net, context, 300)
+}
+
+fn explore_up_to(net: &Net, context: Vec<PlaceId>, max_states: usize) -> Result<ReachabilityGraph> {
     let g = net.instantiate(&Params::new())?;
     let params = ExploreParams {
-        max_states: 300,
+        max_states,
         skip_forced: true,
         forced_context: context,
         ..ExploreParams::default()
@@ -59,15 +63,15 @@ fn differences(a: &ReachabilityGraph, b: &ReachabilityGraph) -> Vec<String> {
     bad
 }
 
-/// Three independent on/off processes (timed switches) and a cycle of
-/// control flow: a timed start, twelve forced hops that never look at the
-/// processes, one read of the first process (a forced hop that depends on
-/// it), then six more forced hops back to the start. Returns the net and
-/// the processes' places.
-fn environment_and_flow() -> (Net, Vec<PlaceId>) {
+/// `processes` independent on/off processes (timed switches) and a cycle
+/// of control flow: a timed start, twelve forced hops that never look at
+/// the processes, one read of the first process (a forced hop that depends
+/// on it), then six more forced hops back to the start. Returns the net
+/// and the processes' places.
+fn environment_and_flow(processes: usize) -> (Net, Vec<PlaceId>) {
     let mut n = Net::new("environment and flow");
     let mut env = Vec::new();
-    for k in 0..3 {
+    for k in 0..processes {
         let on = n.add_place(format!("e{k}.on"), 1u32);
         let off = n.add_place(format!("e{k}.off"), 0u32);
         let t = n.add_timed(format!("e{k}.to_off"), 1.0 + k as f64);
@@ -115,7 +119,7 @@ fn environment_and_flow() -> (Net, Vec<PlaceId>) {
 
 #[test]
 fn stretches_free_of_the_context_are_followed_once_and_the_graph_is_unchanged() {
-    let (net, env) = environment_and_flow();
+    let (net, env) = environment_and_flow(3);
     let without = explore(&net, Vec::new()).unwrap();
     let with = explore(&net, env).unwrap();
     assert_eq!(differences(&without, &with), Vec::<String>::new());
@@ -132,12 +136,39 @@ fn stretches_free_of_the_context_are_followed_once_and_the_graph_is_unchanged() 
     assert!(b < a / 3, "{b} evaluations with the context, {a} without");
 }
 
+/// Past 32,768 stored markings a round's chunks run in parallel, each
+/// learning stretches of its own: 16 processes (65,536 states), on one
+/// thread and on two, give the graph generated without the context.
+#[test]
+fn stretches_learnt_in_parallel_chunks_give_the_same_graph() {
+    let (net, env) = environment_and_flow(16);
+    let on = |threads: usize, context: Vec<PlaceId>| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| explore_up_to(&net, context, 100_000).unwrap())
+    };
+    let without = on(1, Vec::new());
+    assert_eq!(without.num_tangible(), 1 << 16);
+    for threads in [1, 2] {
+        let with = on(threads, env.clone());
+        let bad = differences(&without, &with);
+        assert!(
+            bad.is_empty(),
+            "{threads} threads: {:?}",
+            &bad[..bad.len().min(3)]
+        );
+        assert!(with.stats().forced_evaluated < without.stats().forced_evaluated / 3);
+    }
+}
+
 #[test]
 fn a_context_that_the_flow_changes_is_never_skipped() {
     // The read consumes and returns the tested place: with the flow's own
     // places as context too (they change at every hop), nothing is
     // remembered without them and the graph is the same.
-    let (net, _) = environment_and_flow();
+    let (net, _) = environment_and_flow(3);
     let every: Vec<PlaceId> = (0..net.places.len() as u32).map(PlaceId).collect();
     let without = explore(&net, Vec::new()).unwrap();
     let with = explore(&net, every).unwrap();
