@@ -1,6 +1,6 @@
 //! Analysis of Nav2's four largest shipped trees — the one with the most
-//! nodes (`navigate_on_route_graph_w_recovery.xml`), the two 11,492-state
-//! ones and the largest chain (the goal-patience tree, 29,384 states) —
+//! nodes (`navigate_on_route_graph_w_recovery.xml`), the two 5,520-state
+//! ones and the largest chain (the goal-patience tree, 14,640 states) —
 //! with both parameter sets, without sensitivities (the target of issue
 //! 49: ≤ 100 ms each); with the sidecar's defaults (every condition drawn
 //! at each evaluation: no condition state in the chain); and with
