@@ -190,8 +190,7 @@ impl Forced {
 struct Context {
     /// Per transition: it has an arc (of any kind) on a context place.
     touches: Vec<bool>,
-    /// The immediate transitions with an arc on a context place: their
-    /// other input places and inhibitor places, `(place, multiplicity)`.
+    /// The immediate transitions with an arc on a context place.
     watch: Vec<Watched>,
     places: Vec<u32>,
     /// The bits of the context fields in the current layout.
@@ -821,8 +820,8 @@ struct Batch {
     /// learnt (empty when none is).
     projected: Vec<u64>,
     stretch: Vec<u64>,
-    /// The end of a remembered stretch being replayed.
-    replayed: Vec<u64>,
+    /// The end of a remembered run or stretch, copied out of its table.
+    end: Vec<u64>,
     /// A run cut by the hop limit was met in this round.
     cut: bool,
     /// Markings whose firing rule was evaluated while following hops.
@@ -969,29 +968,27 @@ impl Batch {
                 break;
             }
             let h = hash_words(key);
-            // The stretch being learnt stops where a run's remembered end
-            // is read, not at that end (the hops in between may not be free
-            // of the context).
-            if !self.stretch.is_empty() && (known.get(key, h).is_some() || self.learnt.get(key, h).is_some())
-            {
-                self.end_stretch(context, at, w, stretch_hops, false);
-            }
-            let key = &self.keys[at..at + w];
             if let Some(end) = known.get(key, h).or_else(|| self.learnt.get(key, h)) {
-                self.keys[at..at + w].copy_from_slice(end);
+                self.end.clear();
+                self.end.extend_from_slice(end);
+                // The stretch being learnt stops here, where the run's
+                // remembered end is read, not at that end (the hops in
+                // between may not be free of the context).
+                self.end_stretch(context, at, w, stretch_hops, false);
+                self.keys[at..at + w].copy_from_slice(&self.end);
                 ended = true;
                 break;
             }
-            if let Some((cx, free)) = context {
+            if let Some((cx, stretches)) = context {
                 cx.project(&self.keys[at..at + w], &mut self.projected);
                 if self.stretch.is_empty() {
                     let hp = hash_words(&self.projected);
-                    let remembered = free
+                    let remembered = stretches
                         .get_tagged(&self.projected, hp)
                         .or_else(|| self.learnt_free.get_tagged(&self.projected, hp));
                     if let Some((end, tag)) = remembered {
-                        self.replayed.clear();
-                        self.replayed.extend_from_slice(end);
+                        self.end.clear();
+                        self.end.extend_from_slice(end);
                         hops += self.replay(cx, layout, at, h, tag);
                         if tag & COMPLETE != 0 {
                             ended = true;
@@ -1082,7 +1079,7 @@ impl Batch {
     }
 
     /// Replays a remembered stretch of tag `tag` from the key at `at` (of
-    /// hash `h`) to its end, `self.replayed` with the key's context fields;
+    /// hash `h`) to its end, `self.end` with the key's context fields;
     /// returns the hops it stands for.
     fn replay(&mut self, cx: &Context, layout: &Layout, at: usize, h: u64, tag: u32) -> usize {
         let key = &mut self.keys[at..at + layout.words()];
@@ -1098,7 +1095,7 @@ impl Batch {
                 *mx = (*mx).max(layout.get(key, p as usize));
             }
         }
-        for ((k, &e), &b) in key.iter_mut().zip(&self.replayed).zip(&cx.bits) {
+        for ((k, &e), &b) in key.iter_mut().zip(&self.end).zip(&cx.bits) {
             *k = (*k & b) | e;
         }
         hops.max(1) as usize
