@@ -167,14 +167,20 @@ fn compile(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Result
     })
 }
 
-/// P(success), P(failure), P(never), mean time, and the absorption itself.
-fn outcome(s: &Solved, rates: &[f64]) -> Result<(f64, f64, f64, f64, petri::Absorption)> {
+/// The chain's transient part with `rates` bound (for the absorption and
+/// the quantiles both).
+fn absorbing<'a>(s: &'a Solved, rates: &[f64]) -> Result<petri::Absorbing<'a>> {
     if s.compiled.is_ergodic() {
         return Err(Error::Analysis(
             "the tree never ends: its net has no end marking reachable (a loop with no way out)".into(),
         ));
     }
-    let a = s.compiled.absorption(rates).map_err(|e| match e {
+    Ok(s.compiled.absorbing(rates)?)
+}
+
+/// P(success), P(failure), P(never), mean time, and the absorption itself.
+fn outcome(s: &Solved, chain: &petri::Absorbing) -> Result<(f64, f64, f64, f64, petri::Absorption)> {
+    let a = chain.absorption().map_err(|e| match e {
         petri::Error::Singular { .. } => Error::Analysis(format!(
             "some state of the run cannot reach an end (a loop with no way out): {e}"
         )),
@@ -190,7 +196,8 @@ fn outcome(s: &Solved, rates: &[f64]) -> Result<(f64, f64, f64, f64, petri::Abso
 /// Analyses `tree` with `params`.
 pub fn analyze(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Result<Report> {
     let s = compile(tree, params, options)?;
-    let (p_success, p_failure, p_never, mean_time, a) = outcome(&s, &s.rates)?;
+    let chain = absorbing(&s, &s.rates)?;
+    let (p_success, p_failure, p_never, mean_time, a) = outcome(&s, &chain)?;
     let mean_of = |kind: u8| -> f64 {
         let (mut num, mut den) = (0.0, 0.0);
         for (b, &k) in s.ends.iter().enumerate() {
@@ -204,7 +211,7 @@ pub fn analyze(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Re
     let blame = failure_blame(&s, &a);
     let attributed: f64 = blame.values().sum();
     let nodes = node_stats(tree, &s, &a, mean_time, &blame, p_failure);
-    let quantiles = quantiles(&s, &options.quantiles, mean_time, 1.0 - p_never)?;
+    let quantiles = quantiles(&s, &chain, &options.quantiles, mean_time, 1.0 - p_never)?;
     let sensitivities = if options.sensitivities {
         sensitivities(tree, params, options, &s, p_success, mean_time)?
     } else {
@@ -310,16 +317,19 @@ fn node_stats(
 /// sizes agree on the quantiles to 10⁻⁹), each time read off by bisection; a quantile
 /// beyond 20 mean times is reported as 20 mean times. Should the space not
 /// settle, the distribution on a Crank–Nicolson grid serves instead.
-fn quantiles(s: &Solved, qs: &[f64], mean_time: f64, p_end: f64) -> Result<Vec<(f64, f64)>> {
+fn quantiles(
+    s: &Solved,
+    chain: &petri::Absorbing,
+    qs: &[f64],
+    mean_time: f64,
+    p_end: f64,
+) -> Result<Vec<(f64, f64)>> {
     if qs.is_empty() || mean_time <= 0.0 || p_end <= 0.0 {
         return Ok(qs.iter().map(|&q| (q, 0.0)).collect());
     }
     let horizon = MEANS as f64 * mean_time;
     let levels: Vec<f64> = qs.iter().map(|&q| 1.0 - q.min(1.0) * p_end).collect();
-    match s
-        .compiled
-        .absorption_survival(&s.rates, 0.25 * mean_time, horizon, &levels, 1e-9)
-    {
+    match chain.survival(0.25 * mean_time, horizon, &levels, 1e-9) {
         Ok(survival) => Ok(qs
             .iter()
             .zip(survival.times())
@@ -457,7 +467,7 @@ fn key_sensitivities(
                 rates[t] * (1.0 + h)
             };
         }
-        let (p, _, _, t, _) = outcome(s, &rates)?;
+        let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?)?;
         out.push(Sensitivity {
             key: key.clone(),
             parameter: name.into(),
@@ -484,7 +494,7 @@ fn key_sensitivities(
         shifted.conditions.insert(key.clone(), c);
     }
     let s2 = compile(tree, &shifted, no_sens)?;
-    let (p, _, _, t, _) = outcome(&s2, &s2.rates)?;
+    let (p, _, _, t, _) = outcome(&s2, &absorbing(&s2, &s2.rates)?)?;
     out.push(Sensitivity {
         key,
         parameter: pname.into(),

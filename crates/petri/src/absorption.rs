@@ -289,23 +289,7 @@ impl CompiledGspn {
         levels: &[f64],
         tolerance: f64,
     ) -> Result<crate::survival::Survival> {
-        for (name, v) in [("shift", shift), ("horizon", horizon), ("tolerance", tolerance)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::Invalid(format!(
-                    "the {name} of a survival function must be > 0 (got {v})"
-                )));
-            }
-        }
-        let tr = transient(self, rates)?;
-        let sys = BlockSystem::new(
-            "the time distribution (Krylov space)",
-            &tr.out_rate,
-            &tr.inner,
-            1.0,
-            shift,
-        )?;
-        let p = sys.ordered(&initial_transient(self, &tr));
-        crate::survival::build(&sys, &p, shift, horizon, levels, tolerance)
+        self.absorbing(rates)?.survival(shift, horizon, levels, tolerance)
     }
 
     /// Absorption probabilities, mean times and sojourn times for `rates`
@@ -314,12 +298,66 @@ impl CompiledGspn {
     /// Errors: an irreducible chain (nothing ends), a singular system (a
     /// transient state from which no end is reachable).
     pub fn absorption(&self, rates: &[f64]) -> Result<Absorption> {
-        let tr = transient(self, rates)?;
+        self.absorbing(rates)?.absorption()
+    }
+
+    /// The chain's transient part with `rates` bound, for several of the
+    /// measures above at once ([`Absorbing`]: it is built once).
+    ///
+    /// Errors: an irreducible chain (nothing ends), a rate that is not a
+    /// finite number ≥ 0.
+    pub fn absorbing(&self, rates: &[f64]) -> Result<Absorbing<'_>> {
+        Ok(Absorbing {
+            chain: self,
+            tr: transient(self, rates)?,
+        })
+    }
+}
+
+/// A compiled chain's transient part with its rates bound
+/// ([`CompiledGspn::absorbing`]): what the absorption and the time
+/// distribution are both computed from, built once for both.
+pub struct Absorbing<'a> {
+    chain: &'a CompiledGspn,
+    tr: Transient,
+}
+
+impl Absorbing<'_> {
+    /// [`CompiledGspn::absorption_survival`] on this chain.
+    pub fn survival(
+        &self,
+        shift: f64,
+        horizon: f64,
+        levels: &[f64],
+        tolerance: f64,
+    ) -> Result<crate::survival::Survival> {
+        for (name, v) in [("shift", shift), ("horizon", horizon), ("tolerance", tolerance)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::Invalid(format!(
+                    "the {name} of a survival function must be > 0 (got {v})"
+                )));
+            }
+        }
+        let tr = &self.tr;
+        let sys = BlockSystem::new(
+            "the time distribution (Krylov space)",
+            &tr.out_rate,
+            &tr.inner,
+            1.0,
+            shift,
+        )?;
+        let p = sys.ordered(&initial_transient(self.chain, tr));
+        crate::survival::build(&sys, &p, shift, horizon, levels, tolerance)
+    }
+
+    /// [`CompiledGspn::absorption`] on this chain.
+    pub fn absorption(&self) -> Result<Absorption> {
+        let (chain, tr) = (self.chain, &self.tr);
         let m = tr.states.len();
-        let nb = self.bottom_components().len();
+        let nb = chain.bottom_components().len();
         let mut pi0_t = vec![0.0; m];
         let mut end_probability = vec![0.0; nb];
-        for &(s, p) in self.initial_distribution() {
+        for &(s, p) in chain.initial_distribution() {
             match tr.local[s as usize] {
                 u32::MAX => end_probability[tr.bottom_of[s as usize] as usize] += p,
                 i => pi0_t[i as usize] += p,
@@ -349,7 +387,7 @@ impl CompiledGspn {
             .collect();
         let total: f64 = end_probability.iter().sum();
         let mean_time = x.iter().sum::<f64>() / total.max(f64::MIN_POSITIVE);
-        let mut sojourn = vec![0.0; self.num_tangible()];
+        let mut sojourn = vec![0.0; chain.num_tangible()];
         for (i, &s) in tr.states.iter().enumerate() {
             sojourn[s as usize] = x[i];
         }
@@ -372,7 +410,9 @@ impl CompiledGspn {
             entered_by: entered.into_iter().map(|m| m.into_iter().collect()).collect(),
         })
     }
+}
 
+impl CompiledGspn {
     /// `P(end reached by t)` for each time in `times` (ascending or not),
     /// by uniformisation with truncation error below `tolerance`.
     ///

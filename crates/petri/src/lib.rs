@@ -77,7 +77,7 @@ pub mod survival;
 mod sweep;
 mod vanishing;
 
-pub use absorption::Absorption;
+pub use absorption::{Absorbing, Absorption};
 pub use ctmc::{CompileStats, CompiledGspn, MemoryAccount, MemoryPart, Solution};
 pub use decision::{ChoiceReport, DecisionNet, NetObjective};
 pub use error::{Error, Result};
