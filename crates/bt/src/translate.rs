@@ -400,23 +400,40 @@ impl Builder<'_> {
     /// An Erlang chain of `phases` stages with total mean `mean_s` from
     /// `from` to `to`; the last stage is labelled `last`.
     fn delay(&mut self, n: NodeId, from: PlaceId, to: PlaceId, mean_s: f64, phases: u32, last: Trigger) {
+        self.erlang(n, from, &[(to, 1.0, last, "")], mean_s, phases);
+    }
+
+    /// An Erlang chain of `phases` stages with total mean `mean_s` from
+    /// `from`, whose last stage is one timed transition per end `(to,
+    /// share of the rate, label, name suffix)`: with shares summing to 1 the
+    /// time is Erlang whatever the end, and end `i` is taken with
+    /// probability `share_i`.
+    fn erlang(
+        &mut self,
+        n: NodeId,
+        from: PlaceId,
+        ends: &[(PlaceId, f64, Trigger, &str)],
+        mean_s: f64,
+        phases: u32,
+    ) {
         let rate = f64::from(phases) / mean_s;
+        let role = if matches!(ends[0].2, Trigger::Timer { .. }) {
+            RateRole::Timer
+        } else {
+            RateRole::Duration
+        };
         let mut at = from;
-        for k in 1..=phases {
-            let (next, trig) = if k == phases {
-                (to, last)
-            } else {
-                (self.place(n, "phase"), Trigger::Phase)
-            };
-            let role = if matches!(last, Trigger::Timer { .. }) {
-                RateRole::Timer
-            } else {
-                RateRole::Duration
-            };
-            let t = self.timed(n, &format!("stage{k}"), rate, trig, role);
+        for k in 1..phases {
+            let next = self.place(n, "phase");
+            let t = self.timed(n, &format!("stage{k}"), rate, Trigger::Phase, role);
             self.arc_in(at, t);
             self.arc_out(t, next);
             at = next;
+        }
+        for &(to, share, last, suffix) in ends {
+            let t = self.timed(n, &format!("stage{phases}{suffix}"), share * rate, last, role);
+            self.arc_in(at, t);
+            self.arc_out(t, to);
         }
     }
 
@@ -525,24 +542,11 @@ impl Builder<'_> {
             // time, without a choice marking or a running state per outcome.
             let run = self.place(n, "run");
             self.flow(n, "start", &[io.go], &[run]);
-            let rate = f64::from(a.phases) / mean;
-            let mut at = run;
-            for k in 1..a.phases {
-                let next = self.place(n, "phase");
-                let t = self.timed(n, &format!("stage{k}"), rate, Trigger::Phase, RateRole::Duration);
-                self.arc_in(at, t);
-                self.arc_out(t, next);
-                at = next;
-            }
-            let k = a.phases;
-            for (w, out, trig, what) in [
-                (p, io.ok, Trigger::Success { node: n }, "ok"),
-                (1.0 - p, io.ko, Trigger::Failure { node: n }, "ko"),
-            ] {
-                let t = self.timed(n, &format!("stage{k}_{what}"), w * rate, trig, RateRole::Duration);
-                self.arc_in(at, t);
-                self.arc_out(t, out);
-            }
+            let ends = [
+                (io.ok, p, Trigger::Success { node: n }, "_ok"),
+                (io.ko, 1.0 - p, Trigger::Failure { node: n }, "_ko"),
+            ];
+            self.erlang(n, run, &ends, mean, a.phases);
             return;
         }
         for (success, w, mean) in [
