@@ -83,7 +83,8 @@ pub struct ExploreParams {
     /// flow tests now and then, which would otherwise repeat every forced
     /// run once per combination of their states. Only the speed depends on
     /// the set: the graph is the same for any (docs/gspn.md, *The
-    /// pipeline*). Ignored for nets with decisions. Default: none.
+    /// pipeline*). Ignored for nets with decisions; places the net does not
+    /// have are left out. Default: none.
     pub forced_context: Vec<PlaceId>,
 }
 
@@ -219,8 +220,12 @@ impl Context {
             return None;
         }
         let mut is_context = vec![false; gspn.num_places()];
+        // A place the net does not have is left out (the set only changes
+        // the speed).
         for p in places {
-            *is_context.get_mut(p.index())? = true;
+            if let Some(c) = is_context.get_mut(p.index()) {
+                *c = true;
+            }
         }
         let on = |arcs: &[(u32, u32)]| arcs.iter().any(|&(p, _)| is_context[p as usize]);
         let others = |arcs: &[(u32, u32)]| -> Vec<(u32, u32)> {
@@ -241,9 +246,12 @@ impl Context {
                 });
             }
         }
-        let mut places: Vec<u32> = places.iter().map(|p| p.0).collect();
-        places.sort_unstable();
-        places.dedup();
+        let places: Vec<u32> = (0..gspn.num_places() as u32)
+            .filter(|&p| is_context[p as usize])
+            .collect();
+        if places.is_empty() {
+            return None;
+        }
         Some(Context {
             touches,
             watch,

@@ -164,6 +164,20 @@ fn stretches_learnt_in_parallel_chunks_give_the_same_graph() {
 }
 
 #[test]
+fn places_the_net_does_not_have_are_left_out_of_the_context() {
+    let (net, mut env) = environment_and_flow(3);
+    let without = explore(&net, Vec::new()).unwrap();
+    let with = explore(&net, env.clone()).unwrap();
+    env.push(PlaceId(10_000));
+    let with_unknown = explore(&net, env).unwrap();
+    assert_eq!(differences(&without, &with_unknown), Vec::<String>::new());
+    assert_eq!(
+        with_unknown.stats().forced_evaluated,
+        with.stats().forced_evaluated
+    );
+}
+
+#[test]
 fn a_context_that_the_flow_changes_is_never_skipped() {
     // The read consumes and returns the tested place: with the flow's own
     // places as context too (they change at every hop), nothing is
