@@ -28,6 +28,9 @@ pub(crate) struct Layout {
     word: Vec<u32>,
     shift: Vec<u8>,
     words: usize,
+    /// The places of word `w` are `first[w]..first[w + 1]` (fields are
+    /// packed in place order), for [`Layout::decode`].
+    first: Vec<u32>,
 }
 
 impl Layout {
@@ -47,11 +50,19 @@ impl Layout {
             used += b;
         }
         let words = if width.is_empty() { 1 } else { w as usize + 1 };
+        let mut first = vec![0u32; words + 1];
+        for &w in &word {
+            first[w as usize + 1] += 1;
+        }
+        for i in 0..words {
+            first[i + 1] += first[i];
+        }
         Layout {
             width,
             word,
             shift,
             words,
+            first,
         }
     }
 
@@ -111,9 +122,24 @@ impl Layout {
         }
     }
 
+    ///
+    /// Word by word: a word's fields are consecutive places, read by
+    /// shifting the word down field after field (a word of zeros is a run
+    /// of empty places), instead of looking up each place's word and shift.
     pub(crate) fn decode(&self, key: &[u64], m: &mut [u32]) {
-        for (p, slot) in m.iter_mut().enumerate() {
-            *slot = self.get(key, p);
+        debug_assert_eq!(m.len(), self.width.len());
+        for (w, &v) in key.iter().enumerate().take(self.words) {
+            let (lo, hi) = (self.first[w] as usize, self.first[w + 1] as usize);
+            let (slots, widths) = (&mut m[lo..hi], &self.width[lo..hi]);
+            if v == 0 {
+                slots.fill(0);
+                continue;
+            }
+            let mut v = v;
+            for (slot, &b) in slots.iter_mut().zip(widths) {
+                *slot = (v & mask(b)) as u32;
+                v >>= b; // 1..=32 bits: never the whole word
+            }
         }
     }
 }
@@ -628,5 +654,30 @@ mod tests {
         let mut back = vec![0; 100];
         layout.decode(&key, &mut back);
         assert_eq!(back, m);
+    }
+
+    proptest::proptest! {
+        /// The word-by-word decoding reads what the place-by-place one
+        /// reads, for any widths (1 to 32 bits, fields packed over several
+        /// words, words left partly or wholly empty) and counts.
+        #[test]
+        fn decoding_word_by_word_reads_every_field(
+            fields in proptest::collection::vec((1u8..=32, proptest::prelude::any::<u32>(), 0u8..3), 0..80),
+        ) {
+            let width: Vec<u8> = fields.iter().map(|f| f.0).collect();
+            // A third of the counts zero, so that whole words are.
+            let m: Vec<u32> = fields
+                .iter()
+                .map(|&(b, v, z)| if z == 0 { 0 } else { (u64::from(v) & mask(b)) as u32 })
+                .collect();
+            let layout = Layout::new(width);
+            let mut key = vec![0; layout.words()];
+            layout.encode(&m, &mut key);
+            let mut back = vec![u32::MAX; m.len()];
+            layout.decode(&key, &mut back);
+            proptest::prop_assert_eq!(&back, &m);
+            let each: Vec<u32> = (0..m.len()).map(|p| layout.get(&key, p)).collect();
+            proptest::prop_assert_eq!(&back, &each);
+        }
     }
 }
