@@ -497,11 +497,31 @@ fn store_with(m0: &[u32]) -> MarkingStore {
     store
 }
 
-/// The end of the round that starts at marking `i` when the store holds
-/// `len` markings: [`ROUND_PER_THREAD`] markings per thread when the round
-/// runs on `threads` threads, one [`BATCH`] when it runs on one.
-fn round_end(i: usize, len: usize, threads: Option<usize>) -> usize {
-    (i + threads.map_or(BATCH, |t| ROUND_PER_THREAD * t)).min(len)
+/// The round that starts at marking `i` when the store holds `len`
+/// markings: its end, and whether it runs on the `threads` threads.
+/// Rounds run in parallel from [`PARALLEL_FROM`] stored markings, with
+/// [`MAX_CHUNKS_PER_THREAD`] chunks per thread; on one thread a round is
+/// one [`BATCH`]. When `context` (forced runs remembered across a
+/// context, see [`ExploreParams::forced_context`]), from
+/// [`PARALLEL_FROM_CONTEXT`], with [`MIN_CHUNKS_PER_THREAD`] chunks per
+/// thread in a store of a few thousand markings (what a round learns of
+/// forced runs serves the next: short rounds learn together), growing to
+/// the most in one of [`ROUND_GROWN`] markings.
+fn round(i: usize, len: usize, threads: usize, context: bool) -> (usize, bool) {
+    let from = if context {
+        PARALLEL_FROM_CONTEXT
+    } else {
+        PARALLEL_FROM
+    };
+    if threads < 2 || len < from {
+        return ((i + BATCH).min(len), false);
+    }
+    let per_thread = if context {
+        (len * MAX_CHUNKS_PER_THREAD / ROUND_GROWN).clamp(MIN_CHUNKS_PER_THREAD, MAX_CHUNKS_PER_THREAD)
+    } else {
+        MAX_CHUNKS_PER_THREAD
+    };
+    ((i + per_thread * BATCH * threads).min(len), true)
 }
 
 /// The reachability graph.
@@ -581,8 +601,7 @@ impl ReachabilityGraph {
             stop.check("generating the reachability graph")?;
             stop.generated(store.len(), targets.len());
             // The round's size changes the speed, never the result.
-            let parallel = threads > 1 && store.len() >= PARALLEL_FROM;
-            let end = round_end(i, store.len(), parallel.then_some(threads));
+            let (end, parallel) = round(i, store.len(), threads, memory.context.is_some());
             let chunks = (end - i).div_ceil(BATCH);
             batches.resize_with(chunks.max(batches.len()), Batch::default);
             let run = |(c, b): (usize, &mut Batch)| {
@@ -782,12 +801,22 @@ impl Successors for ReachabilityGraph {
 /// successors each are a few hundred slot loads in flight, which fit the L1
 /// cache.
 const BATCH: usize = 32;
-/// Markings per round and thread once the store is large (32 chunks per
-/// thread: their slots stay in its L2 cache until they are inserted).
-const ROUND_PER_THREAD: usize = 32 * BATCH;
+/// Chunks per round and thread once the store is large (32: their slots
+/// stay in its L2 cache until they are inserted; see [`round`]).
+const MAX_CHUNKS_PER_THREAD: usize = 32;
+/// Chunks per round and thread in a small store.
+const MIN_CHUNKS_PER_THREAD: usize = 4;
+/// Stored markings from which a round has [`MAX_CHUNKS_PER_THREAD`].
+const ROUND_GROWN: usize = 1 << 17;
 /// Stored markings from which rounds run in parallel (below, the hash table
 /// is in cache and a round is too short to share).
 const PARALLEL_FROM: usize = 1 << 15;
+/// The same with forced runs remembered across a context: an expansion
+/// follows forced runs and replays remembered stretches, several times
+/// the work of one without (the behaviour trees' chains: ~3.6 µs a marking,
+/// against ~0.7 µs for Kanban's), so short rounds pay from a few thousand
+/// markings (`crates/petri/EXPERIMENTS.md`).
+const PARALLEL_FROM_CONTEXT: usize = 1 << 11;
 /// `Batch::found` of a successor that was not stored when the round began.
 const NOT_FOUND: u32 = u32::MAX;
 

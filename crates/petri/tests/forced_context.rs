@@ -136,9 +136,10 @@ fn stretches_free_of_the_context_are_followed_once_and_the_graph_is_unchanged() 
     assert!(b < a / 3, "{b} evaluations with the context, {a} without");
 }
 
-/// Past 32,768 stored markings a round's chunks run in parallel, each
-/// learning stretches of its own: 16 processes (65,536 states), on one
-/// thread and on two, give the graph generated without the context.
+/// With a context, past 2,048 stored markings a round's chunks run in
+/// parallel (past 32,768 without), each learning stretches of its own: 16
+/// processes (65,536 states), on one thread and on two, give the graph
+/// generated without the context.
 #[test]
 fn stretches_learnt_in_parallel_chunks_give_the_same_graph() {
     let (net, env) = environment_and_flow(16);
