@@ -238,7 +238,7 @@ impl BlockSystem {
 
     fn factor(&mut self, what: &'static str, out: &[f64], graph: &Csr, s: f64, c: f64) -> Result<()> {
         let singular = |detail: String| Error::Singular { what, detail };
-        // Dense blocks already factorised, by their entries' bits.
+        // Dense blocks already factorised, by their entries (positions and bits).
         let mut seen: HashMap<Vec<u64>, usize> = HashMap::new();
         for b in 0..self.comp_start.len() - 1 {
             let members = &self.states[self.comp_start[b] as usize..self.comp_start[b + 1] as usize];
@@ -263,19 +263,44 @@ impl BlockSystem {
                     }
                 }
                 if k <= DENSE_BLOCK_LIMIT {
-                    // The block's transpose, row-major.
-                    let mut a = vec![0.0; k * k];
-                    for (i, j, v) in entries {
-                        a[j * k + i] += v;
+                    // The block's entries by position, duplicates summed in
+                    // the order they came (as a dense accumulation would):
+                    // the key of equal blocks, and the matrix if new.
+                    // (Rows come in order, each row's entries in the
+                    // graph's order: a stable sort of each row by column.)
+                    let mut row = 0;
+                    while row < entries.len() {
+                        let i = entries[row].0;
+                        let end = row + entries[row..].iter().take_while(|e| e.0 == i).count();
+                        entries[row..end].sort_by_key(|&(_, j, _)| j);
+                        row = end;
                     }
-                    let bits: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
-                    let d = match seen.get(&bits) {
+                    debug_assert!(entries.windows(2).all(|w| (w[0].0, w[0].1) <= (w[1].0, w[1].1)));
+                    let mut key: Vec<u64> = Vec::with_capacity(1 + 2 * entries.len());
+                    key.push(k as u64);
+                    let mut e = 0;
+                    while e < entries.len() {
+                        let (i, j, mut v) = entries[e];
+                        e += 1;
+                        while e < entries.len() && (entries[e].0, entries[e].1) == (i, j) {
+                            v += entries[e].2;
+                            e += 1;
+                        }
+                        key.extend([((i as u64) << 32) | j as u64, v.to_bits()]);
+                    }
+                    let d = match seen.get(&key) {
                         Some(&d) => d,
                         None => {
+                            // The block's transpose, row-major.
+                            let mut a = vec![0.0; k * k];
+                            for pair in key[1..].chunks_exact(2) {
+                                let (i, j) = ((pair[0] >> 32) as usize, (pair[0] & 0xFFFF_FFFF) as usize);
+                                a[j * k + i] = f64::from_bits(pair[1]);
+                            }
                             let lu = ProfileLu::new(k, a)
                                 .ok_or_else(|| singular(format!("a component of {k} states is singular")))?;
                             self.dense.push(lu);
-                            seen.insert(bits, self.dense.len() - 1);
+                            seen.insert(key, self.dense.len() - 1);
                             self.dense.len() - 1
                         }
                     };
