@@ -28,9 +28,10 @@
 //! vectors on Nav2's large chains, quantiles within 1.1·10⁻⁹ of the matrix
 //! exponential's; `crates/bt/BENCHMARKS.md`).
 //!
-//! **When to stop** (`m`): every 2 vectors from 8 on, the times where `S`
+//! **When to stop** (`m`): every 2 vectors from 8 on — every vector once
+//! two readings agree to [`CLOSE`] times the tolerance — the times where `S`
 //! falls to the caller's levels (the quantiles) are read off; the space is
-//! kept once two successive sizes agree on them to the tolerance,
+//! kept once two successive readings agree on them to the tolerance,
 //! relatively (or once it is invariant: a breakdown, after which the
 //! result is exact). `S` converges more slowly at times far below `γ`; as
 //! the check is on the times asked for, a quantile there costs more
@@ -42,14 +43,18 @@
 //! step `δ` of the horizon over [`GRID`] marches `u_k = exp(kδG) e₁` to
 //! the first step below the level; inside it, a bisection takes one
 //! matrix–vector product per halving with `exp(δ/2^l · G)` (each by its
-//! own scaling and squaring, computed once per call as deep as needed)
-//! until the interval is [`RESOLUTION`] of the time, then interpolates
-//! linearly.
+//! own scaling and squaring, computed once per call as deep as needed;
+//! once `δ/2^l · G` is small, ‖·‖₁ ≤ ½, the same Taylor series is applied
+//! to the vector instead, a product with a vector per term rather than
+//! one with a matrix) until the interval is [`RESOLUTION`] of the time,
+//! then interpolates linearly. The products run in place, without
+//! allocating (a reading on a large space: ~0.3 ms).
 //!
 //! Deterministic: one thread, a fixed order of operations.
 
+use faer::linalg::matmul::matmul;
 use faer::prelude::Solve;
-use faer::{Col, Mat, Scale};
+use faer::{Accum, Col, Mat, Par, Scale};
 
 use crate::blocks::BlockSystem;
 use crate::error::{Error, Result};
@@ -57,6 +62,9 @@ use crate::profile_lu::dot;
 
 /// Largest Krylov space (block solves).
 pub const MAX_VECTORS: usize = 64;
+/// Once two sizes agree to this many times the tolerance, the times are
+/// read off at every size instead of every second one.
+const CLOSE: f64 = 100.0;
 /// Steps of the march over the horizon in [`Survival::first_below`].
 pub const GRID: usize = 512;
 /// Bisections inside a step of the march stop once the interval is at
@@ -129,6 +137,7 @@ impl Survival {
         // made as deep as a bisection needs.
         let mut ladder = Ladder {
             g: &self.g,
+            norm1: norm1(&self.g),
             delta,
             steps: vec![expm(&(&self.g * Scale(delta)))],
         };
@@ -140,11 +149,12 @@ impl Survival {
                 *slot = Some(0.0);
             }
         }
+        let mut next = Col::<f64>::zeros(m);
         for k in 0..GRID {
             if out.iter().all(Option::is_some) {
                 break;
             }
-            let next = &ladder.steps[0] * &u;
+            product(&mut next, &ladder.steps[0], &u);
             let s_next = self.weigh(&next);
             for (slot, &level) in out.iter_mut().zip(levels) {
                 if slot.is_none() && s_next <= level {
@@ -152,7 +162,7 @@ impl Survival {
                     *slot = Some(ladder.bisect(self, &u, bracket, level));
                 }
             }
-            u = next;
+            std::mem::swap(&mut u, &mut next);
             s_u = s_next;
         }
         out
@@ -167,6 +177,8 @@ impl Survival {
 /// `exp(δ/2^l · G)` for `l = 0, 1, …` as far as computed.
 struct Ladder<'a> {
     g: &'a Mat<f64>,
+    /// `‖G‖₁`.
+    norm1: f64,
     delta: f64,
     steps: Vec<Mat<f64>>,
 }
@@ -178,6 +190,35 @@ impl Ladder<'_> {
             self.steps.push(expm(&(self.g * Scale(h))));
         }
         &self.steps[l]
+    }
+
+    /// `exp(δ/2^l · G) u`: by the matrix of rung `l` while `δ/2^l · G`
+    /// has a 1-norm above ½, below by the Taylor series applied to `u`
+    /// (the same series and cut as [`expm`]'s, a product with a vector per
+    /// term instead of one with a matrix).
+    fn apply(&mut self, l: usize, u: &Col<f64>) -> Col<f64> {
+        let h = self.delta / f64::powi(2.0, l as i32);
+        let nu = h * self.norm1;
+        if nu > 0.5 {
+            return self.step(l) * u;
+        }
+        let degree = taylor_degree(nu);
+        // Horner on the vector: u + hG (u + hG/2 (u + … (u + hG/K u)))
+        let mut e = u.clone();
+        let mut t = Col::<f64>::zeros(u.nrows());
+        for k in (1..=degree).rev() {
+            matmul(
+                t.as_mat_mut(),
+                Accum::Replace,
+                self.g,
+                e.as_mat(),
+                h / k as f64,
+                Par::Seq,
+            );
+            t += u;
+            std::mem::swap(&mut e, &mut t);
+        }
+        e
     }
 
     /// The time in `[lo, lo + δ]` where `S` crosses `level`, from `u` at
@@ -193,7 +234,7 @@ impl Ladder<'_> {
                 break;
             }
             width *= 0.5;
-            let next = self.step(l) * &u;
+            let next = self.apply(l, &u);
             let s_mid = s.weigh(&next);
             if s_mid <= level {
                 s_hi = s_mid;
@@ -268,7 +309,8 @@ pub(crate) fn build(
         h[j][j + 1] = rest;
         let m = j + 1;
         let invariant = rest <= 1e-13 * before || m == n;
-        if invariant || m == max || (m >= 8 && m % 2 == 0) {
+        let due = m >= 8 && (m % 2 == 0 || last_change <= CLOSE * tolerance);
+        if invariant || m == max || due {
             let mut candidate = project(&sums, &h, m, beta, gamma)?;
             candidate.times = candidate.first_below(levels, horizon);
             if invariant {
@@ -343,24 +385,16 @@ fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
     }
 }
 
-fn unit(m: usize) -> Col<f64> {
-    Col::from_fn(m, |i| f64::from(u8::from(i == 0)))
+/// The 1-norm (largest column sum of magnitudes).
+fn norm1(x: &Mat<f64>) -> f64 {
+    (0..x.ncols())
+        .map(|j| (0..x.nrows()).map(|i| x[(i, j)].abs()).sum::<f64>())
+        .fold(0.0, f64::max)
 }
 
-/// `exp(X)`: scaled by `2^s` to a 1-norm `ν ≤ ½`, a Taylor series of the
-/// least degree `K ≤ 16` with `ν^{K+1}/(K+1)! ≤ 10⁻¹⁸`, squared `s` times.
-fn expm(x: &Mat<f64>) -> Mat<f64> {
-    let m = x.nrows();
-    let norm1 = (0..m)
-        .map(|j| (0..m).map(|i| x[(i, j)].abs()).sum::<f64>())
-        .fold(0.0, f64::max);
-    let s = if norm1 > 0.5 {
-        (norm1 / 0.5).log2().ceil() as i32
-    } else {
-        0
-    };
-    let y = x * Scale(f64::powi(2.0, -s));
-    let nu = norm1 * f64::powi(2.0, -s);
+/// The least Taylor degree `K ≤ 16` with `ν^{K+1}/(K+1)! ≤ 10⁻¹⁸` for a
+/// matrix of 1-norm `ν ≤ ½`.
+fn taylor_degree(nu: f64) -> usize {
     let mut degree = 1;
     let mut term = nu;
     while degree < 16 {
@@ -370,14 +404,44 @@ fn expm(x: &Mat<f64>) -> Mat<f64> {
         }
         degree += 1;
     }
-    // Horner: I + Y (I + Y/2 (I + Y/3 (… (I + Y/K))))
-    let identity = Mat::<f64>::identity(m, m);
-    let mut e = identity.clone();
+    degree
+}
+
+/// `out = a u`, in place.
+fn product(out: &mut Col<f64>, a: &Mat<f64>, u: &Col<f64>) {
+    matmul(out.as_mat_mut(), Accum::Replace, a, u.as_mat(), 1.0, Par::Seq);
+}
+
+fn unit(m: usize) -> Col<f64> {
+    Col::from_fn(m, |i| f64::from(u8::from(i == 0)))
+}
+
+/// `exp(X)`: scaled by `2^s` to a 1-norm `ν ≤ ½`, a Taylor series of the
+/// least degree `K ≤ 16` with `ν^{K+1}/(K+1)! ≤ 10⁻¹⁸`, squared `s` times.
+fn expm(x: &Mat<f64>) -> Mat<f64> {
+    let m = x.nrows();
+    let norm1 = norm1(x);
+    let s = if norm1 > 0.5 {
+        (norm1 / 0.5).log2().ceil() as i32
+    } else {
+        0
+    };
+    let y = x * Scale(f64::powi(2.0, -s));
+    let degree = taylor_degree(norm1 * f64::powi(2.0, -s));
+    // Horner: I + Y (I + Y/2 (I + Y/3 (… (I + Y/K)))), then squared,
+    // between two buffers.
+    let mut e = Mat::<f64>::identity(m, m);
+    let mut t = Mat::<f64>::zeros(m, m);
     for k in (1..=degree).rev() {
-        e = &identity + (&y * &e) * Scale(1.0 / k as f64);
+        matmul(&mut t, Accum::Replace, &y, &e, 1.0 / k as f64, Par::Seq);
+        for i in 0..m {
+            t[(i, i)] += 1.0;
+        }
+        std::mem::swap(&mut e, &mut t);
     }
     for _ in 0..s {
-        e = &e * &e;
+        matmul(&mut t, Accum::Replace, &e, &e, 1.0, Par::Seq);
+        std::mem::swap(&mut e, &mut t);
     }
     e
 }
