@@ -1,8 +1,9 @@
 """The quantiles of `petrinav bt analyze` against an independent method.
 
-`bt analyze` reads the quantiles of the time to the end off a
-Crank–Nicolson grid (petri's `absorption_cdf_steps`, second order, 25
-steps per mean time). This script exports the same chain (`--net`, then
+`bt analyze` reads the quantiles of the time to the end off a survival
+function from a shift-and-invert Krylov space (petri's `survival`; the
+Crank–Nicolson grid, `absorption_cdf_steps`, only where the space does
+not settle). This script exports the same chain (`--net`, then
 `petrinav gspn convert` to Storm's DRN), and finds each quantile again
 with SciPy: `P(T ≤ t)` from the matrix exponential's action
 (`scipy.sparse.linalg.expm_multiply`, Al-Mohy and Higham's method,
