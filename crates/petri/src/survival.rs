@@ -276,8 +276,10 @@ pub(crate) fn build(
         return Ok(s);
     }
     let max = MAX_VECTORS.min(n);
-    // The basis, one column per vector, room for all from the start.
-    let mut basis = Mat::<f64>::with_capacity(n, max + 1);
+    // The basis, one column per vector, its room doubled as it grows (a
+    // resize alone reserves the exact size: a copy per vector).
+    let mut room = (max + 1).min(16);
+    let mut basis = Mat::<f64>::with_capacity(n, room);
     basis.resize_with(n, 1, |i, _| p0[i] / beta);
     // 1ᵀ v of each basis vector.
     let mut sums = vec![p0.iter().sum::<f64>() / beta];
@@ -357,6 +359,10 @@ pub(crate) fn build(
                 *x /= rest;
             }
             sums.push(w.iter().sum::<f64>());
+            if m + 1 > room {
+                room = (2 * room).min(max + 1);
+                basis.reserve(n, room);
+            }
             basis.resize_with(n, m + 1, |i, _| w[i]);
         }
     }
