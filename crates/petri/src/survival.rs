@@ -67,7 +67,7 @@ use crate::profile_lu::dot;
 pub const MAX_VECTORS: usize = 64;
 /// Once two sizes agree to this many times the tolerance, the times are
 /// read off at every size instead of every second one.
-const CLOSE: f64 = 100.0;
+pub const CLOSE: f64 = 100.0;
 /// Steps of the march over the horizon in [`Survival::first_below`].
 pub const GRID: usize = 512;
 /// Bisections inside a step of the march stop once the interval is at
