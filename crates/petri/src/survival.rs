@@ -287,12 +287,10 @@ pub(crate) fn build(
     let mut h = vec![vec![0.0; max + 1]; max];
     let mut previous: Option<Vec<Option<f64>>> = None;
     let mut last_change = f64::INFINITY;
-    let mut w = vec![0.0; n];
+    // `w` enters each step as the last basis vector (it was stored from it).
+    let mut w: Vec<f64> = p0.iter().map(|&x| x / beta).collect();
     let mut c = Col::<f64>::zeros(max);
     for j in 0..max {
-        for (i, x) in w.iter_mut().enumerate() {
-            *x = basis[(i, j)];
-        }
         sys.solve_ordered(&mut w);
         let before = norm(&w);
         if !before.is_finite() {
