@@ -122,8 +122,8 @@ impl Layout {
         }
     }
 
-    ///
-    /// Word by word: a word's fields are consecutive places, read by
+    /// The counts of the packed `key` into `m` (one per place), word by
+    /// word: a word's fields are consecutive places, read by
     /// shifting the word down field after field (a word of zeros is a run
     /// of empty places), instead of looking up each place's word and shift.
     pub(crate) fn decode(&self, key: &[u64], m: &mut [u32]) {

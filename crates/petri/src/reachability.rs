@@ -508,19 +508,18 @@ fn store_with(m0: &[u32]) -> MarkingStore {
 /// forced runs serves the next: short rounds learn together), growing to
 /// the most in one of [`ROUND_GROWN`] markings.
 fn round(i: usize, len: usize, threads: usize, context: bool) -> (usize, bool) {
-    let from = if context {
-        PARALLEL_FROM_CONTEXT
+    let (from, per_thread) = if context {
+        let grown = len * MAX_CHUNKS_PER_THREAD / ROUND_GROWN;
+        (
+            PARALLEL_FROM_CONTEXT,
+            grown.clamp(MIN_CHUNKS_PER_THREAD, MAX_CHUNKS_PER_THREAD),
+        )
     } else {
-        PARALLEL_FROM
+        (PARALLEL_FROM, MAX_CHUNKS_PER_THREAD)
     };
     if threads < 2 || len < from {
         return ((i + BATCH).min(len), false);
     }
-    let per_thread = if context {
-        (len * MAX_CHUNKS_PER_THREAD / ROUND_GROWN).clamp(MIN_CHUNKS_PER_THREAD, MAX_CHUNKS_PER_THREAD)
-    } else {
-        MAX_CHUNKS_PER_THREAD
-    };
     ((i + per_thread * BATCH * threads).min(len), true)
 }
 
