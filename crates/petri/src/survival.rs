@@ -15,9 +15,9 @@
 //! *Preconditioning Lanczos approximations to the matrix exponential*, SIAM
 //! J. Sci. Comput. 27, 2006). Arnoldi (classical Gram–Schmidt as two
 //! matrix–vector products with the basis, a second pass where the first
-//! cancelled most of the vector — "twice is enough"; the modified form it
-//! replaced gave the same quantiles to 1e-9 and took ~8 % longer on the
-//! largest Nav2 chain) gives an orthonormal basis `V_m` and the
+//! cancelled most of the vector — "twice is enough"; the modified form,
+//! vector by vector, is in `crates/petri/EXPERIMENTS.md`) gives an
+//! orthonormal basis `V_m` and the
 //! Hessenberg `H_m` of `M⁻¹` on it (transposed: `p ↦ p
 //! M⁻¹` acts on rows), so `A ≈ (H_m⁻¹ − I)/γ` there and
 //!
