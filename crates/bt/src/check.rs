@@ -16,7 +16,16 @@
 //! way, and Nav2's selector actions (which return SUCCESS whatever
 //! happens); every other leaf may do either. A read is not reported when
 //! the reading node sits in an earlier child of a Fallback whose later child
-//! writes the entry (the "check, else compute" idiom of Nav2's trees).
+//! writes the entry (the "check, else compute" idiom of Nav2's trees), nor
+//! in an earlier child of a node that re-ticks it while a later child runs
+//! (reactive Sequence or Fallback, PipelineSequence) when a later child
+//! writes the entry: a monitor of the running child's reports, which finds
+//! the entry unset at its first tick by construction (Nav2's
+//! `IsWithinPathTrackingBounds` passes until `FollowPath`'s first tracking
+//! feedback). The first idiom's premise is taken on both sides: a check
+//! whose entry is unset fails (Nav2's `ValidatePath` rejects an empty
+//! path), so after the Fallback the entries its later children write count
+//! as written on that path.
 
 use std::collections::BTreeSet;
 
@@ -473,13 +482,20 @@ impl Checker<'_> {
             .any(|m| self.writes(m).contains(key))
     }
 
-    /// Whether a read of `key` at `n` is the "check, else compute" idiom:
-    /// `n` is under an earlier child of a Fallback whose later child writes `key`.
+    /// Whether a read of `key` at `n` is one of two idioms: "check, else
+    /// compute" (`n` is under an earlier child of a Fallback whose later
+    /// child writes `key`) or a monitor (`n` is under an earlier child of a
+    /// node that re-ticks its earlier children while a later one runs — a
+    /// reactive Sequence or Fallback, a PipelineSequence — and a later child
+    /// writes `key`: the monitor reads what the running child reports).
     fn guarded(&self, n: NodeId, key: &str) -> bool {
         let mut child = n;
         while let Some(p) = self.tree.node(child).parent {
             let parent = self.tree.node(p);
-            if matches!(parent.kind, Kind::Fallback | Kind::ReactiveFallback) {
+            if matches!(
+                parent.kind,
+                Kind::Fallback | Kind::ReactiveFallback | Kind::ReactiveSequence | Kind::PipelineSequence
+            ) {
                 let i = parent.children.iter().position(|&c| c == child).unwrap_or(0);
                 if parent.children[i + 1..]
                     .iter()
@@ -491,6 +507,26 @@ impl Checker<'_> {
             child = p;
         }
         false
+    }
+
+    /// Whether `c`'s subtree reads an entry that is not in `defined`, that
+    /// `c` does not write itself, and that one of `later` writes: a check
+    /// of "check, else compute" whose entry is unset.
+    fn checks_unset(&self, c: NodeId, defined: &BTreeSet<String>, later: &[NodeId]) -> bool {
+        self.tree.preorder_from(c).into_iter().any(|m| {
+            self.tree
+                .node(m)
+                .ports
+                .iter()
+                .any(|p| match (p.direction, &p.key) {
+                    (Direction::Input | Direction::InOut, Some(k)) => {
+                        !defined.contains(k)
+                            && !self.writes_within(c, k)
+                            && later.iter().any(|&l| self.writes_within(l, k))
+                    }
+                    _ => false,
+                })
+        })
     }
 
     /// Reports the input ports of `n` that read entries not in `defined`.
@@ -552,9 +588,13 @@ impl Checker<'_> {
                 let round = matches!(node.kind, Kind::RoundRobin);
                 let mut d = defined.clone();
                 let mut ok: Option<BTreeSet<String>> = None;
-                for &c in &kids {
+                for (i, &c) in kids.iter().enumerate() {
                     let (s, f) = self.flow(c, if round { defined } else { &d });
-                    if self.can_ok[c.index()] {
+                    // The idiom's premise, taken on both sides: a check of an
+                    // entry that a later child computes fails while the entry
+                    // is unset, so it does not end the Fallback on this path.
+                    let unset_check = !round && self.checks_unset(c, &d, &kids[i + 1..]);
+                    if self.can_ok[c.index()] && !unset_check {
                         ok = Some(ok.map_or(s.clone(), |x| meet(&x, &s)));
                     }
                     d = if round { defined.clone() } else { f };

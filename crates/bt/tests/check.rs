@@ -79,6 +79,33 @@ fn port_read_before_any_write() {
     );
 }
 
+/// A reactive node's earlier child reading what a later, running child
+/// writes is a monitor (not reported); the same two leaves under a plain
+/// Sequence read an entry nothing has written yet.
+#[test]
+fn monitor_of_a_running_child_is_not_a_read_before_write() {
+    only(
+        "monitor_idiom.xml",
+        FindingKind::ReadBeforeWrite,
+        "Main/Sequence#0/Sequence(NotWatched)/IsWithinPathTrackingBounds#0",
+        10,
+    );
+}
+
+/// "Check, else compute": the check's read of an entry the later child
+/// computes is not reported, and since the check fails while its entry is
+/// unset, what the later child writes counts as written after the
+/// Fallback (the route); a read of an entry nothing writes still is.
+#[test]
+fn check_else_compute_writes_what_follows_reads() {
+    only(
+        "check_else_compute.xml",
+        FindingKind::ReadBeforeWrite,
+        "Main/Sequence#0/FollowPath#2",
+        9,
+    );
+}
+
 #[test]
 fn missing_subtree() {
     only(
