@@ -1,6 +1,6 @@
 """`petrinav bt analyze` end to end with two builds, run in turn.
 
-For each of Nav2's four largest shipped trees and both parameter sets,
+For each of Nav2's five largest shipped trees and both parameter sets,
 each round runs the "before" binary and then the "after" one (so that a
 change in the box's load falls on both), and prints the fastest and the
 median wall clock and the median CPU time of the child (10 ms
@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 NAV2 = Path(__file__).resolve().parents[3] / "models" / "bt" / "nav2"
-# The four largest shipped trees (models/bt/nav2/largest.txt).
+# The five largest shipped trees (models/bt/nav2/largest.txt).
 TREES = [
     line
     for line in (NAV2 / "largest.txt").read_text().splitlines()

@@ -173,6 +173,8 @@ fn nav2_trees_only_the_documented_findings() {
     let expected = [
         "follow_point.xml: never_succeeds FollowPoint/PipelineSequence(NavigateWithReplanning)",
         "navigate_on_route_graph_w_recovery.xml: read_before_write NavigateOnRouteGraphWRecovery/RecoveryNode(NavigateRecovery)/Sequence#1/Fallback#0/WouldAPlannerRecoveryHelp#1",
+        "navigate_to_pose_w_bounds_check.xml: read_before_write NavigateToPoseWBoundsCheck/Sequence#0/ComputePathToPose#0",
+        "navigate_to_pose_w_bounds_check.xml: read_before_write NavigateToPoseWBoundsCheck/Sequence#0/ReactiveSequence#1/FollowPath#1",
     ];
     assert_eq!(seen, expected, "{seen:#?}");
 }

@@ -5,8 +5,8 @@
 //! tick-based interpreter.
 //!
 //! The fast test runs 4,000 executions per tree and set and, since it makes
-//! 44 comparisons at once, widens each interval to 99.99 % (z = 3.89; a
-//! Bonferroni bound keeps the chance of any false alarm near 0.5 %).
+//! 60 comparisons at once, widens each interval to 99.99 % (z = 3.89; a
+//! Bonferroni bound keeps the chance of any false alarm near 0.6 %).
 //! `cargo test -p bt --release --test montecarlo -- --ignored --nocapture`
 //! runs the 100,000-execution version with per-comparison 99 % intervals,
 //! as the issue asks, and prints every comparison; by chance alone about
