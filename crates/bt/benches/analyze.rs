@@ -5,7 +5,9 @@
 //! with both parameter sets, without sensitivities (the target of issue
 //! 49: ≤ 100 ms each); with the sidecar's defaults (every condition drawn
 //! at each evaluation: no condition state in the chain); and with
-//! sensitivities on the first two. Figures in `crates/bt/BENCHMARKS.md`.
+//! sensitivities on the first two; and `bt check` (the shipped trees, and
+//! a Fallback 20,000 and 99,000 actions wide). Figures in
+//! `crates/bt/BENCHMARKS.md`.
 
 use bt::{AnalyzeOptions, ReadOptions, Tree, TreeParams};
 
@@ -63,4 +65,35 @@ fn analyze_with_sensitivities(bencher: divan::Bencher, file: &str) {
     let (tree, params) = load(file, "nominal");
     let options = AnalyzeOptions::default();
     bencher.bench(|| bt::analyze(&tree, &params, &options).expect("analysis"));
+}
+
+/// `bt check` on every shipped Nav2 tree, and on a Fallback of `n` actions
+/// that each read and write entries of their own (the shape on which the
+/// read-before-write flow was quadratic: 73 s at 20,000 before it counted
+/// entries as bits and subtrees as ranges).
+#[divan::bench(args = [0, 20_000, 99_000], sample_count = 5)]
+fn check(bencher: divan::Bencher, n: usize) {
+    let trees: Vec<Tree> = if n == 0 {
+        std::fs::read_dir(DIR)
+            .expect("models/bt/nav2")
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "xml") && !p.ends_with("nav2_tree_nodes.xml"))
+            .map(|p| bt::read_file(p, &ReadOptions::default()).expect("a shipped tree"))
+            .collect()
+    } else {
+        let leaves: String = (0..n)
+            .map(|i| format!("<ComputePathToPose goal=\"{{g{i}}}\" path=\"{{p{i}}}\"/>"))
+            .collect();
+        let xml = format!(
+            "<root BTCPP_format=\"4\" main_tree_to_execute=\"M\"><BehaviorTree ID=\"M\"><Fallback>{leaves}</Fallback></BehaviorTree></root>"
+        );
+        vec![bt::read_str(&xml, "wide.xml", None, &ReadOptions::default()).expect("the wide tree")]
+    };
+    let options = bt::check::CheckOptions::nav2();
+    bencher.bench(|| {
+        trees
+            .iter()
+            .map(|t| bt::check(t, None, &options).len())
+            .sum::<usize>()
+    });
 }
