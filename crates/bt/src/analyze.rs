@@ -12,7 +12,10 @@
 //! instant as an earlier event are not separated from it, and failures at
 //! time 0 are reported apart. Sensitivities are forward differences:
 //! durations and change rates re-solve the compiled chain with scaled rates;
-//! probabilities re-translate and re-compile the tree.
+//! so does an action's `p_success` when its last stage draws the outcome
+//! (one mean time: success and failure rates in the ratio p : 1 − p, the
+//! same chain for p + δ); other probabilities re-translate and re-compile
+//! the tree.
 
 use std::collections::BTreeMap;
 
@@ -476,13 +479,27 @@ fn key_sensitivities(
             d_mean_time: (t - t0) / (h * value),
         });
     }
-    // Probabilities: re-translate.
+    // Probabilities: re-translate, or — where the probability is a ratio of
+    // rates — re-solve.
     let (pname, pvalue) = if is_action {
         ("p_success", params.action(tree, n).p_success)
     } else {
         ("p_true", params.condition(tree, n).p_true)
     };
     let h = if pvalue + 1e-4 <= 1.0 { 1e-4 } else { -1e-4 };
+    if is_action {
+        if let Some(rates) = outcome_as_rates(tree, params, s, &key, n, h) {
+            let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?)?;
+            out.push(Sensitivity {
+                key,
+                parameter: pname.into(),
+                value: pvalue,
+                d_p_success: (p - p0) / h,
+                d_mean_time: (t - t0) / h,
+            });
+            return Ok(out);
+        }
+    }
     let mut shifted = params.clone();
     if is_action {
         let mut a = params.action(tree, n);
@@ -503,6 +520,50 @@ fn key_sensitivities(
         d_mean_time: (t - t0) / h,
     });
     Ok(out)
+}
+
+/// The rates of the translation of `params` with action `key`'s
+/// `p_success` moved by `h`, when that is a change of rates alone: an action
+/// with one mean time whose outcome the last stage draws (success and
+/// failure at rates in the ratio p : 1 − p, `translate`), `p` and `p + h`
+/// both strictly between 0 and 1 — the same chain, so a re-solve instead of
+/// a re-translation and re-compilation. `None` otherwise.
+fn outcome_as_rates(
+    tree: &Tree,
+    params: &TreeParams,
+    s: &Solved,
+    key: &str,
+    n: NodeId,
+    h: f64,
+) -> Option<Vec<f64>> {
+    let a = params.action(tree, n);
+    let (p, q) = (a.p_success, a.p_success + h);
+    let drawn_last = a.mean_time_success > 0.0 && a.mean_time_failure == a.mean_time_success;
+    let only_actions = tree
+        .preorder()
+        .into_iter()
+        .filter(|&m| matches!(tree.node(m).kind, Kind::Action | Kind::Sleep { .. }))
+        .filter(|&m| tree.node(m).param_key() == key)
+        .all(|m| matches!(tree.node(m).kind, Kind::Action));
+    if !(drawn_last && only_actions && 0.0 < p.min(q) && p.max(q) < 1.0) {
+        return None;
+    }
+    let mut rates = s.rates.clone();
+    let mut touched = false;
+    for (t, r) in rates.iter_mut().enumerate() {
+        let (m, scale) = match (s.tr.roles[t], s.tr.triggers[t]) {
+            (Some((m, RateRole::Duration)), Some(Trigger::Success { node })) if node == m => (m, q / p),
+            (Some((m, RateRole::Duration)), Some(Trigger::Failure { node })) if node == m => {
+                (m, (1.0 - q) / (1.0 - p))
+            }
+            _ => continue,
+        };
+        if matches!(tree.node(m).kind, Kind::Action) && tree.node(m).param_key() == key {
+            *r *= scale;
+            touched = true;
+        }
+    }
+    touched.then_some(rates)
 }
 
 /// The GSPN of a tree, for `--dot` and for other tools.

@@ -95,8 +95,9 @@ pub struct AnalyzeArgs {
     #[arg(long = "quantile", value_name = "Q")]
     quantiles: Vec<f64>,
     /// Also compute the sensitivities of P(success) and of the mean time to
-    /// every leaf parameter: one re-solve per time parameter and one
-    /// re-compilation per probability (seconds to tens of seconds on Nav2's
+    /// every leaf parameter: one re-solve per time parameter and per action's
+    /// probability of success when its last stage draws the outcome, one
+    /// re-compilation per other probability (about a second on Nav2's
     /// largest trees; crates/bt/BENCHMARKS.md).
     #[arg(long)]
     sensitivities: bool,
