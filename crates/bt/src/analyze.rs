@@ -14,8 +14,9 @@
 //! durations and change rates re-solve the compiled chain with scaled rates;
 //! so does an action's `p_success` when its last stage draws the outcome
 //! (one mean time: success and failure rates in the ratio p : 1 − p, the
-//! same chain for p + δ); other probabilities re-translate and re-compile
-//! the tree.
+//! same chain for p + δ), and a persistent condition's `p_true` (its change
+//! rates and the weights of its first draw, re-weighting the initial
+//! distribution); other probabilities re-translate and re-compile the tree.
 
 use std::collections::BTreeMap;
 
@@ -181,9 +182,18 @@ fn absorbing<'a>(s: &'a Solved, rates: &[f64]) -> Result<petri::Absorbing<'a>> {
     Ok(s.compiled.absorbing(rates)?)
 }
 
-/// P(success), P(failure), P(never), mean time, and the absorption itself.
-fn outcome(s: &Solved, chain: &petri::Absorbing) -> Result<(f64, f64, f64, f64, petri::Absorption)> {
-    let a = chain.absorption().map_err(|e| match e {
+/// P(success), P(failure), P(never), mean time, and the absorption itself
+/// (from the chain's initial distribution, or from `initial`).
+fn outcome(
+    s: &Solved,
+    chain: &petri::Absorbing,
+    initial: Option<&[(u32, f64)]>,
+) -> Result<(f64, f64, f64, f64, petri::Absorption)> {
+    let a = match initial {
+        None => chain.absorption(),
+        Some(initial) => chain.absorption_from(initial),
+    };
+    let a = a.map_err(|e| match e {
         petri::Error::Singular { .. } => Error::Analysis(format!(
             "some state of the run cannot reach an end (a loop with no way out): {e}"
         )),
@@ -200,7 +210,7 @@ fn outcome(s: &Solved, chain: &petri::Absorbing) -> Result<(f64, f64, f64, f64, 
 pub fn analyze(tree: &Tree, params: &TreeParams, options: &AnalyzeOptions) -> Result<Report> {
     let s = compile(tree, params, options)?;
     let chain = absorbing(&s, &s.rates)?;
-    let (p_success, p_failure, p_never, mean_time, a) = outcome(&s, &chain)?;
+    let (p_success, p_failure, p_never, mean_time, a) = outcome(&s, &chain, None)?;
     let mean_of = |kind: u8| -> f64 {
         let (mut num, mut den) = (0.0, 0.0);
         for (b, &k) in s.ends.iter().enumerate() {
@@ -470,7 +480,7 @@ fn key_sensitivities(
                 rates[t] * (1.0 + h)
             };
         }
-        let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?)?;
+        let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?, None)?;
         out.push(Sensitivity {
             key: key.clone(),
             parameter: name.into(),
@@ -487,18 +497,21 @@ fn key_sensitivities(
         ("p_true", params.condition(tree, n).p_true)
     };
     let h = if pvalue + 1e-4 <= 1.0 { 1e-4 } else { -1e-4 };
-    if is_action {
-        if let Some(rates) = outcome_as_rates(tree, params, s, &key, n, h) {
-            let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?)?;
-            out.push(Sensitivity {
-                key,
-                parameter: pname.into(),
-                value: pvalue,
-                d_p_success: (p - p0) / h,
-                d_mean_time: (t - t0) / h,
-            });
-            return Ok(out);
-        }
+    let moved = if is_action {
+        outcome_as_rates(tree, params, s, &key, n, h).map(|r| (r, None))
+    } else {
+        condition_as_rates(tree, params, s, &key, n, h).map(|(r, i)| (r, Some(i)))
+    };
+    if let Some((rates, initial)) = moved {
+        let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?, initial.as_deref())?;
+        out.push(Sensitivity {
+            key,
+            parameter: pname.into(),
+            value: pvalue,
+            d_p_success: (p - p0) / h,
+            d_mean_time: (t - t0) / h,
+        });
+        return Ok(out);
     }
     let mut shifted = params.clone();
     if is_action {
@@ -511,7 +524,7 @@ fn key_sensitivities(
         shifted.conditions.insert(key.clone(), c);
     }
     let s2 = compile(tree, &shifted, no_sens)?;
-    let (p, _, _, t, _) = outcome(&s2, &absorbing(&s2, &s2.rates)?)?;
+    let (p, _, _, t, _) = outcome(&s2, &absorbing(&s2, &s2.rates)?, None)?;
     out.push(Sensitivity {
         key,
         parameter: pname.into(),
@@ -564,6 +577,50 @@ fn outcome_as_rates(
         }
     }
     touched.then_some(rates)
+}
+
+/// An initial distribution over a chain's tangible states:
+/// `(state, probability)`.
+type Initial = Vec<(u32, f64)>;
+
+/// The rates and the initial distribution of the translation of `params`
+/// with condition `key`'s `p_true` moved by `h`, when that changes rates and
+/// initial weights alone: a persistent condition (a change rate), `p` and
+/// `p + h` both strictly between 0 and 1. Its changes' rates are
+/// `change_rate·(1 − p)` to false and `change_rate·p` to true, and its first
+/// value is drawn before anything else with weights `p` and `1 − p`, so
+/// every initial state where it holds is `p`-weighted and every other
+/// `(1 − p)`-weighted: the same chain, a re-solve. `None` otherwise.
+fn condition_as_rates(
+    tree: &Tree,
+    params: &TreeParams,
+    s: &Solved,
+    key: &str,
+    n: NodeId,
+    h: f64,
+) -> Option<(Vec<f64>, Initial)> {
+    let c = params.condition(tree, n);
+    let (p, q) = (c.p_true, c.p_true + h);
+    let net = s.tr.conditions.get(key)?;
+    if !(c.change_rate > 0.0 && 0.0 < p.min(q) && p.max(q) < 1.0) {
+        return None;
+    }
+    let (up, down) = (q / p, (1.0 - q) / (1.0 - p));
+    let mut rates = s.rates.clone();
+    for (t, scale) in [(net.to_false?, down), (net.to_true?, up)] {
+        rates[t.index()] *= scale;
+    }
+    let initial = s
+        .compiled
+        .initial_distribution()
+        .iter()
+        .map(|&(st, w)| {
+            let m = s.compiled.tangible_marking(st as usize);
+            let holds = m[net.holds.index()] > 0;
+            (st, w * if holds { up } else { down })
+        })
+        .collect();
+    Some((rates, initial))
 }
 
 /// The GSPN of a tree, for `--dot` and for other tools.

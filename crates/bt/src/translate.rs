@@ -102,6 +102,25 @@ pub struct Translation {
     /// its memory of forced hops may leave out
     /// ([`petri::ExploreParams::forced_context`]).
     pub world: Vec<PlaceId>,
+    /// Each persistent condition's places and changes, by its key.
+    pub conditions: BTreeMap<String, ConditionNet>,
+}
+
+/// A persistent condition in the net: its `true` and `false` places (one
+/// marked from the start, drawn by two immediate transitions weighted
+/// `p_true` and `1 − p_true`) and its changes (rates `change_rate·(1 −
+/// p_true)` to false and `change_rate·p_true` to true; `None` where the
+/// rate is 0).
+#[derive(Debug, Clone, Copy)]
+pub struct ConditionNet {
+    /// Marked while the condition holds.
+    pub holds: PlaceId,
+    /// Marked while it does not.
+    pub fails: PlaceId,
+    /// The change from true to false.
+    pub to_false: Option<TransitionId>,
+    /// The change from false to true.
+    pub to_true: Option<TransitionId>,
 }
 
 /// The interface of a node's sub-net.
@@ -122,8 +141,8 @@ struct Builder<'a> {
     halts: BTreeMap<NodeId, (PlaceId, PlaceId)>,
     /// Persistent one-hot indices: (node, `active` place, index places).
     persistent: Vec<(NodeId, PlaceId, Vec<PlaceId>)>,
-    /// Condition state places by key: (`true`, `false`).
-    conditions: BTreeMap<String, (PlaceId, PlaceId)>,
+    /// Condition state by key.
+    conditions: BTreeMap<String, ConditionNet>,
     triggers: BTreeMap<TransitionId, Trigger>,
     roles: BTreeMap<TransitionId, (NodeId, RateRole)>,
     /// Places from which a lingering child's report is taken (see `take`).
@@ -183,7 +202,7 @@ pub fn translate(tree: &Tree, params: &TreeParams) -> Result<Translation> {
     let roles = (0..b.net.transitions.len())
         .map(|t| b.roles.get(&TransitionId(t as u32)).copied())
         .collect();
-    let world = b.conditions.values().flat_map(|&(t, f)| [t, f]).collect();
+    let world = b.conditions.values().flat_map(|c| [c.holds, c.fails]).collect();
     Ok(Translation {
         net: b.net,
         done_ok,
@@ -192,6 +211,7 @@ pub fn translate(tree: &Tree, params: &TreeParams) -> Result<Translation> {
         roles,
         triggers,
         world,
+        conditions: b.conditions,
     })
 }
 
@@ -357,8 +377,8 @@ impl Builder<'_> {
 
     /// The `(true, false)` places of condition key `key` (created on first use).
     fn condition_state(&mut self, n: NodeId, key: &str) -> (PlaceId, PlaceId) {
-        if let Some(&c) = self.conditions.get(key) {
-            return c;
+        if let Some(c) = self.conditions.get(key) {
+            return (c.holds, c.fails);
         }
         let cp = self.params.condition(self.tree, n);
         let safe: String = key
@@ -378,10 +398,14 @@ impl Builder<'_> {
                 self.arc_out(tr, target);
             }
         }
-        for (from, to, rate, what) in [
+        let mut changes = [None, None];
+        for (i, (from, to, rate, what)) in [
             (t, f, cp.change_rate * (1.0 - cp.p_true), "to_false"),
             (f, t, cp.change_rate * cp.p_true, "to_true"),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             if rate > 0.0 {
                 let tr = self.net.add_timed(format!("c{k}_{safe}.{what}"), rate);
                 self.triggers.insert(tr, Trigger::Change { node: n });
@@ -391,9 +415,16 @@ impl Builder<'_> {
                 let (dok, dko) = self.done;
                 self.inhibit(dok, tr, 1);
                 self.inhibit(dko, tr, 1);
+                changes[i] = Some(tr);
             }
         }
-        self.conditions.insert(key.to_string(), (t, f));
+        let c = ConditionNet {
+            holds: t,
+            fails: f,
+            to_false: changes[0],
+            to_true: changes[1],
+        };
+        self.conditions.insert(key.to_string(), c);
         (t, f)
     }
 
@@ -599,8 +630,8 @@ impl Builder<'_> {
             self.arc_out(t, fired);
             for (key, value) in a {
                 // Created with the earlier child that reads it.
-                let (tp, fp) = self.conditions[&key];
-                self.test(if value { tp } else { fp }, t);
+                let c = self.conditions[&key];
+                self.test(if value { c.holds } else { c.fails }, t);
             }
         }
         Some(fired)
@@ -874,8 +905,8 @@ impl Builder<'_> {
                 self.arc_out(t, halt);
                 self.arc_out(t, wait);
                 for (key, v) in a {
-                    let (tp, fp) = self.conditions[&key];
-                    self.test(if v { tp } else { fp }, t);
+                    let c = self.conditions[&key];
+                    self.test(if v { c.holds } else { c.fails }, t);
                 }
             }
             let t = self.flow(n, "switched", &[halted, wait], &[]);

@@ -95,10 +95,11 @@ pub struct AnalyzeArgs {
     #[arg(long = "quantile", value_name = "Q")]
     quantiles: Vec<f64>,
     /// Also compute the sensitivities of P(success) and of the mean time to
-    /// every leaf parameter: one re-solve per time parameter and per action's
-    /// probability of success when its last stage draws the outcome, one
-    /// re-compilation per other probability (about a second on Nav2's
-    /// largest trees; crates/bt/BENCHMARKS.md).
+    /// every leaf parameter: one re-solve per time parameter, per action's
+    /// probability of success when its last stage draws the outcome and per
+    /// persistent condition's probability of holding, one re-compilation per
+    /// other probability (under a second on Nav2's largest trees;
+    /// crates/bt/BENCHMARKS.md).
     #[arg(long)]
     sensitivities: bool,
     /// Write the tree drawn as SVG, coloured by activity and failures.

@@ -352,12 +352,30 @@ impl Absorbing<'_> {
 
     /// [`CompiledGspn::absorption`] on this chain.
     pub fn absorption(&self) -> Result<Absorption> {
+        self.absorption_from(self.chain.initial_distribution())
+    }
+
+    /// The absorption from another initial distribution over the chain's
+    /// tangible states (`(state, probability)` pairs, as
+    /// [`CompiledGspn::initial_distribution`] gives them) — e.g. the same
+    /// chain with the initial draws weighted otherwise. A state out of
+    /// range is an error.
+    pub fn absorption_from(&self, initial: &[(u32, f64)]) -> Result<Absorption> {
         let (chain, tr) = (self.chain, &self.tr);
         let m = tr.states.len();
         let nb = chain.bottom_components().len();
         let mut pi0_t = vec![0.0; m];
         let mut end_probability = vec![0.0; nb];
-        for &(s, p) in chain.initial_distribution() {
+        if let Some(&(s, p)) = initial
+            .iter()
+            .find(|&&(s, p)| s as usize >= tr.local.len() || !(p.is_finite() && p >= 0.0))
+        {
+            return Err(Error::Invalid(format!(
+                "an initial probability {p} of state {s} (the chain has {} tangible states; probabilities are finite and ≥ 0)",
+                tr.local.len()
+            )));
+        }
+        for &(s, p) in initial {
             match tr.local[s as usize] {
                 u32::MAX => end_probability[tr.bottom_of[s as usize] as usize] += p,
                 i => pi0_t[i as usize] += p,
