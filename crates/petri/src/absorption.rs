@@ -538,6 +538,58 @@ mod tests {
         }
     }
 
+    /// An immediate first draw between two starts (weights 1 : 1), then
+    /// `A` → ok at rate 1 or `B` → ko at rate 2: from the initial
+    /// distribution re-weighted 1 : 3, P(ok) = 1/4 and E[T] = 1/4·1 + 3/4·1/2.
+    #[test]
+    fn absorption_from_another_initial_distribution() {
+        let mut net = Net::new("draw");
+        let i = net.add_place("i", 1u32);
+        let a = net.add_place("a", 0u32);
+        let b = net.add_place("b", 0u32);
+        let ok = net.add_place("ok", 0u32);
+        let ko = net.add_place("ko", 0u32);
+        for (name, to) in [("x", a), ("y", b)] {
+            let t = net.add_immediate(name, 1.0, 1);
+            net.input(i, t);
+            net.output(t, to);
+        }
+        let (ta, tb) = (net.add_timed("ta", 1.0), net.add_timed("tb", 2.0));
+        net.input(a, ta);
+        net.output(ta, ok);
+        net.input(b, tb);
+        net.output(tb, ko);
+        let (c, rates) = compiled(&net);
+        let chain = c.absorbing(&rates).unwrap();
+        let initial: Vec<(u32, f64)> = c
+            .initial_distribution()
+            .iter()
+            .map(|&(s, w)| {
+                (
+                    s,
+                    w * if c.tangible_marking(s as usize)[1] == 1 {
+                        0.5
+                    } else {
+                        1.5
+                    },
+                )
+            })
+            .collect();
+        let r = chain.absorption_from(&initial).unwrap();
+        let okb = c
+            .bottom_components()
+            .iter()
+            .position(|b| c.tangible_marking(b[0] as usize)[3] == 1)
+            .unwrap();
+        assert!((r.end_probability[okb] - 0.25).abs() < 1e-12, "{r:?}");
+        assert!((r.mean_time - 0.625).abs() < 1e-12, "{r:?}");
+        let same = chain.absorption_from(c.initial_distribution()).unwrap();
+        assert_eq!(same.end_probability, chain.absorption().unwrap().end_probability);
+        for bad in [(c.num_tangible() as u32, 1.0), (0, f64::NAN), (0, -1.0)] {
+            assert!(chain.absorption_from(&[bad]).is_err(), "{bad:?}");
+        }
+    }
+
     /// Two exponential stages (Erlang 2, rate 2 each): mean 1, P(T ≤ t) = 1 − e^{−2t}(1 + 2t).
     #[test]
     fn erlang_two_stages() {
