@@ -293,8 +293,9 @@ fn local_map(comp: &crate::structure::Component, k: usize, parts: &[Part]) -> (L
     let mut counts: Vec<u32> = Vec::with_capacity(comp.places.len());
     'states: for l in 0..n {
         let st = comp.state(l);
-        counts.clear();
-        counts.extend_from_slice(st);
+        // The parts decide first, from the counts they read: the state is
+        // copied only where the transition is enabled (a component of many
+        // places, most states disabled, is then not copied state by state).
         let mut deg = u32::MAX;
         for part in parts {
             let v = st[part.position];
@@ -308,7 +309,11 @@ fn local_map(comp: &crate::structure::Component, k: usize, parts: &[Part]) -> (L
             if w < 0 || w > i64::from(part.capacity) {
                 continue 'states;
             }
-            counts[part.position] = w as u32;
+        }
+        counts.clear();
+        counts.extend_from_slice(st);
+        for part in parts {
+            counts[part.position] = (i64::from(st[part.position]) + part.delta) as u32;
         }
         match comp.rank(&counts) {
             Some(m) => {
