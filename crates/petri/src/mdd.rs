@@ -63,6 +63,12 @@ pub(crate) struct MddLimits {
     /// caches): bounds the time and the caches' memory of a search whose
     /// place order makes the diagram's intermediate sets explode.
     pub max_operations: u64,
+    /// Most children entries the arena's nodes may hold together, and the
+    /// widest node a search may build: a node of a place holding `k` tokens
+    /// has `k + 1` entries, so a place with many tokens (a P-invariant
+    /// `A + B = N` makes N nodes of up to N entries) would otherwise fill
+    /// the memory before the node limit is reached.
+    pub max_entries: usize,
 }
 
 impl Default for MddLimits {
@@ -71,6 +77,7 @@ impl Default for MddLimits {
             max_nodes: 4_000_000,
             max_tokens: 1 << 16,
             max_operations: 2_000_000,
+            max_entries: 1 << 26,
         }
     }
 }
@@ -171,6 +178,8 @@ pub(crate) struct Mdd {
     limits: MddLimits,
     /// Operations computed so far (see [`MddLimits::max_operations`]).
     operations: u64,
+    /// Children entries of the arena's nodes (see [`MddLimits::max_entries`]).
+    entries: usize,
     /// Names of places, for errors.
     place_names: Vec<String>,
 }
@@ -209,6 +218,7 @@ impl Mdd {
             by_top: vec![Vec::new(); order.len()],
             limits,
             operations: 0,
+            entries: 0,
             place_names: gspn.place_names().to_vec(),
         };
         for t in 0..gspn.num_transitions() {
@@ -269,6 +279,8 @@ impl Mdd {
                 self.limits.max_nodes
             )));
         }
+        self.room(ch.len())?;
+        self.entries += ch.len();
         let id = self.nodes.len() as u32;
         self.nodes.push(Node {
             depth: depth as u32,
@@ -278,6 +290,18 @@ impl Mdd {
         let hasher = &self.hasher;
         self.unique[depth].insert_unique(hash, id, |&i| hasher.hash_one(&nodes[i as usize].children[..]));
         Ok(id)
+    }
+
+    /// An error if `len` more children entries would pass
+    /// [`MddLimits::max_entries`] (a node that wide, or the arena that full).
+    fn room(&self, len: usize) -> Result<()> {
+        if self.entries.saturating_add(len) > self.limits.max_entries {
+            return Err(Error::Invalid(format!(
+                "the symbolic state space needs more than {} decision-diagram entries (a place holding many tokens)",
+                self.limits.max_entries
+            )));
+        }
+        Ok(())
     }
 
     /// Counts one computed operation; past [`MddLimits::max_operations`], an
@@ -385,6 +409,7 @@ impl Mdd {
                     }
                     let j = j as usize;
                     if j >= ch.len() {
+                        self.room(j + 1)?;
                         ch.resize(j + 1, EMPTY);
                     }
                     let u = self.union(ch[j], f)?;
@@ -431,6 +456,7 @@ impl Mdd {
             }
             let j = j as usize;
             if j >= s.len() {
+                self.room(j + 1)?;
                 s.resize(j + 1, EMPTY);
             }
             s[j] = self.union(s[j], f)?;
@@ -450,6 +476,7 @@ impl Mdd {
         let mut below = TERMINAL;
         for depth in (0..self.depths()).rev() {
             let v = marking[self.order[depth] as usize] as usize;
+            self.room(v + 1)?;
             let mut ch = vec![EMPTY; v + 1];
             ch[v] = below;
             below = self.saturate(depth, ch)?;

@@ -173,8 +173,9 @@ pub struct Structure {
 impl Structure {
     /// Finds the structure of `gspn`'s reachable markings (see the module
     /// docs). Fails when the symbolic search exceeds its limits (a place
-    /// without a structural bound grows past 65,536 tokens, or 4 million
-    /// diagram nodes), when a component would have more than
+    /// without a structural bound grows past 65,536 tokens, 4 million
+    /// diagram nodes, or 2²⁶ children entries — a place holding many
+    /// tokens), when a component would have more than
     /// [`MAX_LOCAL_STATES`] local states, or on a bad partition.
     pub fn detect(gspn: &Gspn, params: &StructureParams) -> Result<Structure> {
         let start = std::time::Instant::now();

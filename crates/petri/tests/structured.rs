@@ -2,7 +2,7 @@
 //! 1e-9 on every net whose structure is found, a reason otherwise.
 
 use petri::{
-    CompiledGspn, Error, ExploreParams, Expr, Gspn, Interrupt, Params, SolveParams, StructuredGspn,
+    CompiledGspn, Error, ExploreParams, Expr, Gspn, Interrupt, Net, Params, SolveParams, StructuredGspn,
     StructuredParams, families,
 };
 
@@ -122,6 +122,29 @@ fn every_real_net_agrees_with_the_explicit_engine_or_gets_a_reason() {
     }
     println!("solved by the structured engine: {solved:?}");
     assert!(solved.len() >= 5, "{solved:?}");
+}
+
+/// Two places sharing 100,000 tokens (`A + B = N`): the decision diagram
+/// of the reachable set would hold N nodes of up to N children (5·10⁹
+/// entries, 20 GB) — the engine refuses it within its entry limit instead of
+/// filling the memory, and says why.
+#[test]
+fn a_place_holding_many_tokens_is_refused_not_an_out_of_memory() {
+    let mut net = Net::new("shared");
+    let a = net.add_place("A", 100_000u32);
+    let b = net.add_place("B", 0u32);
+    for (name, from, to) in [("t", a, b), ("u", b, a)] {
+        let t = net.add_timed(name, 1.0);
+        net.input(from, t);
+        net.output(t, to);
+    }
+    let g = net.instantiate(&Params::new()).unwrap();
+    match StructuredGspn::build(&g, &StructuredParams::default(), Interrupt::NEVER) {
+        Err(Error::Unstructured { reason }) => {
+            assert!(reason.contains("decision-diagram entries"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]
