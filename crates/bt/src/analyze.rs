@@ -341,6 +341,11 @@ fn quantiles(
         return Ok(qs.iter().map(|&q| (q, 0.0)).collect());
     }
     let horizon = MEANS as f64 * mean_time;
+    if !horizon.is_finite() {
+        return Err(Error::Analysis(format!(
+            "the mean time to the end is {mean_time:e} s, too long to compute its quantiles ({MEANS} mean times overflow): are the leaves' times in seconds?"
+        )));
+    }
     let levels: Vec<f64> = qs.iter().map(|&q| 1.0 - q.min(1.0) * p_end).collect();
     match chain.survival(0.25 * mean_time, horizon, &levels, 1e-9) {
         Ok(survival) => Ok(qs

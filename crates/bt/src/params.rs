@@ -32,9 +32,9 @@
 //! evaluation is an independent draw with probability `p_true` (as in
 //! Colledanchise et al.'s stochastic behaviour trees), and a reactive parent
 //! keeps the result it got.
-//! Every value is checked (probabilities in [0, 1], durations and rates
-//! finite and ≥ 0, phases 1…64); an error names the file, line, table and
-//! field.
+//! Every value is checked (probabilities in [0, 1], durations and rates 0
+//! or from 1e-9 to 1e9 — seconds, or per second — phases 1…64); an error
+//! names the file, line, table and field.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -44,6 +44,11 @@ use toml::Spanned;
 
 use crate::error::{Error, Result};
 use crate::tree::{Kind, NodeId, Tree};
+
+/// The smallest time (s) or rate (per s) other than 0 a sidecar may give.
+pub const MIN_SCALE: f64 = 1e-9;
+/// The largest time (s) or rate (per s) a sidecar may give.
+pub const MAX_SCALE: f64 = 1e9;
 
 /// Parameters of an action leaf.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -194,15 +199,30 @@ impl Checker<'_> {
         }
     }
 
+    /// A time (s) or a rate (per s): 0, or from [`MIN_SCALE`] to
+    /// [`MAX_SCALE`] — beyond, the chain's rates and times leave the range
+    /// where its solves keep their precision (a mean time of 1e300 s made
+    /// infinite conditional means).
     fn non_negative(&self, table: &str, field: &str, v: &Option<Spanned<f64>>) -> Result<Option<f64>> {
         match v {
             None => Ok(None),
             Some(s) => {
                 let x = *s.get_ref();
-                if x.is_finite() && x >= 0.0 {
+                if x == 0.0 || (MIN_SCALE..=MAX_SCALE).contains(&x) {
                     Ok(Some(x))
                 } else {
-                    Err(self.err(table, field, x.to_string(), s.span().start, "a finite number ≥ 0"))
+                    let shown = if x != 0.0 && !(1e-4..1e6).contains(&x.abs()) {
+                        format!("{x:e}")
+                    } else {
+                        x.to_string()
+                    };
+                    Err(self.err(
+                        table,
+                        field,
+                        shown,
+                        s.span().start,
+                        "0, or a number from 1e-9 to 1e9 (seconds, or per second)",
+                    ))
                 }
             }
         }
@@ -491,6 +511,32 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("p.toml:2: [leaf.A] mean_time = -1"), "{e}");
+    }
+
+    /// Times and rates beyond 1e-9…1e9 (s, or per s) are refused: a mean
+    /// time of 1e300 s had made the conditional mean times infinite.
+    #[test]
+    fn times_and_rates_out_of_scale_are_refused() {
+        for (field, v) in [
+            ("mean_time", "1e300"),
+            ("mean_time", "1e-12"),
+            ("change_rate", "2e9"),
+        ] {
+            let e = TreeParams::parse(&format!("[leaf.A]\n{field} = {v}\n"), "p.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("p.toml:2: [leaf.A] {field} = ")), "{e}");
+            assert!(
+                e.ends_with("0, or a number from 1e-9 to 1e9 (seconds, or per second)"),
+                "{e}"
+            );
+        }
+        for v in ["0", "1e-9", "1e9", "30.5"] {
+            assert!(
+                TreeParams::parse(&format!("[leaf.A]\nmean_time = {v}\n"), "p.toml").is_ok(),
+                "{v}"
+            );
+        }
     }
 
     #[test]
