@@ -42,7 +42,7 @@ pub struct DriveArgs {
     /// Start pose `x,y,theta` (metres, metres, radians).
     #[arg(long, value_name = "X,Y,THETA", allow_hyphen_values = true)]
     start: String,
-    /// Command segments `v,omega,seconds;…`.
+    /// Command segments `v,omega,seconds;…` (at most a day, 86,400 s, in all).
     #[arg(
         long,
         value_name = "SEGMENTS",
@@ -115,6 +115,17 @@ fn segments(text: &str, source: &str) -> Result<Vec<(Command, f64)>> {
     }
     if out.is_empty() {
         bail!("{source}: no command segments");
+    }
+    if let Some((i, _)) = out.iter().enumerate().find(|(_, (_, t))| *t < 0.0) {
+        bail!("{source}, segment {}: a duration must be ≥ 0 s", i + 1);
+    }
+    // The drive is recorded step by step: a day, as for `nav` and the lab.
+    let total: f64 = out.iter().map(|(_, t)| t).sum();
+    if total > lab::tours::MAX_TIME_LIMIT_S {
+        bail!(
+            "{source}: the segments last {total} s in all, more than {} s (a day of driving, recorded step by step)",
+            lab::tours::MAX_TIME_LIMIT_S
+        );
     }
     Ok(out)
 }

@@ -90,6 +90,11 @@ fn bad_geometry_and_scripts_are_clear_errors() {
         (vec!["--start", "1,2", "--commands", "0.3,0,1"], "--start"),
         (vec!["--start", "1,2,0", "--commands", "0.3,0"], "segment 1"),
         (vec!["--start", "1,2,0", "--commands", "0.3,0,-1"], "duration"),
+        // Recorded step by step: 1e9 s had grown to 14 GB.
+        (
+            vec!["--start", "1,2,0", "--commands", "0,0,80000;0,0,7000"],
+            "a day",
+        ),
         (vec!["--start", "1,2,0"], "--commands"),
     ] {
         let mut all = vec!["sim", "drive", w.to_str().unwrap()];
