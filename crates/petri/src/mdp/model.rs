@@ -356,6 +356,20 @@ impl Model {
             + self.row_action.capacity() * 4
     }
 
+    /// Row `r`'s entries as `(target, probability)`, the probabilities as
+    /// [`probabilities`](Self::probabilities) gives them, without building
+    /// the whole vector (what a question about one row should cost).
+    pub fn row_probabilities(&self, r: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        // The state owning row `r`: the last whose first row is ≤ r.
+        let s = self.row_start.partition_point(|&x| x as usize <= r) - 1;
+        let e = if self.rate_rows { self.exit_rate[s] } else { 0.0 };
+        let (a, b) = (self.entry_start[r] as usize, self.entry_start[r + 1] as usize);
+        (a..b).map(move |k| {
+            let v = self.val[k];
+            (self.col[k] as usize, if e > 0.0 { v / e } else { v })
+        })
+    }
+
     /// The probabilities of every entry: the values themselves, or for
     /// the Markovian rows of a [`rate_rows`](Self::rate_rows) model
     /// `rate / E`.

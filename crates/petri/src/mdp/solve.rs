@@ -131,11 +131,9 @@ impl Optimum {
         } else {
             0.0
         };
-        let prob = model.probabilities();
-        let (a, e) = (model.entry_start[r] as usize, model.entry_start[r + 1] as usize);
         let mut q = self.row_reward.get(r).copied().unwrap_or(0.0) - self.value(s) * view_tau;
-        for k in a..e {
-            q += prob[k] * self.bias[model.col[k] as usize];
+        for (t, p) in model.row_probabilities(r) {
+            q += p * self.bias[t];
         }
         Some(q)
     }
@@ -144,26 +142,16 @@ impl Optimum {
     /// `s`) and following the policy after: the alternatives a choice
     /// marking weighs.
     pub fn row_bounds(&self, model: &Model, r: usize) -> (f64, f64) {
-        if !self.bias.is_empty() {
-            // Long-run averages: a row's own reward does not count.
-            let prob = model.probabilities();
-            let (a, e) = (model.entry_start[r] as usize, model.entry_start[r + 1] as usize);
-            let (mut l, mut u) = (0.0, 0.0);
-            for k in a..e {
-                let t = model.col[k] as usize;
-                l += prob[k] * self.lower[t];
-                u += prob[k] * self.upper[t];
-            }
-            return (l, u);
-        }
-        let reward = self.row_reward.get(r).copied().unwrap_or(0.0);
-        let prob = model.probabilities();
-        let (a, e) = (model.entry_start[r] as usize, model.entry_start[r + 1] as usize);
+        // Long-run averages: a row's own reward does not count.
+        let reward = if self.bias.is_empty() {
+            self.row_reward.get(r).copied().unwrap_or(0.0)
+        } else {
+            0.0
+        };
         let (mut l, mut u) = (reward, reward);
-        for k in a..e {
-            let t = model.col[k] as usize;
-            l += prob[k] * self.lower[t];
-            u += prob[k] * self.upper[t];
+        for (t, p) in model.row_probabilities(r) {
+            l += p * self.lower[t];
+            u += p * self.upper[t];
         }
         (l, u)
     }
