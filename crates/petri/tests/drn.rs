@@ -207,6 +207,24 @@ fn the_memory_guard_is_checked_before_reading_the_body() {
     assert!(matches!(err, Error::MemoryLimit { .. }), "{err}");
 }
 
+/// A label is a flag per state: 20,000 states each with a label of its
+/// own would be 400 MB of flags from a 0.6 MB file. The labels are held to
+/// the memory guard as they are joined; the same file reads under a limit
+/// that leaves room for them.
+#[test]
+fn many_distinct_labels_are_held_to_the_memory_guard() {
+    let n = 20_000;
+    let mut text = format!("@type: DTMC\n@nr_states\n{n}\n@model\n");
+    for s in 0..n {
+        let init = if s == 0 { " init" } else { "" };
+        text += &format!("state {s}{init} L{s}\n\t{} : 1\n", (s + 1) % n);
+    }
+    let err = read_drn(&text, "test.drn", &DrnParams { max_memory: 64 << 20 }).unwrap_err();
+    assert!(matches!(err, Error::MemoryLimit { .. }), "{err}");
+    let model = read_drn(&text, "test.drn", &DrnParams { max_memory: 1 << 30 }).unwrap();
+    assert_eq!(model.num_states(), n);
+}
+
 #[test]
 fn a_dtmc_and_an_mdp_read() {
     let dtmc = "@type: DTMC\n@nr_states\n3\n@model\nstate 0 init\n\t1 : 0.5\n\t2 : 0.5\nstate 1 a\n\t1 : 1\nstate 2\n\t2 : 1\n";

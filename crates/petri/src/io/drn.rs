@@ -276,6 +276,10 @@ struct Chunk {
     val: Vec<f64>,
     row_names: Vec<u32>,
     action_names: Vec<String>,
+    /// Indices of `label_names` and `action_names` (names looked up once
+    /// each, not by a scan: a file of many distinct names stays linear).
+    label_ids: HashMap<String, u32>,
+    action_ids: HashMap<String, u32>,
     action_rewards: Vec<f64>,
     any_state_reward: Vec<bool>,
     any_action_reward: Vec<bool>,
@@ -409,13 +413,7 @@ impl Parser<'_> {
                 ));
             }
         }
-        let id = match c.action_names.iter().position(|n| n == name) {
-            Some(i) => i as u32,
-            None => {
-                c.action_names.push(name.to_string());
-                c.action_names.len() as u32 - 1
-            }
-        };
+        let id = intern(&mut c.action_names, &mut c.action_ids, name);
         c.row_names.push(id);
         let after = self.rewards(rest, line, &mut c.action_rewards, any)?;
         if !after.trim().is_empty() {
@@ -485,13 +483,7 @@ impl Parser<'_> {
         let local = c.rows_of.len() as u32;
         for label in labels(rest) {
             let label = label.map_err(|m| self.err(line, m))?;
-            let i = match c.label_names.iter().position(|n| n == label) {
-                Some(i) => i as u32,
-                None => {
-                    c.label_names.push(label.to_string());
-                    c.label_names.len() as u32 - 1
-                }
-            };
+            let i = intern(&mut c.label_names, &mut c.label_ids, label);
             c.labels.push((local, i));
         }
         c.rows_of.push(0);
@@ -708,7 +700,11 @@ pub fn read_drn(text: &str, source: &str, params: &DrnParams) -> Result<Model> {
     for c in parsed {
         chunks.push(c?);
     }
-    assemble(&header, chunks, source, line)
+    let budget = Budget {
+        estimate,
+        limit: params.max_memory,
+    };
+    assemble(&header, chunks, source, line, budget)
 }
 
 /// Reads a DRN file.
@@ -734,7 +730,13 @@ pub fn read_drn_file(path: impl AsRef<Path>, params: &DrnParams) -> Result<Model
 /// The chunks joined into one model, checked across chunks: states
 /// numbered in order over the chunks, their count and the actions' the
 /// declared ones.
-fn assemble(header: &Header, chunks: Vec<Chunk>, source: &str, last_line: usize) -> Result<Model> {
+fn assemble(
+    header: &Header,
+    chunks: Vec<Chunk>,
+    source: &str,
+    last_line: usize,
+    budget: Budget,
+) -> Result<Model> {
     let mut expected = 0u64;
     for c in &chunks {
         if let Some((line, first)) = c.first_state {
@@ -769,12 +771,28 @@ fn assemble(header: &Header, chunks: Vec<Chunk>, source: &str, last_line: usize)
             format!("the file has {rows} actions, but @nr_choices declares {declared}"),
         ));
     }
-    join(header, chunks, n, rows, source)
+    join(header, chunks, n, rows, source, budget)
+}
+
+/// The memory the header's estimate takes and the limit it is held to
+/// ([`DrnParams::max_memory`]); the labels, which the header does not
+/// count, are checked against it as they are joined.
+#[derive(Debug, Clone, Copy)]
+struct Budget {
+    estimate: u64,
+    limit: u64,
 }
 
 /// The checked chunks concatenated: rows, entries, exit rates, labels
 /// (`init` giving the initial states), rewards and action names.
-fn join(header: &Header, chunks: Vec<Chunk>, n: usize, rows: usize, source: &str) -> Result<Model> {
+fn join(
+    header: &Header,
+    chunks: Vec<Chunk>,
+    n: usize,
+    rows: usize,
+    source: &str,
+    budget: Budget,
+) -> Result<Model> {
     let k = header.reward_names.len();
     let entries: usize = chunks.iter().map(|c| c.col.len()).sum();
     let mut row_start = Vec::with_capacity(n + 1);
@@ -783,7 +801,9 @@ fn join(header: &Header, chunks: Vec<Chunk>, n: usize, rows: usize, source: &str
     let mut val = Vec::with_capacity(entries);
     let mut exit = Vec::with_capacity(if header.model_type.is_continuous() { n } else { 0 });
     let mut labels: Vec<(String, Vec<bool>)> = Vec::new();
+    let mut label_ids: HashMap<String, usize> = HashMap::new();
     let mut action_names: Vec<String> = Vec::new();
+    let mut action_ids: HashMap<String, u32> = HashMap::new();
     let mut row_action = Vec::with_capacity(rows);
     let mut state_rewards = vec![Vec::with_capacity(n); k];
     let mut action_rewards = vec![Vec::with_capacity(rows); k];
@@ -806,15 +826,27 @@ fn join(header: &Header, chunks: Vec<Chunk>, n: usize, rows: usize, source: &str
         let ids: Vec<u32> = c
             .action_names
             .iter()
-            .map(|name| intern(&mut action_names, name))
+            .map(|name| intern(&mut action_names, &mut action_ids, name))
             .collect();
         row_action.extend(c.row_names.iter().map(|&i| ids[i as usize]));
         for &(s, l) in &c.labels {
             let name = &c.label_names[l as usize];
-            let i = match labels.iter().position(|(x, _)| x == name) {
-                Some(i) => i,
+            let i = match label_ids.get(name) {
+                Some(&i) => i,
                 None => {
+                    // A label is a flag per state: the model's memory grows
+                    // by a state count per distinct label.
+                    let estimate = budget.estimate + (labels.len() as u64 + 1) * n as u64;
+                    if estimate > budget.limit {
+                        return Err(Error::MemoryLimit {
+                            estimate,
+                            limit: budget.limit,
+                            markings: n,
+                            edges: entries,
+                        });
+                    }
                     labels.push((name.clone(), vec![false; n]));
+                    label_ids.insert(name.clone(), labels.len() - 1);
                     labels.len() - 1
                 }
             };
@@ -865,15 +897,16 @@ fn join(header: &Header, chunks: Vec<Chunk>, n: usize, rows: usize, source: &str
     Ok(model)
 }
 
-/// The index of `name` in `names`, added at the end when new.
-fn intern(names: &mut Vec<String>, name: &str) -> u32 {
-    match names.iter().position(|n| n == name) {
-        Some(i) => i as u32,
-        None => {
-            names.push(name.to_string());
-            names.len() as u32 - 1
-        }
+/// The index of `name` in `names` (`ids` indexes them), added at the end
+/// when new.
+fn intern(names: &mut Vec<String>, ids: &mut HashMap<String, u32>, name: &str) -> u32 {
+    if let Some(&i) = ids.get(name) {
+        return i;
     }
+    let i = names.len() as u32;
+    names.push(name.to_string());
+    ids.insert(name.to_string(), i);
+    i
 }
 
 /// A value in the notation that reads back as the same `f64`.
