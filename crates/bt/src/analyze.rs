@@ -507,29 +507,27 @@ fn key_sensitivities(
     } else {
         condition_as_rates(tree, params, s, &key, n, h).map(|(r, i)| (r, Some(i)))
     };
-    if let Some((rates, initial)) = moved {
-        let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?, initial.as_deref())?;
-        out.push(Sensitivity {
-            key,
-            parameter: pname.into(),
-            value: pvalue,
-            d_p_success: (p - p0) / h,
-            d_mean_time: (t - t0) / h,
-        });
-        return Ok(out);
-    }
-    let mut shifted = params.clone();
-    if is_action {
-        let mut a = params.action(tree, n);
-        a.p_success += h;
-        shifted.actions.insert(key.clone(), a);
-    } else {
-        let mut c = params.condition(tree, n);
-        c.p_true += h;
-        shifted.conditions.insert(key.clone(), c);
-    }
-    let s2 = compile(tree, &shifted, no_sens)?;
-    let (p, _, _, t, _) = outcome(&s2, &absorbing(&s2, &s2.rates)?, None)?;
+    let (p, t) = match moved {
+        Some((rates, initial)) => {
+            let (p, _, _, t, _) = outcome(s, &absorbing(s, &rates)?, initial.as_deref())?;
+            (p, t)
+        }
+        None => {
+            let mut shifted = params.clone();
+            if is_action {
+                let mut a = params.action(tree, n);
+                a.p_success += h;
+                shifted.actions.insert(key.clone(), a);
+            } else {
+                let mut c = params.condition(tree, n);
+                c.p_true += h;
+                shifted.conditions.insert(key.clone(), c);
+            }
+            let s2 = compile(tree, &shifted, no_sens)?;
+            let (p, _, _, t, _) = outcome(&s2, &absorbing(&s2, &s2.rates)?, None)?;
+            (p, t)
+        }
+    };
     out.push(Sensitivity {
         key,
         parameter: pname.into(),
