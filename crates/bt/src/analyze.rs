@@ -502,10 +502,22 @@ fn key_sensitivities(
         ("p_true", params.condition(tree, n).p_true)
     };
     let h = if pvalue + 1e-4 <= 1.0 { 1e-4 } else { -1e-4 };
-    let moved = if is_action {
-        outcome_as_rates(tree, params, s, &key, n, h).map(|r| (r, None))
+    // The parameters a re-translation would use; where they move only
+    // rates (and initial weights) of the same chain, a re-solve.
+    let mut shifted = params.clone();
+    if is_action {
+        let mut a = params.action(tree, n);
+        a.p_success += h;
+        shifted.actions.insert(key.clone(), a);
     } else {
-        condition_as_rates(tree, params, s, &key, n, h).map(|(r, i)| (r, Some(i)))
+        let mut c = params.condition(tree, n);
+        c.p_true += h;
+        shifted.conditions.insert(key.clone(), c);
+    }
+    let moved = if is_action {
+        outcome_as_rates(tree, params, &shifted, s).map(|r| (r, None))
+    } else {
+        condition_as_rates(tree, params, &shifted, s, &key).map(|(r, i)| (r, Some(i)))
     };
     let (p, t) = match moved {
         Some((rates, initial)) => {
@@ -513,16 +525,6 @@ fn key_sensitivities(
             (p, t)
         }
         None => {
-            let mut shifted = params.clone();
-            if is_action {
-                let mut a = params.action(tree, n);
-                a.p_success += h;
-                shifted.actions.insert(key.clone(), a);
-            } else {
-                let mut c = params.condition(tree, n);
-                c.p_true += h;
-                shifted.conditions.insert(key.clone(), c);
-            }
             let s2 = compile(tree, &shifted, no_sens)?;
             let (p, _, _, t, _) = outcome(&s2, &absorbing(&s2, &s2.rates)?, None)?;
             (p, t)
@@ -538,74 +540,96 @@ fn key_sensitivities(
     Ok(out)
 }
 
-/// The rates of the translation of `params` with action `key`'s
-/// `p_success` moved by `h`, when that is a change of rates alone: an action
-/// with one mean time whose outcome the last stage draws (success and
-/// failure at rates in the ratio p : 1 − p, `translate`), `p` and `p + h`
-/// both strictly between 0 and 1 — the same chain, so a re-solve instead of
-/// a re-translation and re-compilation. `None` otherwise.
-fn outcome_as_rates(
-    tree: &Tree,
-    params: &TreeParams,
-    s: &Solved,
-    key: &str,
-    n: NodeId,
-    h: f64,
-) -> Option<Vec<f64>> {
-    let a = params.action(tree, n);
-    let (p, q) = (a.p_success, a.p_success + h);
-    let drawn_last = a.mean_time_success > 0.0 && a.mean_time_failure == a.mean_time_success;
-    let only_actions = tree
-        .preorder()
-        .into_iter()
-        .filter(|&m| matches!(tree.node(m).kind, Kind::Action | Kind::Sleep { .. }))
-        .filter(|&m| tree.node(m).param_key() == key)
-        .all(|m| matches!(tree.node(m).kind, Kind::Action));
-    if !(drawn_last && only_actions && 0.0 < p.min(q) && p.max(q) < 1.0) {
+/// The rates of the translation of `shifted` (an action's `p_success`
+/// moved), when that is a change of rates alone: every action whose
+/// parameters move keeps one mean time and its outcome drawn by the last
+/// stage (success and failure at rates in the ratio p : 1 − p, `translate`),
+/// `p` strictly between 0 and 1 before and after — the same chain, so a
+/// re-solve instead of a re-translation and re-compilation. `None`
+/// otherwise.
+fn outcome_as_rates(tree: &Tree, params: &TreeParams, shifted: &TreeParams, s: &Solved) -> Option<Vec<f64>> {
+    let drawn_last = |a: &crate::params::ActionParams| {
+        a.mean_time_success > 0.0
+            && a.mean_time_failure == a.mean_time_success
+            && 0.0 < a.p_success
+            && a.p_success < 1.0
+    };
+    // Per moved action, the scale of its success and failure rates.
+    let mut scale = BTreeMap::new();
+    for m in tree.preorder() {
+        if !matches!(tree.node(m).kind, Kind::Action) {
+            continue;
+        }
+        let (a, b) = (params.action(tree, m), shifted.action(tree, m));
+        if a == b {
+            continue;
+        }
+        let same_times = (a.mean_time_success, a.phases) == (b.mean_time_success, b.phases);
+        if !(drawn_last(&a) && drawn_last(&b) && same_times) {
+            return None;
+        }
+        let (p, q) = (a.p_success, b.p_success);
+        scale.insert(m, (q / p, (1.0 - q) / (1.0 - p)));
+    }
+    if scale.is_empty() {
         return None;
     }
     let mut rates = s.rates.clone();
-    let mut touched = false;
     for (t, r) in rates.iter_mut().enumerate() {
-        let (m, scale) = match (s.tr.roles[t], s.tr.triggers[t]) {
-            (Some((m, RateRole::Duration)), Some(Trigger::Success { node })) if node == m => (m, q / p),
-            (Some((m, RateRole::Duration)), Some(Trigger::Failure { node })) if node == m => {
-                (m, (1.0 - q) / (1.0 - p))
-            }
+        let (m, success) = match (s.tr.roles[t], s.tr.triggers[t]) {
+            (Some((m, RateRole::Duration)), Some(Trigger::Success { node })) if node == m => (m, true),
+            (Some((m, RateRole::Duration)), Some(Trigger::Failure { node })) if node == m => (m, false),
             _ => continue,
         };
-        if matches!(tree.node(m).kind, Kind::Action) && tree.node(m).param_key() == key {
-            *r *= scale;
-            touched = true;
+        if let Some(&(up, down)) = scale.get(&m) {
+            *r *= if success { up } else { down };
         }
     }
-    touched.then_some(rates)
+    Some(rates)
 }
 
 /// An initial distribution over a chain's tangible states:
 /// `(state, probability)`.
 type Initial = Vec<(u32, f64)>;
 
-/// The rates and the initial distribution of the translation of `params`
-/// with condition `key`'s `p_true` moved by `h`, when that changes rates and
-/// initial weights alone: a persistent condition (a change rate), `p` and
-/// `p + h` both strictly between 0 and 1. Its changes' rates are
+/// The rates and the initial distribution of the translation of `shifted`
+/// (condition `key`'s `p_true` moved), when that changes rates and initial
+/// weights alone: the conditions whose parameters move are exactly those
+/// reading `key`'s state, a persistent one (a change rate) moved from `p` to
+/// `q`, both strictly between 0 and 1. Its changes' rates are
 /// `change_rate·(1 − p)` to false and `change_rate·p` to true, and its first
 /// value is drawn before anything else with weights `p` and `1 − p`, so
-/// every initial state where it holds is `p`-weighted and every other
-/// `(1 − p)`-weighted: the same chain, a re-solve. `None` otherwise.
+/// every initial state where it holds is re-weighted by `q/p` and every
+/// other by `(1 − q)/(1 − p)`: the same chain, a re-solve. `None` otherwise.
 fn condition_as_rates(
     tree: &Tree,
     params: &TreeParams,
+    shifted: &TreeParams,
     s: &Solved,
     key: &str,
-    n: NodeId,
-    h: f64,
 ) -> Option<(Vec<f64>, Initial)> {
-    let c = params.condition(tree, n);
-    let (p, q) = (c.p_true, c.p_true + h);
     let net = s.tr.conditions.get(key)?;
-    if !(c.change_rate > 0.0 && 0.0 < p.min(q) && p.max(q) < 1.0) {
+    let mut moved = None;
+    for m in tree.preorder() {
+        if !matches!(tree.node(m).kind, Kind::Condition | Kind::Gate) {
+            continue;
+        }
+        let (a, b) = (params.condition(tree, m), shifted.condition(tree, m));
+        let reads_key = params.condition_key(tree, m) == key;
+        if reads_key != (a != b) || (a != b && !matches!(tree.node(m).kind, Kind::Condition)) {
+            return None;
+        }
+        if a != b {
+            if moved.is_some_and(|x| x != (a, b)) {
+                return None;
+            }
+            moved = Some((a, b));
+        }
+    }
+    let (a, b) = moved?;
+    let (p, q) = (a.p_true, b.p_true);
+    let persistent = a.change_rate > 0.0 && b.change_rate == a.change_rate;
+    if !(persistent && 0.0 < p.min(q) && p.max(q) < 1.0) {
         return None;
     }
     let (up, down) = (q / p, (1.0 - q) / (1.0 - p));
