@@ -133,7 +133,7 @@ pub fn chain(tr: &Translation, max_states: usize) -> Result<(CompiledGspn, Vec<f
     let explore = ExploreParams {
         max_states,
         skip_forced: true,
-        forced_context: tr.world.clone(),
+        forced_context: tr.world(),
         ..ExploreParams::default()
     };
     let compiled = CompiledGspn::build(&gspn, &explore).map_err(|e| match e {

@@ -96,14 +96,22 @@ pub struct Translation {
     /// Per transition: the node whose parameter sets its rate, and how
     /// (`None` for immediate transitions).
     pub roles: Vec<Option<(NodeId, RateRole)>>,
+    /// Each persistent condition's places and changes, by its key.
+    pub conditions: BTreeMap<String, ConditionNet>,
+}
+
+impl Translation {
     /// The places of the world: every persistent condition's `true` and
     /// `false` places. The zero-time control flow only tests them, so the
     /// analysis passes them to the state-space generation as the context
     /// its memory of forced hops may leave out
     /// ([`petri::ExploreParams::forced_context`]).
-    pub world: Vec<PlaceId>,
-    /// Each persistent condition's places and changes, by its key.
-    pub conditions: BTreeMap<String, ConditionNet>,
+    pub fn world(&self) -> Vec<PlaceId> {
+        self.conditions
+            .values()
+            .flat_map(|c| [c.holds, c.fails])
+            .collect()
+    }
 }
 
 /// A persistent condition in the net: its `true` and `false` places (one
@@ -202,7 +210,6 @@ pub fn translate(tree: &Tree, params: &TreeParams) -> Result<Translation> {
     let roles = (0..b.net.transitions.len())
         .map(|t| b.roles.get(&TransitionId(t as u32)).copied())
         .collect();
-    let world = b.conditions.values().flat_map(|c| [c.holds, c.fails]).collect();
     Ok(Translation {
         net: b.net,
         done_ok,
@@ -210,7 +217,6 @@ pub fn translate(tree: &Tree, params: &TreeParams) -> Result<Translation> {
         activity,
         roles,
         triggers,
-        world,
         conditions: b.conditions,
     })
 }

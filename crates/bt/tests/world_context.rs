@@ -15,7 +15,7 @@ fn graph(tr: &bt::translate::Translation, context: bool) -> ReachabilityGraph {
     let gspn = tr.net.instantiate(&Params::new()).expect("a net");
     let params = ExploreParams {
         skip_forced: true,
-        forced_context: if context { tr.world.clone() } else { Vec::new() },
+        forced_context: if context { tr.world() } else { Vec::new() },
         ..ExploreParams::default()
     };
     ReachabilityGraph::explore(&gspn, &params).expect("a graph")
